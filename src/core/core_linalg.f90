@@ -1,0 +1,133 @@
+!> Thin wrappers over the LAPACK routines flexmor uses, with explicit interfaces.
+module core_linalg
+  use core_kinds, only: wp
+  implicit none
+  private
+  public :: lu_factor, lu_solve, chol_factor, chol_solve, sym_gen_eig, solve_dense
+
+  interface
+    subroutine dgetrf(m, n, a, lda, ipiv, info)
+      import :: wp
+      integer, intent(in) :: m, n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: ipiv(*), info
+    end subroutine dgetrf
+    subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+      import :: wp
+      character, intent(in) :: trans
+      integer, intent(in) :: n, nrhs, lda, ldb, ipiv(*)
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dgetrs
+    subroutine dpotrf(uplo, n, a, lda, info)
+      import :: wp
+      character, intent(in) :: uplo
+      integer, intent(in) :: n, lda
+      real(wp), intent(inout) :: a(lda, *)
+      integer, intent(out) :: info
+    end subroutine dpotrf
+    subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
+      import :: wp
+      character, intent(in) :: uplo
+      integer, intent(in) :: n, nrhs, lda, ldb
+      real(wp), intent(in) :: a(lda, *)
+      real(wp), intent(inout) :: b(ldb, *)
+      integer, intent(out) :: info
+    end subroutine dpotrs
+    subroutine dsygvd(itype, jobz, uplo, n, a, lda, b, ldb, w, work, lwork, iwork, liwork, info)
+      import :: wp
+      integer, intent(in) :: itype, n, lda, ldb, lwork, liwork
+      character, intent(in) :: jobz, uplo
+      real(wp), intent(inout) :: a(lda, *), b(ldb, *)
+      real(wp), intent(out) :: w(*), work(*)
+      integer, intent(out) :: iwork(*), info
+    end subroutine dsygvd
+  end interface
+
+contains
+
+  !> LU factorisation in place. info > 0: the k-th pivot is exactly zero. `rcond_pivot`
+  !> returns the smallest |pivot| relative to the largest, a cheap singularity indicator,
+  !> and `worst` the column where it occurs.
+  subroutine lu_factor(a, ipiv, info, rcond_pivot, worst)
+    real(wp), intent(inout) :: a(:, :)
+    integer, intent(out) :: ipiv(:), info
+    real(wp), intent(out), optional :: rcond_pivot
+    integer, intent(out), optional :: worst
+    integer :: n, k, kmin
+    real(wp) :: dmax
+    n = size(a, 1)
+    call dgetrf(n, n, a, max(n, 1), ipiv, info)
+    if (present(rcond_pivot)) then
+      dmax = 0.0_wp
+      kmin = 1
+      do k = 1, n
+        dmax = max(dmax, abs(a(k, k)))
+        if (abs(a(k, k)) < abs(a(kmin, kmin))) kmin = k
+      end do
+      rcond_pivot = 0.0_wp
+      if (n == 0) rcond_pivot = 1.0_wp
+      if (dmax > 0 .and. n > 0) rcond_pivot = abs(a(kmin, kmin)) / dmax
+      if (present(worst)) worst = kmin
+    end if
+  end subroutine lu_factor
+
+  subroutine lu_solve(a, ipiv, b)
+    real(wp), intent(in) :: a(:, :)
+    integer, intent(in) :: ipiv(:)
+    real(wp), intent(inout) :: b(:, :)
+    integer :: n, info
+    n = size(a, 1)
+    if (n == 0 .or. size(b, 2) == 0) return
+    call dgetrs('N', n, size(b, 2), a, n, ipiv, b, n, info)
+  end subroutine lu_solve
+
+  !> Cholesky factorisation in place (lower). info = k > 0: leading minor k not positive.
+  subroutine chol_factor(a, info)
+    real(wp), intent(inout) :: a(:, :)
+    integer, intent(out) :: info
+    call dpotrf('L', size(a, 1), a, max(size(a, 1), 1), info)
+  end subroutine chol_factor
+
+  subroutine chol_solve(a, b)
+    real(wp), intent(in) :: a(:, :)
+    real(wp), intent(inout) :: b(:)
+    integer :: n, info
+    n = size(a, 1)
+    call dpotrs('L', n, 1, a, n, b, n, info)
+  end subroutine chol_solve
+
+  !> Solve a general dense system a x = b (b overwritten by x); info /= 0 if singular.
+  subroutine solve_dense(a, b, info)
+    real(wp), intent(in) :: a(:, :)
+    real(wp), intent(inout) :: b(:)
+    integer, intent(out) :: info
+    real(wp) :: lu(size(a, 1), size(a, 2)), rhs(size(b), 1)
+    integer :: ipiv(size(a, 1))
+    lu = a
+    call dgetrf(size(a, 1), size(a, 1), lu, max(size(a, 1), 1), ipiv, info)
+    if (info /= 0) return
+    rhs(:, 1) = b
+    call dgetrs('N', size(a, 1), 1, lu, max(size(a, 1), 1), ipiv, rhs, max(size(a, 1), 1), info)
+    b = rhs(:, 1)
+  end subroutine solve_dense
+
+  !> Generalised symmetric-definite eigenproblem k v = lambda m v (m positive definite).
+  !> Eigenvalues ascending; vectors m-orthonormal in the columns of v.
+  subroutine sym_gen_eig(k, m, lambda, v, info)
+    real(wp), intent(in) :: k(:, :), m(:, :)
+    real(wp), intent(out) :: lambda(:), v(:, :)
+    integer, intent(out) :: info
+    real(wp), allocatable :: b(:, :), work(:)
+    integer, allocatable :: iwork(:)
+    real(wp) :: wq(1)
+    integer :: n, iwq(1)
+    n = size(k, 1)
+    v = k
+    b = m
+    call dsygvd(1, 'V', 'L', n, v, n, b, n, lambda, wq, -1, iwq, -1, info)
+    allocate(work(int(wq(1))), iwork(iwq(1)))
+    call dsygvd(1, 'V', 'L', n, v, n, b, n, lambda, work, size(work), iwork, size(iwork), info)
+  end subroutine sym_gen_eig
+end module core_linalg

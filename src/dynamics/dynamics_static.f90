@@ -1,0 +1,127 @@
+!> Static equilibrium with load stepping, and the tangent stiffness used by statics and the
+!> modal analysis. With the prescribed modes locked and no velocity, the generalised force is
+!>   F(q_dy) = DF_dy^T f(x(q)) - sigma_dy(q),   K_T = -dF/dq_dy = S_dd - d(DF_dy^T f)/dq_dy.
+!> S_dd is assembled exactly (sigma is linear in q); the load part, which holds the geometric
+!> stiffness of the loads and gravity, is differentiated numerically (central differences of
+!> exact kinematic solutions), and skipped when the model carries no load.
+module dynamics_static
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_NUMERIC, ERR_INPUT
+  use core_linalg, only: solve_dense
+  use dynamics_system, only: dynamics_t
+  implicit none
+  private
+  public :: tangent_stiffness, static_solve
+
+contains
+
+  logical function has_loads(dyn)
+    type(dynamics_t), intent(in) :: dyn
+    has_loads = dyn%load_factor /= 0 .and. (any(dyn%model%force /= 0) .or. &
+                                            any(dyn%model%gravity /= 0))
+  end function has_loads
+
+  !> Load part of the generalised force, DF_dy^T f, at (t, q_dy) with the model locked.
+  subroutine load_force(dyn, t, q_dy, fl, err)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    real(wp), intent(out) :: fl(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: a(size(q_dy)), zero(size(q_dy))
+    zero = 0.0_wp
+    call dyn%evaluate(t, q_dy, zero, a, err)
+    fl = dyn%gen_force + dyn%stresses(dyn%full_q(t, q_dy), [dyn%full_q(t, zero) * 0.0_wp])
+  end subroutine load_force
+
+  !> Tangent stiffness K_T at (t, q_dy); leaves the mass matrix of that state in dyn%mbar.
+  subroutine tangent_stiffness(dyn, t, q_dy, k, err)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    real(wp), intent(out) :: k(:, :)
+    type(error_t), intent(out) :: err
+    real(wp) :: unit(dyn%model%n_q), zero(dyn%model%n_q), fp(size(q_dy)), fm(size(q_dy))
+    real(wp) :: qp(size(q_dy)), h, a(size(q_dy)), v0(size(q_dy))
+    integer :: j, nr
+    logical :: was_locked
+    was_locked = dyn%locked
+    dyn%locked = .true.
+    nr = dyn%model%n_rh
+    zero = 0.0_wp
+    do j = 1, size(q_dy)
+      unit = 0.0_wp
+      unit(nr + j) = 1.0_wp
+      k(:, j) = dyn%stresses(unit, zero)
+    end do
+    if (has_loads(dyn)) then
+      h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+      do j = 1, size(q_dy)
+        qp = q_dy
+        qp(j) = q_dy(j) + h
+        call load_force(dyn, t, qp, fp, err)
+        if (.not. err%ok()) exit
+        qp(j) = q_dy(j) - h
+        call load_force(dyn, t, qp, fm, err)
+        if (.not. err%ok()) exit
+        k(:, j) = k(:, j) - (fp - fm) / (2 * h)
+      end do
+      k = 0.5_wp * (k + transpose(k))
+    end if
+    v0 = 0.0_wp
+    if (err%ok()) call dyn%evaluate(t, q_dy, v0, a, err)
+    dyn%locked = was_locked
+  end subroutine tangent_stiffness
+
+  !> Newton-Raphson with the load applied in n_steps equal increments. q_dy holds the start
+  !> on entry and the equilibrium on exit; x_steps(:, k) the nodal coordinates after step k.
+  subroutine static_solve(dyn, t, n_steps, tol, max_iter, q_dy, x_steps, iterations, err)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, tol
+    integer, intent(in) :: n_steps, max_iter
+    real(wp), intent(inout) :: q_dy(:)
+    real(wp), intent(out) :: x_steps(:, :)
+    integer, intent(out) :: iterations
+    type(error_t), intent(out) :: err
+    real(wp) :: k(size(q_dy), size(q_dy)), r(size(q_dy)), a(size(q_dy)), v0(size(q_dy))
+    real(wp) :: lambda, scale
+    integer :: step, it, info
+    character(len=200) :: msg
+    if (n_steps < 1 .or. max_iter < 1 .or. tol <= 0) then
+      call err%set(ERR_INPUT, 'group &static: n_steps and max_iter must be >= 1 and tol > 0')
+      return
+    end if
+    v0 = 0.0_wp
+    iterations = 0
+    dyn%locked = .true.
+    do step = 1, n_steps
+      lambda = real(step, wp) / n_steps
+      do it = 1, max_iter
+        dyn%load_factor = lambda
+        call tangent_stiffness(dyn, t, q_dy, k, err)
+        if (.not. err%ok()) exit
+        r = dyn%gen_force
+        call solve_dense(k, r, info)
+        if (info /= 0) then
+          write(msg, '(a,f8.5,a)') 'static analysis: the tangent stiffness is singular at ' // &
+            'load factor ', lambda, ' (buckling or a mechanism)'
+          call err%set(ERR_NUMERIC, trim(msg))
+          exit
+        end if
+        q_dy = q_dy + r
+        iterations = iterations + 1
+        scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+        if (maxval(abs(r)) <= tol * scale) exit
+      end do
+      if (err%ok() .and. it > max_iter) then
+        write(msg, '(a,i0,a,f8.5,a,es10.3)') 'static analysis: Newton did not converge in ', &
+          max_iter, ' iterations at load factor ', lambda, ', last correction ', maxval(abs(r))
+        call err%set(ERR_NUMERIC, trim(msg))
+      end if
+      if (.not. err%ok()) exit
+      call dyn%evaluate(t, q_dy, v0, a, err)
+      if (.not. err%ok()) exit
+      x_steps(:, step) = dyn%kin%x
+    end do
+    dyn%locked = .false.
+    dyn%load_factor = 1.0_wp
+  end subroutine static_solve
+end module dynamics_static

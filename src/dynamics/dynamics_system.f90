@@ -1,0 +1,255 @@
+!> Equations of motion of a model (formulation.md section 5) as an `ode2_system_t`:
+!>   Mbar a = DF_dy^T [f - M (D2F qd qd + DF_rh qdd_rh) - h] - sigma_dy
+!> sigma_dy are the stress resultants of the dynamic modes, sigma = S e + beta S e_dot, with the
+!> mode values taken from q itself (DF_e restricted to the dynamic columns is the identity on
+!> dynamic modes and zero elsewhere, so DF_e^T sigma reduces to sigma_dy).
+module dynamics_system
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
+  use core_linalg, only: chol_factor, chol_solve
+  use model_system, only: model_t, COORD_X, COORD_Y
+  use model_kinematics, only: kinematics_t
+  use elements_base, only: MODE_DYNAMIC
+  use integrators_system, only: ode2_system_t
+  implicit none
+  private
+  public :: dynamics_t
+
+  type, extends(ode2_system_t) :: dynamics_t
+    type(model_t) :: model
+    type(kinematics_t) :: kin
+    real(wp) :: load_factor = 1.0_wp          !< scales nodal loads and gravity (static steps)
+    logical :: locked = .false.               !< prescribed modes held still (statics, modes)
+    real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last evaluation
+    real(wp), allocatable :: gen_force(:)     !< right-hand side of the last evaluation
+    ! History at the output times (filled by record):
+    real(wp), allocatable :: x_hist(:, :), q_hist(:, :), v_hist(:, :), energy_hist(:, :)
+    type(error_t) :: last_error               !< why the last callback returned non-zero
+  contains
+    procedure :: init => dyn_init
+    procedure :: prescribed => dyn_prescribed
+    procedure :: full_q => dyn_full_q
+    procedure :: evaluate => dyn_evaluate
+    procedure :: accel => dyn_accel
+    procedure :: record => dyn_record
+    procedure :: energy => dyn_energy
+    procedure :: stresses => dyn_stresses
+    procedure :: allocate_history => dyn_allocate_history
+  end type dynamics_t
+
+contains
+
+  !> Take ownership of a finalised model and solve the kinematics in its initial state, which
+  !> also checks that the coordinate classes determine every calculable coordinate.
+  subroutine dyn_init(this, model, t0, q_dy0, err)
+    class(dynamics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: t0, q_dy0(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: a(model%n_dy)
+    this%model = model
+    call this%kin%init(this%model)
+    allocate(this%mbar(model%n_dy, model%n_dy), this%gen_force(model%n_dy))
+    call this%evaluate(t0, q_dy0, 0.0_wp * q_dy0, a, err)
+    if (.not. err%ok()) call err%prefix('initial configuration: ')
+  end subroutine dyn_init
+
+  !> Prescribed coordinates and their first two time derivatives at t.
+  subroutine dyn_prescribed(this, t, p, pd, pdd)
+    class(dynamics_t), intent(in) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(out) :: p(:), pd(:), pdd(:)
+    integer :: i
+    do i = 1, this%model%n_rh
+      call this%model%motions(this%model%modes(this%model%q_mode(i))%motion)%eval(t, p(i), &
+        pd(i), pdd(i))
+    end do
+    if (this%locked) then
+      pd = 0.0_wp
+      pdd = 0.0_wp
+    end if
+  end subroutine dyn_prescribed
+
+  !> Full q = (q_rh(t), q_dy).
+  function dyn_full_q(this, t, q_dy) result(q)
+    class(dynamics_t), intent(in) :: this
+    real(wp), intent(in) :: t, q_dy(:)
+    real(wp) :: q(this%model%n_q), pd(this%model%n_rh), pdd(this%model%n_rh)
+    call this%prescribed(t, q(1:this%model%n_rh), pd, pdd)
+    q(this%model%n_rh + 1:) = q_dy
+  end function dyn_full_q
+
+  !> Stress resultants of the dynamic modes, in q_dy order.
+  function dyn_stresses(this, q, qd) result(sigma)
+    class(dynamics_t), intent(in) :: this
+    real(wp), intent(in) :: q(:), qd(:)
+    real(wp) :: sigma(this%model%n_dy)
+    real(wp), allocatable :: e(:), ed(:), s(:, :)
+    integer :: iel, j, nm
+    associate (m => this%model)
+      sigma = 0.0_wp
+      do iel = 1, m%n_elements
+        nm = m%elements(iel)%e%n_modes()
+        if (.not. any(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1)%class &
+                      == MODE_DYNAMIC)) cycle
+        allocate(e(nm), ed(nm), s(nm, nm))
+        call m%mode_values(iel, q, e)
+        call m%mode_values(iel, qd, ed)
+        call m%elements(iel)%e%stiffness(s)
+        e = matmul(s, e + m%elements(iel)%e%damping * ed)
+        do j = 1, nm
+          associate (mode => m%modes(m%mode_first(iel) + j - 1))
+            if (mode%class == MODE_DYNAMIC) sigma(mode%q - m%n_rh) = e(j)
+          end associate
+        end do
+        deallocate(e, ed, s)
+      end do
+    end associate
+  end function dyn_stresses
+
+  !> Accelerations of the dynamic coordinates; also leaves mbar and gen_force for callers.
+  subroutine dyn_evaluate(this, t, q_dy, v_dy, a, err)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q_dy(:), v_dy(:)
+    real(wp), intent(out) :: a(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
+    real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
+    real(wp), allocatable :: me(:, :), he(:), fe(:), dfe(:, :)
+    real(wp) :: pot
+    integer :: iel, i, info, nr, nd
+    character(len=120) :: msg
+    associate (m => this%model, df => this%kin%df)
+      nr = m%n_rh
+      nd = m%n_dy
+      call this%prescribed(t, q(1:nr), qd(1:nr), pdd)
+      q(nr + 1:) = q_dy
+      qd(nr + 1:) = v_dy
+      call this%kin%solve(m, q, err)
+      if (.not. err%ok()) return
+      call this%kin%transfer(m)
+      call this%kin%second(m, qd, conv)
+      if (nr > 0) conv = conv + matmul(df(:, 1:nr), pdd)
+      xd = matmul(df, qd)
+      rhs = this%load_factor * m%force - m%lumped * conv
+      do i = 1, m%n_x
+        if (m%coord_kind(i) == COORD_X) rhs(i) = rhs(i) + this%load_factor * m%lumped(i) * m%gravity(1)
+        if (m%coord_kind(i) == COORD_Y) rhs(i) = rhs(i) + this%load_factor * m%lumped(i) * m%gravity(2)
+      end do
+      this%mbar = 0.0_wp
+      do i = 1, m%n_x
+        if (m%lumped(i) > 0) this%mbar = this%mbar + m%lumped(i) * &
+          matmul(reshape(df(i, nr + 1:), [nd, 1]), reshape(df(i, nr + 1:), [1, nd]))
+      end do
+      do iel = 1, m%n_elements
+        associate (el => m%elements(iel)%e)
+          if (.not. el%has_inertia()) cycle
+          allocate(me(size(el%dofs), size(el%dofs)), he(size(el%dofs)), fe(size(el%dofs)))
+          call el%inertia(this%kin%x(el%dofs), xd(el%dofs), me, he)
+          call el%weight(this%kin%x(el%dofs), this%load_factor * m%gravity, fe, pot)
+          rhs(el%dofs) = rhs(el%dofs) - matmul(me, conv(el%dofs)) - he + fe
+          dfe = df(el%dofs, nr + 1:)
+          this%mbar = this%mbar + matmul(transpose(dfe), matmul(me, dfe))
+          deallocate(me, he, fe)
+        end associate
+      end do
+      this%gen_force = matmul(rhs, df(:, nr + 1:)) - this%stresses(q, qd)
+      a = this%gen_force
+      me = this%mbar
+      call chol_factor(me, info)
+      if (info /= 0) then
+        write(msg, '(a,i0,a)') 'the mass matrix is singular (dynamic coordinate ', info, ', '
+        call err%set(ERR_MODEL, trim(msg) // ' ' // m%q_name(nr + info) // &
+          ', has no inertia: add mass or rotary inertia, or make that mode rigid)')
+        return
+      end if
+      call chol_solve(me, a)
+      if (any(a /= a) .or. any(abs(a) > huge(1.0_wp) / 4)) then
+        write(msg, '(a,es12.5)') 'accelerations are not finite at t = ', t
+        call err%set(ERR_NUMERIC, trim(msg))
+      end if
+    end associate
+  end subroutine dyn_evaluate
+
+  subroutine dyn_accel(this, t, q, v, a, status)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: a(:)
+    integer, intent(out) :: status
+    type(error_t) :: err
+    call this%evaluate(t, q, v, a, err)
+    status = 0
+    if (.not. err%ok()) then
+      ! A kinematic solve that fails may succeed with a smaller step: recoverable.
+      status = 1
+      if (err%code == ERR_MODEL) status = -1
+      call this%last_error%clear()
+      call this%last_error%set(err%code, err%message)
+      a = 0.0_wp
+    end if
+  end subroutine dyn_accel
+
+  subroutine dyn_allocate_history(this, nt)
+    class(dynamics_t), intent(inout) :: this
+    integer, intent(in) :: nt
+    if (allocated(this%x_hist)) deallocate(this%x_hist, this%q_hist, this%v_hist, this%energy_hist)
+    allocate(this%x_hist(this%model%n_x, nt), this%q_hist(this%model%n_dy, nt))
+    allocate(this%v_hist(this%model%n_dy, nt), this%energy_hist(2, nt))
+  end subroutine dyn_allocate_history
+
+  subroutine dyn_record(this, k, t, q, v, status)
+    class(dynamics_t), intent(inout) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t, q(:), v(:)
+    integer, intent(out) :: status
+    real(wp) :: a(size(q))
+    call this%accel(t, q, v, a, status)
+    if (status /= 0) return
+    this%x_hist(:, k) = this%kin%x
+    this%q_hist(:, k) = q
+    this%v_hist(:, k) = v
+    this%energy_hist(:, k) = this%energy(t, q, v)
+  end subroutine dyn_record
+
+  !> Kinetic and potential energy (elastic, loads and gravity) at the last kinematic solution,
+  !> which must belong to (t, q_dy).
+  function dyn_energy(this, t, q_dy, v_dy) result(en)
+    class(dynamics_t), intent(in) :: this
+    real(wp), intent(in) :: t, q_dy(:), v_dy(:)
+    real(wp) :: en(2)
+    real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
+    real(wp) :: xd(this%model%n_x), x(this%model%n_x), pot
+    real(wp), allocatable :: me(:, :), he(:), fe(:), e(:), s(:, :)
+    integer :: iel, i, nm
+    associate (m => this%model)
+      call this%prescribed(t, q(1:m%n_rh), qd(1:m%n_rh), pdd)
+      q(m%n_rh + 1:) = q_dy
+      qd(m%n_rh + 1:) = v_dy
+      x = this%kin%x
+      xd = matmul(this%kin%df, qd)
+      en(1) = 0.5_wp * sum(m%lumped * xd**2)
+      en(2) = -this%load_factor * dot_product(m%force, x)
+      do i = 1, m%n_x
+        if (m%coord_kind(i) == COORD_X) en(2) = en(2) - this%load_factor * m%lumped(i) * m%gravity(1) * x(i)
+        if (m%coord_kind(i) == COORD_Y) en(2) = en(2) - this%load_factor * m%lumped(i) * m%gravity(2) * x(i)
+      end do
+      do iel = 1, m%n_elements
+        associate (el => m%elements(iel)%e)
+          nm = el%n_modes()
+          allocate(e(nm), s(nm, nm))
+          call m%mode_values(iel, q, e)
+          call el%stiffness(s)
+          en(2) = en(2) + 0.5_wp * dot_product(e, matmul(s, e))
+          deallocate(e, s)
+          if (.not. el%has_inertia()) cycle
+          allocate(me(size(el%dofs), size(el%dofs)), he(size(el%dofs)), fe(size(el%dofs)))
+          call el%inertia(x(el%dofs), xd(el%dofs), me, he)
+          call el%weight(x(el%dofs), this%load_factor * m%gravity, fe, pot)
+          en(1) = en(1) + 0.5_wp * dot_product(xd(el%dofs), matmul(me, xd(el%dofs)))
+          en(2) = en(2) + pot
+          deallocate(me, he, fe)
+        end associate
+      end do
+    end associate
+  end function dyn_energy
+end module dynamics_system

@@ -1,0 +1,113 @@
+!> The abstract planar element: deformation modes e = D(x) of its nodal coordinates, their
+!> first derivatives, second directional derivatives, stiffness and (optionally) inertia.
+!>
+!> Elements see only their own coordinates x_e (gathered by the model through `dofs`); every
+!> mode carries a class (rigid, released, prescribed, dynamic) chosen per mode by the user.
+module elements_base
+  use core_kinds, only: wp
+  implicit none
+  private
+  public :: element_t, element_slot_t
+  public :: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC, mode_class_name
+
+  integer, parameter :: MODE_RIGID = 1      !< e = 0
+  integer, parameter :: MODE_RELEASED = 2   !< free, no stiffness, follows from the others
+  integer, parameter :: MODE_PRESCRIBED = 3 !< e = e(t), a driven input
+  integer, parameter :: MODE_DYNAMIC = 4    !< a degree of freedom with stiffness
+
+  type, abstract :: element_t
+    character(len=:), allocatable :: label
+    integer, allocatable :: dofs(:)        !< global indices of the element's coordinates
+    integer, allocatable :: mode_class(:)  !< MODE_* per deformation mode
+    real(wp) :: damping = 0.0_wp           !< stiffness-proportional damping time constant [s]
+  contains
+    procedure(evaluate_iface), deferred :: evaluate
+    procedure(second_iface), deferred :: second
+    procedure(stiffness_iface), deferred :: stiffness
+    procedure :: n_modes => element_n_modes
+    procedure :: has_inertia => element_no_inertia
+    procedure :: inertia => element_zero_inertia
+    procedure :: weight => element_zero_weight
+    procedure :: lumped_mass => element_no_lumped_mass
+  end type element_t
+
+  !> Container so that a model holds elements of different types in one array.
+  type :: element_slot_t
+    class(element_t), allocatable :: e
+  end type element_slot_t
+
+  abstract interface
+    !> Deformations e (n_modes) and their Jacobian de = dD/dx (n_modes, n_coords).
+    pure subroutine evaluate_iface(this, x, e, de)
+      import :: element_t, wp
+      class(element_t), intent(in) :: this
+      real(wp), intent(in) :: x(:)
+      real(wp), intent(out) :: e(:), de(:, :)
+    end subroutine evaluate_iface
+
+    !> Second directional derivative d2/ds2 D(x + s v) at s = 0 for every mode.
+    pure subroutine second_iface(this, x, v, d2e)
+      import :: element_t, wp
+      class(element_t), intent(in) :: this
+      real(wp), intent(in) :: x(:), v(:)
+      real(wp), intent(out) :: d2e(:)
+    end subroutine second_iface
+
+    !> Stiffness matrix S (n_modes, n_modes): sigma = S e.
+    pure subroutine stiffness_iface(this, s)
+      import :: element_t, wp
+      class(element_t), intent(in) :: this
+      real(wp), intent(out) :: s(:, :)
+    end subroutine stiffness_iface
+  end interface
+
+contains
+
+  pure integer function element_n_modes(this)
+    class(element_t), intent(in) :: this
+    element_n_modes = size(this%mode_class)
+  end function element_n_modes
+
+  !> True when the element has a configuration-dependent (consistent) mass.
+  pure logical function element_no_inertia(this)
+    class(element_t), intent(in) :: this
+    element_no_inertia = .false.
+  end function element_no_inertia
+
+  !> Mass matrix m(x) and convective force h(x, xd) = m-derivative terms, for consistent masses.
+  pure subroutine element_zero_inertia(this, x, xd, m, h)
+    class(element_t), intent(in) :: this
+    real(wp), intent(in) :: x(:), xd(:)
+    real(wp), intent(out) :: m(:, :), h(:)
+    m = 0.0_wp
+    h = 0.0_wp
+  end subroutine element_zero_inertia
+
+  !> Nodal forces f (n_coords) of gravity g (2) on a consistent mass, and its potential energy.
+  pure subroutine element_zero_weight(this, x, g, f, potential)
+    class(element_t), intent(in) :: this
+    real(wp), intent(in) :: x(:), g(2)
+    real(wp), intent(out) :: f(:), potential
+    f = 0.0_wp
+    potential = 0.0_wp
+  end subroutine element_zero_weight
+
+  !> Constant diagonal mass per element coordinate (lumped masses).
+  pure subroutine element_no_lumped_mass(this, diag)
+    class(element_t), intent(in) :: this
+    real(wp), intent(out) :: diag(:)
+    diag = 0.0_wp
+  end subroutine element_no_lumped_mass
+
+  pure function mode_class_name(c) result(name)
+    integer, intent(in) :: c
+    character(len=:), allocatable :: name
+    select case (c)
+    case (MODE_RIGID); name = 'rigid'
+    case (MODE_RELEASED); name = 'released'
+    case (MODE_PRESCRIBED); name = 'prescribed'
+    case (MODE_DYNAMIC); name = 'dynamic'
+    case default; name = 'unknown'
+    end select
+  end function mode_class_name
+end module elements_base

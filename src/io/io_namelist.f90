@@ -1,0 +1,985 @@
+!> Reader for scene files in (a hand-written subset of) Fortran namelist syntax.
+!>
+!> We parse ourselves rather than use `read(u, nml=...)`: gfortran names the offending value,
+!> not the variable, on a type error and reads a missing group as end of file. Here every
+!> message is one line naming file, line, group (with its occurrence) and variable.
+!>
+!> Values are kept as raw tokens and converted only by the typed getters, so one parse serves
+!> every caller and a parameter sweep can override a value by text (`set_raw`) before use.
+module io_namelist
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_INPUT
+  implicit none
+  private
+  public :: nml_file_t, nml_group_t, string_t
+
+  type :: string_t
+    character(:), allocatable :: s
+  end type string_t
+
+  !> One value of a list; `rep` comes from a repeat count such as `3*0.0`.
+  type :: item_t
+    character(:), allocatable :: text   ! string contents (unquoted) or the bare token
+    logical :: quoted = .false.
+    integer :: rep = 1
+  end type item_t
+
+  type :: var_t
+    character(:), allocatable :: name
+    type(item_t), allocatable :: items(:)
+    integer :: line = 0
+    logical :: used = .false.
+    logical :: overridden = .false.
+  end type var_t
+
+  type :: nml_group_t
+    character(:), allocatable :: name
+    integer :: line = 0
+    integer :: occurrence = 0
+    character(:), allocatable :: path
+    type(var_t), allocatable, private :: vars(:)
+  contains
+    procedure :: has => group_has
+    procedure :: get_real => group_get_real
+    procedure :: get_int => group_get_int
+    procedure :: get_logical => group_get_logical
+    procedure :: get_string => group_get_string
+    procedure :: get_real_array => group_get_real_array
+    procedure :: get_int_array => group_get_int_array
+    procedure :: get_string_array => group_get_string_array
+    procedure :: check_all_used => group_check_all_used
+    procedure :: where => group_where
+    procedure :: set_raw => group_set_raw
+  end type nml_group_t
+
+  type :: nml_file_t
+    character(:), allocatable :: path, text
+    type(nml_group_t), allocatable :: groups(:)
+  contains
+    procedure :: load => file_load
+    procedure :: parse => file_parse
+    procedure :: count => file_count
+    procedure :: group_index => file_group_index
+    procedure :: check_known_groups => file_check_known_groups
+  end type nml_file_t
+
+  integer, parameter :: TK_EOF = 0, TK_ERR = 1, TK_AMP = 2, TK_SLASH = 3, TK_EQ = 4, &
+    TK_COMMA = 5, TK_WORD = 6, TK_STRING = 7
+
+  type :: token_t
+    integer :: kind = TK_EOF
+    integer :: line = 0
+    integer :: rep = 1
+    character(:), allocatable :: text   ! word, string contents, group name or error message
+  end type token_t
+
+  character(*), parameter :: WHITE = ' ' // achar(9) // achar(10) // achar(13)
+  character(*), parameter :: NAME_CHARS = 'abcdefghijklmnopqrstuvwxyz0123456789_'
+
+contains
+
+  ! ---------------------------------------------------------------- file level
+
+  subroutine file_load(this, path, err)
+    class(nml_file_t), intent(inout) :: this
+    character(*), intent(in) :: path
+    type(error_t), intent(out) :: err
+    character(256) :: msg
+    character(:), allocatable :: text
+    integer :: u, ios, n
+
+    open(newunit=u, file=path, status='old', access='stream', form='unformatted', &
+      action='read', iostat=ios, iomsg=msg)
+    if (ios /= 0) then
+      call err%set(ERR_INPUT, "cannot open input file '" // path // "': " // system_part(msg))
+      return
+    end if
+    inquire(unit=u, size=n)
+    allocate(character(max(n, 0)) :: text)
+    if (n > 0) read(u, iostat=ios, iomsg=msg) text
+    close(u)
+    if (ios /= 0 .or. n < 0) then
+      if (n < 0) msg = 'size unknown'
+      call err%set(ERR_INPUT, "cannot read input file '" // path // "': " // system_part(msg))
+      return
+    end if
+    call this%parse(text, path, err)
+  end subroutine file_load
+
+  !> gfortran's iomsg repeats the file name ("Cannot open file 'x': No such ..."); keep the reason.
+  function system_part(msg) result(r)
+    character(*), intent(in) :: msg
+    character(:), allocatable :: r
+    integer :: k
+    k = index(msg, "': ", back=.true.)
+    r = trim(msg(merge(k + 3, 1, k > 0):))
+  end function system_part
+
+  subroutine file_parse(this, text, path, err)
+    class(nml_file_t), intent(inout) :: this
+    character(*), intent(in) :: text, path
+    type(error_t), intent(out) :: err
+    type(nml_group_t), allocatable :: tmp(:)
+    type(nml_group_t) :: g
+    type(token_t) :: tok
+    integer :: pos, line, n
+
+    this%path = path
+    this%text = text
+    if (allocated(this%groups)) deallocate(this%groups)
+    allocate(this%groups(0))
+    pos = 1
+    line = 1
+    do
+      ! Outside groups only '&' matters; '!' comments are skipped so '&' in them is harmless.
+      do while (pos <= len(text))
+        if (text(pos:pos) == '&') exit
+        if (text(pos:pos) == '!') then
+          do while (pos <= len(text))
+            if (text(pos:pos) == achar(10)) exit
+            pos = pos + 1
+          end do
+          cycle
+        end if
+        if (text(pos:pos) == achar(10)) line = line + 1
+        pos = pos + 1
+      end do
+      if (pos > len(text)) return
+      call next_token(text, pos, line, tok)
+      if (tok%kind == TK_ERR) then
+        call err%set(ERR_INPUT, at(path, tok%line) // tok%text)
+        return
+      end if
+      ! component by component: gfortran 12 has ICEs on constructors with such components
+      g%name = tok%text
+      g%line = tok%line
+      g%path = path
+      g%occurrence = this%count(tok%text) + 1
+      if (allocated(g%vars)) deallocate(g%vars)
+      allocate(g%vars(0))
+      call parse_group_body(g, text, pos, line, err)
+      if (.not. err%ok()) return
+      n = size(this%groups)
+      allocate(tmp(n + 1))
+      tmp(1:n) = this%groups
+      tmp(n + 1) = g
+      call move_alloc(tmp, this%groups)
+    end do
+  end subroutine file_parse
+
+  subroutine parse_group_body(g, text, pos, line, err)
+    type(nml_group_t), intent(inout) :: g
+    character(*), intent(in) :: text
+    integer, intent(inout) :: pos, line
+    type(error_t), intent(inout) :: err
+    type(token_t) :: tok
+    type(var_t) :: v
+    character(:), allocatable :: msg
+    integer :: k, eline
+
+    do
+      call next_token(text, pos, line, tok)
+      select case (tok%kind)
+      case (TK_SLASH)
+        return
+      case (TK_COMMA)
+        cycle
+      case (TK_EOF)
+        call err%set(ERR_INPUT, g%where() // ": missing closing '/'")
+        return
+      case (TK_AMP)
+        if (tok%text == 'end') return   ! old-style '&end' terminator
+        call err%set(ERR_INPUT, g%where() // ": missing closing '/' before &" // tok%text // &
+          ' on line ' // itoa(tok%line))
+        return
+      case (TK_ERR)
+        call err%set(ERR_INPUT, where_at(g, tok%line) // ': ' // tok%text)
+        return
+      case (TK_WORD)
+        continue
+      case default
+        call err%set(ERR_INPUT, where_at(g, tok%line) // ': expected a variable name, got ' // &
+          describe(tok))
+        return
+      end select
+
+      v%name = lower(tok%text)
+      v%line = tok%line
+      call check_name(v%name, msg)
+      if (len(msg) == 0) then
+        call next_token(text, pos, line, tok)
+        if (tok%kind /= TK_EQ) msg = "'=' missing after '" // v%name // "'"
+      end if
+      if (len(msg) > 0) then
+        call err%set(ERR_INPUT, where_at(g, v%line) // ': ' // msg)
+        return
+      end if
+      k = find_var(g, v%name)
+      if (k > 0) then
+        call err%set(ERR_INPUT, where_at(g, v%line) // ": variable '" // v%name // &
+          "' assigned twice (first on line " // itoa(g%vars(k)%line) // ')')
+        return
+      end if
+      call parse_values(text, pos, line, v%items, msg, eline)
+      if (len(msg) > 0) then
+        call err%set(ERR_INPUT, where_at(g, eline) // ": variable '" // v%name // "': " // msg)
+        return
+      end if
+      call add_var(g, v)
+    end do
+  end subroutine parse_group_body
+
+  !> Collect values up to the next `name =`, '/', '&' or end of text.
+  subroutine parse_values(text, pos, line, items, msg, eline)
+    character(*), intent(in) :: text
+    integer, intent(inout) :: pos, line
+    type(item_t), allocatable, intent(out) :: items(:)
+    character(:), allocatable, intent(out) :: msg
+    integer, intent(out) :: eline
+    type(token_t) :: tok, after
+    type(item_t) :: it
+    type(item_t), allocatable :: tmp(:)
+    integer :: pos0, line0, p, l, star, n
+    logical :: want_value
+
+    allocate(items(4))
+    n = 0
+    msg = ''
+    eline = line
+    want_value = .true.
+    do
+      pos0 = pos
+      line0 = line
+      call next_token(text, pos, line, tok)
+      select case (tok%kind)
+      case (TK_ERR)
+        msg = tok%text
+        eline = tok%line
+        return
+      case (TK_COMMA)
+        if (want_value) then
+          msg = 'empty value'
+          eline = tok%line
+          return
+        end if
+        want_value = .true.
+        cycle
+      case (TK_WORD)
+        p = pos
+        l = line
+        call next_token(text, p, l, after)
+        if (after%kind == TK_EQ) exit                 ! the word names the next variable
+        it%text = tok%text
+        it%quoted = .false.
+        it%rep = 1
+        star = index(tok%text, '*')
+        if (star > 0) then
+          eline = tok%line
+          it%rep = repeat_count(tok%text(:star - 1))
+          it%text = tok%text(star + 1:)
+          if (it%rep < 1) then
+            msg = "bad repeat count in '" // tok%text // "'"
+            return
+          else if (len(it%text) == 0) then
+            msg = "empty value in '" // tok%text // "'"
+            return
+          end if
+        end if
+      case (TK_STRING)
+        it%text = tok%text
+        it%quoted = .true.
+        it%rep = tok%rep
+      case default
+        exit
+      end select
+      if (n == size(items)) then   ! grow geometrically: long arrays stay linear
+        allocate(tmp(2 * n))
+        tmp(1:n) = items
+        call move_alloc(tmp, items)
+      end if
+      n = n + 1
+      items(n) = it
+      want_value = .false.
+    end do
+    pos = pos0
+    line = line0
+    items = items(1:n)
+    if (n == 0) msg = 'empty value'
+  end subroutine parse_values
+
+  subroutine next_token(text, pos, line, tok)
+    character(*), intent(in) :: text
+    integer, intent(inout) :: pos, line
+    type(token_t), intent(out) :: tok
+    integer :: start, n
+    character :: c
+
+    n = len(text)
+    do while (pos <= n)
+      c = text(pos:pos)
+      if (c == '!') then
+        do while (pos <= n)
+          if (text(pos:pos) == achar(10)) exit
+          pos = pos + 1
+        end do
+      else if (index(WHITE, c) > 0) then
+        if (c == achar(10)) line = line + 1
+        pos = pos + 1
+      else
+        exit
+      end if
+    end do
+    tok%line = line
+    tok%text = ''
+    if (pos > n) return
+    c = text(pos:pos)
+    pos = pos + 1
+    select case (c)
+    case ('/')
+      tok%kind = TK_SLASH
+    case ('=')
+      tok%kind = TK_EQ
+    case (',')
+      tok%kind = TK_COMMA
+    case ('&')
+      start = pos
+      do while (pos <= n)
+        if (index(NAME_CHARS, lower(text(pos:pos))) == 0) exit
+        pos = pos + 1
+      end do
+      tok%text = lower(text(start:pos - 1))
+      tok%kind = TK_AMP
+      if (.not. is_name(tok%text)) then
+        tok%kind = TK_ERR
+        tok%text = "expected a group name after '&'"
+      end if
+    case ("'", '"')
+      call read_string(text, pos, c, tok)
+    case default
+      start = pos - 1
+      do while (pos <= n)
+        if (scan(text(pos:pos), WHITE // ',=/!&''"') > 0) exit
+        pos = pos + 1
+      end do
+      tok%kind = TK_WORD
+      tok%text = text(start:pos - 1)
+      ! `2*'abc'`: a repeat count written against a quoted string
+      if (pos <= n .and. pos - start >= 2) then
+        if (scan(text(pos:pos), '''"') > 0 .and. text(pos - 1:pos - 1) == '*' .and. &
+            verify(text(start:pos - 2), '0123456789') == 0) then
+          tok%rep = repeat_count(text(start:pos - 2))
+          c = text(pos:pos)
+          pos = pos + 1
+          call read_string(text, pos, c, tok)
+          if (tok%rep < 1 .and. tok%kind == TK_STRING) then
+            tok%kind = TK_ERR
+            tok%text = 'bad repeat count'
+          end if
+        end if
+      end if
+    end select
+  end subroutine next_token
+
+  !> Quoted string starting after the opening quote `q`; it must close on the same line.
+  subroutine read_string(text, pos, q, tok)
+    character(*), intent(in) :: text
+    integer, intent(inout) :: pos
+    character, intent(in) :: q
+    type(token_t), intent(inout) :: tok
+    character(:), allocatable :: s
+    integer :: n
+
+    n = len(text)
+    s = ''
+    do while (pos <= n)
+      if (text(pos:pos) == achar(10)) exit
+      if (text(pos:pos) == q) then
+        if (pos < n) then
+          if (text(pos + 1:pos + 1) == q) then   ! doubled quote stands for one
+            s = s // q
+            pos = pos + 2
+            cycle
+          end if
+        end if
+        pos = pos + 1
+        tok%kind = TK_STRING
+        tok%text = s
+        return
+      end if
+      s = s // text(pos:pos)
+      pos = pos + 1
+    end do
+    tok%kind = TK_ERR
+    tok%text = 'unterminated string (a string must end on the line where it starts)'
+  end subroutine read_string
+
+  integer function file_count(this, name) result(n)
+    class(nml_file_t), intent(in) :: this
+    character(*), intent(in) :: name
+    integer :: i
+    n = 0
+    if (.not. allocated(this%groups)) return
+    do i = 1, size(this%groups)
+      if (this%groups(i)%name == lower(trim(name))) n = n + 1
+    end do
+  end function file_count
+
+  integer function file_group_index(this, name, k) result(idx)
+    class(nml_file_t), intent(in) :: this
+    character(*), intent(in) :: name
+    integer, intent(in) :: k
+    integer :: i, seen
+    idx = 0
+    if (.not. allocated(this%groups)) return
+    seen = 0
+    do i = 1, size(this%groups)
+      if (this%groups(i)%name == lower(trim(name))) then
+        seen = seen + 1
+        if (seen == k) then
+          idx = i
+          return
+        end if
+      end if
+    end do
+  end function file_group_index
+
+  subroutine file_check_known_groups(this, names, err)
+    class(nml_file_t), intent(in) :: this
+    character(*), intent(in) :: names(:)
+    type(error_t), intent(out) :: err
+    integer :: i, j
+    logical :: known
+    if (.not. allocated(this%groups)) return
+    do i = 1, size(this%groups)
+      known = .false.
+      do j = 1, size(names)
+        known = known .or. this%groups(i)%name == lower(trim(names(j)))
+      end do
+      if (.not. known) then
+        call err%set(ERR_INPUT, at(this%path, this%groups(i)%line) // 'unknown group &' // &
+          this%groups(i)%name)
+        return
+      end if
+    end do
+  end subroutine file_check_known_groups
+
+  ! ---------------------------------------------------------------- group level
+
+  !> "scene.nml:12: group &link #2"
+  function group_where(this) result(s)
+    class(nml_group_t), intent(in) :: this
+    character(:), allocatable :: s
+    s = where_at(this, this%line)
+  end function group_where
+
+  function where_at(g, line) result(s)
+    class(nml_group_t), intent(in) :: g
+    integer, intent(in) :: line
+    character(:), allocatable :: s
+    s = at(g%path, line) // 'group &' // g%name // ' #' // itoa(g%occurrence)
+  end function where_at
+
+  !> Prefix for messages about variable k: where it was written, or that an override set it.
+  function var_where(g, k) result(s)
+    class(nml_group_t), intent(in) :: g
+    integer, intent(in) :: k
+    character(:), allocatable :: s
+    s = where_at(g, g%vars(k)%line) // ": variable '" // g%vars(k)%name // "'"
+    if (g%vars(k)%overridden) s = s // ' (set by override)'
+    s = s // ': '
+  end function var_where
+
+  logical function group_has(this, var)
+    class(nml_group_t), intent(in) :: this
+    character(*), intent(in) :: var
+    group_has = find_var(this, lower(trim(var))) > 0
+  end function group_has
+
+  !> Find `var` and mark it used. k = 0 when absent: an error unless a default exists.
+  subroutine lookup(g, var, has_default, scalar, k, err)
+    class(nml_group_t), intent(inout) :: g
+    character(*), intent(in) :: var
+    logical, intent(in) :: has_default, scalar
+    integer, intent(out) :: k
+    type(error_t), intent(inout) :: err
+    integer :: n
+    k = find_var(g, lower(trim(var)))
+    if (k == 0) then
+      if (.not. has_default) call err%set(ERR_INPUT, g%where() // &
+        ": missing required variable '" // lower(trim(var)) // "'")
+      return
+    end if
+    g%vars(k)%used = .true.
+    n = sum(g%vars(k)%items%rep)
+    if (scalar .and. n /= 1) then
+      call err%set(ERR_INPUT, var_where(g, k) // 'expected one value, got ' // itoa(n))
+      k = 0
+    end if
+  end subroutine lookup
+
+  subroutine group_get_real(this, var, value, err, default)
+    class(nml_group_t), intent(inout) :: this
+    character(*), intent(in) :: var
+    real(wp), intent(out) :: value
+    type(error_t), intent(out) :: err
+    real(wp), intent(in), optional :: default
+    character(:), allocatable :: msg
+    integer :: k
+    value = 0
+    call lookup(this, var, present(default), .true., k, err)
+    if (k == 0) then
+      if (err%ok() .and. present(default)) value = default
+      return
+    end if
+    call to_real(this%vars(k)%items(1), value, msg)
+    if (len(msg) > 0) call err%set(ERR_INPUT, var_where(this, k) // msg)
+  end subroutine group_get_real
+
+  subroutine group_get_int(this, var, value, err, default)
+    class(nml_group_t), intent(inout) :: this
+    character(*), intent(in) :: var
+    integer, intent(out) :: value
+    type(error_t), intent(out) :: err
+    integer, intent(in), optional :: default
+    character(:), allocatable :: msg
+    integer :: k
+    value = 0
+    call lookup(this, var, present(default), .true., k, err)
+    if (k == 0) then
+      if (err%ok() .and. present(default)) value = default
+      return
+    end if
+    call to_int(this%vars(k)%items(1), value, msg)
+    if (len(msg) > 0) call err%set(ERR_INPUT, var_where(this, k) // msg)
+  end subroutine group_get_int
+
+  subroutine group_get_logical(this, var, value, err, default)
+    class(nml_group_t), intent(inout) :: this
+    character(*), intent(in) :: var
+    logical, intent(out) :: value
+    type(error_t), intent(out) :: err
+    logical, intent(in), optional :: default
+    type(item_t) :: it
+    integer :: k
+    value = .false.
+    call lookup(this, var, present(default), .true., k, err)
+    if (k == 0) then
+      if (err%ok() .and. present(default)) value = default
+      return
+    end if
+    it = this%vars(k)%items(1)
+    if (.not. it%quoted) then
+      select case (lower(it%text))
+      case ('.true.', '.t.', 't')
+        value = .true.
+        return
+      case ('.false.', '.f.', 'f')
+        return
+      end select
+    end if
+    call err%set(ERR_INPUT, var_where(this, k) // 'expected a logical (.true. or .false.), got ' &
+      // shown(it))
+  end subroutine group_get_logical
+
+  subroutine group_get_string(this, var, value, err, default)
+    class(nml_group_t), intent(inout) :: this
+    character(*), intent(in) :: var
+    character(:), allocatable, intent(out) :: value
+    type(error_t), intent(out) :: err
+    character(*), intent(in), optional :: default
+    integer :: k
+    value = ''
+    call lookup(this, var, present(default), .true., k, err)
+    if (k == 0) then
+      if (err%ok() .and. present(default)) value = default
+      return
+    end if
+    if (.not. this%vars(k)%items(1)%quoted) then
+      call err%set(ERR_INPUT, var_where(this, k) // 'expected a quoted string, got ' // &
+        shown(this%vars(k)%items(1)))
+      return
+    end if
+    value = this%vars(k)%items(1)%text
+  end subroutine group_get_string
+
+  subroutine group_get_real_array(this, var, values, err, default)
+    class(nml_group_t), intent(inout) :: this
+    character(*), intent(in) :: var
+    real(wp), allocatable, intent(out) :: values(:)
+    type(error_t), intent(out) :: err
+    real(wp), intent(in), optional :: default(:)
+    character(:), allocatable :: msg
+    real(wp) :: x
+    integer :: k, i, m
+    call lookup(this, var, present(default), .false., k, err)
+    if (k == 0) then
+      allocate(values(0))
+      if (err%ok() .and. present(default)) values = default
+      return
+    end if
+    associate (items => this%vars(k)%items)
+      allocate(values(sum(items%rep)))
+      m = 0
+      do i = 1, size(items)
+        call to_real(items(i), x, msg)
+        if (len(msg) > 0) then
+          call err%set(ERR_INPUT, var_where(this, k) // 'value ' // itoa(m + 1) // ': ' // msg)
+          return
+        end if
+        values(m + 1:m + items(i)%rep) = x
+        m = m + items(i)%rep
+      end do
+    end associate
+  end subroutine group_get_real_array
+
+  subroutine group_get_int_array(this, var, values, err, default)
+    class(nml_group_t), intent(inout) :: this
+    character(*), intent(in) :: var
+    integer, allocatable, intent(out) :: values(:)
+    type(error_t), intent(out) :: err
+    integer, intent(in), optional :: default(:)
+    character(:), allocatable :: msg
+    integer :: k, i, m, x
+    call lookup(this, var, present(default), .false., k, err)
+    if (k == 0) then
+      allocate(values(0))
+      if (err%ok() .and. present(default)) values = default
+      return
+    end if
+    associate (items => this%vars(k)%items)
+      allocate(values(sum(items%rep)))
+      m = 0
+      do i = 1, size(items)
+        call to_int(items(i), x, msg)
+        if (len(msg) > 0) then
+          call err%set(ERR_INPUT, var_where(this, k) // 'value ' // itoa(m + 1) // ': ' // msg)
+          return
+        end if
+        values(m + 1:m + items(i)%rep) = x
+        m = m + items(i)%rep
+      end do
+    end associate
+  end subroutine group_get_int_array
+
+  subroutine group_get_string_array(this, var, values, err, default)
+    class(nml_group_t), intent(inout) :: this
+    character(*), intent(in) :: var
+    type(string_t), allocatable, intent(out) :: values(:)
+    type(error_t), intent(out) :: err
+    type(string_t), intent(in), optional :: default(:)
+    integer :: k, i, j, m
+    call lookup(this, var, present(default), .false., k, err)
+    if (k == 0) then
+      allocate(values(0))
+      if (err%ok() .and. present(default)) values = default
+      return
+    end if
+    associate (items => this%vars(k)%items)
+      allocate(values(sum(items%rep)))
+      m = 0
+      do i = 1, size(items)
+        if (.not. items(i)%quoted) then
+          call err%set(ERR_INPUT, var_where(this, k) // 'value ' // itoa(m + 1) // &
+            ': expected a quoted string, got ' // shown(items(i)))
+          deallocate(values)
+          allocate(values(0))
+          return
+        end if
+        do j = 1, items(i)%rep
+          m = m + 1
+          values(m)%s = items(i)%text
+        end do
+      end do
+    end associate
+  end subroutine group_get_string_array
+
+  subroutine group_check_all_used(this, err)
+    class(nml_group_t), intent(in) :: this
+    type(error_t), intent(out) :: err
+    integer :: k
+    if (.not. allocated(this%vars)) return
+    do k = 1, size(this%vars)
+      if (.not. this%vars(k)%used) then
+        call err%set(ERR_INPUT, where_at(this, this%vars(k)%line) // ": unknown variable '" // &
+          this%vars(k)%name // "'")
+        return
+      end if
+    end do
+  end subroutine group_check_all_used
+
+  !> Replace or add `var` with the values written in `text` (as after '=' in the file).
+  subroutine group_set_raw(this, var, text, err)
+    class(nml_group_t), intent(inout) :: this
+    character(*), intent(in) :: var, text
+    type(error_t), intent(out) :: err
+    type(item_t), allocatable :: items(:)
+    type(token_t) :: tok
+    type(var_t) :: new
+    character(:), allocatable :: name, msg
+    integer :: pos, line, eline, k
+
+    name = lower(trim(var))
+    call check_name(name, msg)
+    if (len(msg) > 0) then
+      call err%set(ERR_INPUT, this%where() // ': ' // msg)
+      return
+    end if
+    pos = 1
+    line = 1
+    call parse_values(text, pos, line, items, msg, eline)
+    if (len(msg) == 0) then
+      call next_token(text, pos, line, tok)
+      if (tok%kind /= TK_EOF) msg = 'unexpected ' // describe(tok)
+    end if
+    if (len(msg) > 0) then
+      call err%set(ERR_INPUT, this%where() // ": variable '" // name // "': bad value '" // &
+        text // "': " // msg)
+      return
+    end if
+    k = find_var(this, name)
+    if (k == 0) then
+      new%name = name
+      new%line = this%line
+      call add_var(this, new)
+      k = size(this%vars)
+    end if
+    this%vars(k)%items = items
+    this%vars(k)%overridden = .true.
+  end subroutine group_set_raw
+
+  ! ---------------------------------------------------------------- helpers
+
+  integer function find_var(g, name) result(k)
+    class(nml_group_t), intent(in) :: g
+    character(*), intent(in) :: name
+    if (allocated(g%vars)) then
+      do k = 1, size(g%vars)
+        if (g%vars(k)%name == name) return
+      end do
+    end if
+    k = 0
+  end function find_var
+
+  subroutine add_var(g, v)
+    type(nml_group_t), intent(inout) :: g
+    type(var_t), intent(in) :: v
+    type(var_t), allocatable :: tmp(:)
+    integer :: n
+    if (.not. allocated(g%vars)) allocate(g%vars(0))
+    n = size(g%vars)
+    allocate(tmp(n + 1))
+    tmp(1:n) = g%vars
+    tmp(n + 1) = v
+    call move_alloc(tmp, g%vars)
+  end subroutine add_var
+
+  !> Empty msg when `name` is a valid variable name.
+  subroutine check_name(name, msg)
+    character(*), intent(in) :: name
+    character(:), allocatable, intent(out) :: msg
+    msg = ''
+    if (index(name, '(') > 0) then
+      msg = "indexed assignment '" // name // "' is not supported: give the whole array, " // &
+        "e.g. x = 1.0, 2.0, 3.0"
+    else if (.not. is_name(name)) then
+      msg = "invalid variable name '" // name // "'"
+    end if
+  end subroutine check_name
+
+  !> A letter followed by letters, digits or underscores (lower case).
+  pure logical function is_name(s)
+    character(*), intent(in) :: s
+    is_name = .false.
+    if (len(s) == 0) return
+    is_name = index(NAME_CHARS(1:26), s(1:1)) > 0 .and. verify(s, NAME_CHARS) == 0
+  end function is_name
+
+  !> The n of `n*value`; 0 when it is not a positive integer.
+  integer function repeat_count(s) result(n)
+    character(*), intent(in) :: s
+    integer :: ios
+    n = 0
+    if (len(s) == 0 .or. verify(s, '0123456789') /= 0) return
+    read(s, *, iostat=ios) n
+    if (ios /= 0) n = 0
+  end function repeat_count
+
+  subroutine to_real(it, x, msg)
+    type(item_t), intent(in) :: it
+    real(wp), intent(out) :: x
+    character(:), allocatable, intent(out) :: msg
+    character(:), allocatable :: t
+    integer :: ios
+    x = 0
+    msg = ''
+    t = lower(it%text)
+    select case (t(max(verify(t, '+-'), 1):))   ! sign stripped
+    case ('nan', 'inf', 'infinity')
+      if (.not. it%quoted) then
+        msg = 'expected a finite real number, got ' // shown(it)
+        return
+      end if
+    end select
+    if (it%quoted .or. .not. is_real_syntax(t)) then
+      msg = 'expected a real number, got ' // shown(it)
+      return
+    end if
+    ! strtod would raise the overflow trap of debug builds, so reject huge values first
+    if (decimal_exponent(t) > 308) then
+      msg = 'real number out of range: ' // shown(it)
+      return
+    end if
+    read(t, *, iostat=ios) x
+    if (ios /= 0 .or. .not. ieee_is_finite(x)) msg = 'expected a finite real number, got ' // &
+      shown(it)
+  end subroutine to_real
+
+  subroutine to_int(it, x, msg)
+    type(item_t), intent(in) :: it
+    integer, intent(out) :: x
+    character(:), allocatable, intent(out) :: msg
+    integer :: ios
+    x = 0
+    msg = ''
+    if (it%quoted .or. .not. is_int_syntax(it%text, signed=.true.)) then
+      msg = 'expected an integer, got ' // shown(it)
+      return
+    end if
+    read(it%text, *, iostat=ios) x
+    if (ios /= 0) msg = 'integer out of range: ' // shown(it)
+  end subroutine to_int
+
+  pure logical function is_int_syntax(s, signed)
+    character(*), intent(in) :: s
+    logical, intent(in) :: signed
+    integer :: i0
+    i0 = 1
+    if (signed .and. len(s) > 0) then
+      if (scan(s(1:1), '+-') > 0) i0 = 2
+    end if
+    is_int_syntax = len(s) >= i0 .and. verify(s(i0:), '0123456789') == 0
+  end function is_int_syntax
+
+  !> [sign] digits [. digits] [(e|d) [sign] digits], with at least one mantissa digit.
+  pure logical function is_real_syntax(s)
+    character(*), intent(in) :: s   ! lower case
+    integer :: i, n, nd
+    n = len(s)
+    is_real_syntax = .false.
+    i = 1
+    if (n == 0) return
+    if (scan(s(1:1), '+-') > 0) i = 2
+    nd = 0
+    call digits(i, nd)
+    if (i <= n) then
+      if (s(i:i) == '.') then
+        i = i + 1
+        call digits(i, nd)
+      end if
+    end if
+    if (nd == 0) return
+    if (i <= n) then
+      if (scan(s(i:i), 'ed') == 0) return
+      i = i + 1
+      if (i <= n) then
+        if (scan(s(i:i), '+-') > 0) i = i + 1
+      end if
+      nd = 0
+      call digits(i, nd)
+      if (nd == 0) return
+    end if
+    is_real_syntax = i > n
+  contains
+    pure subroutine digits(i, nd)
+      integer, intent(inout) :: i, nd
+      do while (i <= n)
+        if (scan(s(i:i), '0123456789') == 0) exit
+        i = i + 1
+        nd = nd + 1
+      end do
+    end subroutine digits
+  end function is_real_syntax
+
+  !> E such that |x| < 10**E (0 for zero) for text that passed is_real_syntax; capped so
+  !> absurd exponents cannot overflow the integer.
+  pure integer function decimal_exponent(s) result(e)
+    character(*), intent(in) :: s
+    integer :: i, k, dot, first, ex
+    k = scan(s, 'ed')
+    ex = 0
+    if (k > 0) then
+      do i = k + 1, len(s)
+        if (scan(s(i:i), '0123456789') > 0) ex = min(ex * 10 + iachar(s(i:i)) - iachar('0'), 100000)
+      end do
+      if (scan(s(k + 1:), '-') > 0) ex = -ex
+    else
+      k = len(s) + 1
+    end if
+    dot = index(s(:k - 1), '.')
+    if (dot == 0) dot = k
+    first = scan(s(:k - 1), '123456789')
+    e = 0
+    if (first == 0) return
+    if (first < dot) then
+      e = ex + (dot - first)
+    else
+      e = ex - (first - dot - 1)
+    end if
+  end function decimal_exponent
+
+  function shown(it) result(s)
+    type(item_t), intent(in) :: it
+    character(:), allocatable :: s
+    if (it%quoted) then
+      s = "string '" // it%text // "'"
+    else
+      s = "'" // it%text // "'"
+    end if
+  end function shown
+
+  function describe(tok) result(s)
+    type(token_t), intent(in) :: tok
+    character(:), allocatable :: s
+    select case (tok%kind)
+    case (TK_SLASH)
+      s = "'/'"
+    case (TK_EQ)
+      s = "'='"
+    case (TK_COMMA)
+      s = "','"
+    case (TK_AMP)
+      s = "'&" // tok%text // "'"
+    case (TK_STRING)
+      s = "string '" // tok%text // "'"
+    case default
+      s = "'" // tok%text // "'"
+    end select
+  end function describe
+
+  !> "path:line: "
+  function at(path, line) result(s)
+    character(*), intent(in) :: path
+    integer, intent(in) :: line
+    character(:), allocatable :: s
+    s = path // ':' // itoa(line) // ': '
+  end function at
+
+  pure function itoa(i) result(s)
+    integer, intent(in) :: i
+    character(:), allocatable :: s
+    character(24) :: buf
+    write(buf, '(i0)') i
+    s = trim(buf)
+  end function itoa
+
+  pure function lower(s) result(r)
+    character(*), intent(in) :: s
+    character(len(s)) :: r
+    integer :: i
+    r = s
+    do i = 1, len(s)
+      if (s(i:i) >= 'A' .and. s(i:i) <= 'Z') r(i:i) = achar(iachar(s(i:i)) + 32)
+    end do
+  end function lower
+end module io_namelist

@@ -1,0 +1,381 @@
+!> Reads a scene file (namelist syntax) into scene records. The groups, their variables,
+!> units and defaults are documented in docs/input.md; keep the two in step.
+!>
+!> Every message names the file, line, group and variable. Values are range-checked here when
+!> the check needs no other record; cross-references are checked by model_build.
+module io_scene
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_INPUT
+  use io_namelist, only: nml_file_t, nml_group_t, string_t
+  use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
+    mass_rec_t, force_rec_t, motion_rec_t, label_t
+  implicit none
+  private
+  public :: read_scene, load_scene, SCENE_GROUPS
+
+  character(len=8), parameter :: SCENE_GROUPS(12) = [character(len=8) :: 'scene', 'node', &
+    'link', 'hinge', 'truss', 'mass', 'force', 'motion', 'static', 'modal', 'dynamic', 'output']
+
+contains
+
+  !> Load and read a scene file.
+  subroutine load_scene(path, file, scene, err)
+    character(len=*), intent(in) :: path
+    type(nml_file_t), intent(out) :: file
+    type(scene_t), intent(out) :: scene
+    type(error_t), intent(out) :: err
+    call file%load(path, err)
+    if (err%ok()) call read_scene(file, scene, err)
+  end subroutine load_scene
+
+  subroutine read_scene(file, scene, err)
+    type(nml_file_t), intent(inout) :: file
+    type(scene_t), intent(out) :: scene
+    type(error_t), intent(out) :: err
+    integer :: i
+    call file%check_known_groups(SCENE_GROUPS, err)
+    if (.not. err%ok()) return
+    do i = 1, size(SCENE_GROUPS)
+      if (any(SCENE_GROUPS(i) == [character(len=8) :: 'scene', 'static', 'modal', 'dynamic', &
+                                  'output']) .and. file%count(trim(SCENE_GROUPS(i))) > 1) then
+        call err%set(ERR_INPUT, file%path // ': group &' // trim(SCENE_GROUPS(i)) // &
+          ' may appear only once')
+        return
+      end if
+    end do
+    if (file%count('node') == 0) then
+      call err%set(ERR_INPUT, file%path // ': the scene has no &node group')
+      return
+    end if
+    allocate(scene%nodes(file%count('node')), scene%links(file%count('link')))
+    allocate(scene%hinges(file%count('hinge')), scene%trusses(file%count('truss')))
+    allocate(scene%masses(file%count('mass')), scene%forces(file%count('force')))
+    allocate(scene%motions(file%count('motion')))
+    do i = 1, size(file%groups)
+      associate (g => file%groups(i))
+        select case (g%name)
+        case ('scene'); call read_scene_group(g, scene, err)
+        case ('node'); call read_node(g, scene%nodes(g%occurrence), err)
+        case ('link'); call read_link(g, scene%links(g%occurrence), err)
+        case ('hinge'); call read_hinge(g, scene%hinges(g%occurrence), err)
+        case ('truss'); call read_truss(g, scene%trusses(g%occurrence), err)
+        case ('mass'); call read_mass(g, scene%masses(g%occurrence), err)
+        case ('force'); call read_force(g, scene%forces(g%occurrence), err)
+        case ('motion'); call read_motion(g, scene%motions(g%occurrence), err)
+        case ('static'); call read_static(g, scene, err)
+        case ('modal'); call read_modal(g, scene, err)
+        case ('dynamic'); call read_dynamic(g, scene, err)
+        case ('output'); call read_output(g, scene, err)
+        end select
+        if (err%ok()) call g%check_all_used(err)
+      end associate
+      if (.not. err%ok()) return
+    end do
+    if (.not. allocated(scene%output_nodes)) then
+      allocate(scene%output_nodes(size(scene%nodes)))
+      do i = 1, size(scene%nodes)
+        scene%output_nodes(i)%s = scene%nodes(i)%label
+      end do
+    end if
+    if (.not. allocated(scene%title)) scene%title = ''
+  end subroutine read_scene
+
+  ! Getter wrappers that keep the first error and skip work after it.
+
+  subroutine rd_real(g, var, value, err, default)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: var
+    real(wp), intent(inout) :: value
+    type(error_t), intent(inout) :: err
+    real(wp), intent(in), optional :: default
+    type(error_t) :: e
+    if (.not. err%ok()) return
+    call g%get_real(var, value, e, default)
+    if (.not. e%ok()) err = e
+  end subroutine rd_real
+
+  subroutine rd_int(g, var, value, err, default)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: var
+    integer, intent(inout) :: value
+    type(error_t), intent(inout) :: err
+    integer, intent(in), optional :: default
+    type(error_t) :: e
+    if (.not. err%ok()) return
+    call g%get_int(var, value, e, default)
+    if (.not. e%ok()) err = e
+  end subroutine rd_int
+
+  subroutine rd_logical(g, var, value, err, default)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: var
+    logical, intent(inout) :: value
+    type(error_t), intent(inout) :: err
+    logical, intent(in), optional :: default
+    type(error_t) :: e
+    if (.not. err%ok()) return
+    call g%get_logical(var, value, e, default)
+    if (.not. e%ok()) err = e
+  end subroutine rd_logical
+
+  !> Strings; `lower` folds keywords (mode classes, laws) to lower case.
+  subroutine rd_string(g, var, value, err, default, lower)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: var
+    character(len=:), allocatable, intent(inout) :: value
+    type(error_t), intent(inout) :: err
+    character(len=*), intent(in), optional :: default
+    logical, intent(in), optional :: lower
+    type(error_t) :: e
+    integer :: i
+    if (.not. err%ok()) return
+    call g%get_string(var, value, e, default)
+    if (.not. e%ok()) then
+      err = e
+      return
+    end if
+    if (present(lower)) then
+      do i = 1, len(value)
+        if (value(i:i) >= 'A' .and. value(i:i) <= 'Z') value(i:i) = achar(iachar(value(i:i)) + 32)
+      end do
+    end if
+  end subroutine rd_string
+
+  !> Error unless value > 0 (or >= 0 when zero is allowed).
+  subroutine positive(g, var, value, err, zero_ok)
+    type(nml_group_t), intent(in) :: g
+    character(len=*), intent(in) :: var
+    real(wp), intent(in) :: value
+    type(error_t), intent(inout) :: err
+    logical, intent(in), optional :: zero_ok
+    character(len=32) :: buf
+    if (.not. err%ok()) return
+    if (value > 0 .or. (present(zero_ok) .and. value == 0)) return
+    write(buf, '(g0)') value
+    if (present(zero_ok)) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''' must not be ' // &
+        'negative, got ' // trim(buf))
+    else
+      call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''' must be positive, got ' &
+        // trim(buf))
+    end if
+  end subroutine positive
+
+  subroutine read_scene_group(g, scene, err)
+    type(nml_group_t), intent(inout) :: g
+    type(scene_t), intent(inout) :: scene
+    type(error_t), intent(inout) :: err
+    real(wp), allocatable :: gravity(:)
+    type(error_t) :: e
+    call rd_string(g, 'title', scene%title, err, default='')
+    if (.not. err%ok()) return
+    call g%get_real_array('gravity', gravity, e, default=[0.0_wp, 0.0_wp])
+    if (.not. e%ok()) then
+      err = e
+    else if (size(gravity) /= 2) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''gravity'' needs 2 values (gx, gy)')
+    else
+      scene%gravity = gravity
+    end if
+  end subroutine read_scene_group
+
+  subroutine read_node(g, n, err)
+    type(nml_group_t), intent(inout) :: g
+    type(node_rec_t), intent(out) :: n
+    type(error_t), intent(inout) :: err
+    logical :: fixed
+    call rd_string(g, 'label', n%label, err)
+    call rd_real(g, 'x', n%x, err)
+    call rd_real(g, 'y', n%y, err)
+    call rd_logical(g, 'fixed', fixed, err, default=.false.)
+    call rd_logical(g, 'fix_x', n%fix_x, err, default=fixed)
+    call rd_logical(g, 'fix_y', n%fix_y, err, default=fixed)
+    call rd_logical(g, 'fix_phi', n%fix_phi, err, default=fixed)
+  end subroutine read_node
+
+  subroutine read_link(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(link_rec_t), intent(out) :: r
+    type(error_t), intent(inout) :: err
+    call rd_string(g, 'label', r%label, err)
+    call rd_string(g, 'from', r%from, err)
+    call rd_string(g, 'to', r%to, err)
+    call rd_int(g, 'n_elements', r%n_elements, err, default=1)
+    call rd_real(g, 'E', r%e_modulus, err)
+    call rd_real(g, 'A', r%area, err)
+    call rd_real(g, 'I', r%inertia, err)
+    call rd_real(g, 'rho', r%density, err)
+    call rd_real(g, 'G', r%shear_modulus, err, default=0.0_wp)
+    call rd_real(g, 'shear_factor', r%shear_factor, err, default=5.0_wp / 6.0_wp)
+    call rd_string(g, 'elongation', r%elongation, err, default='rigid', lower=.true.)
+    call rd_string(g, 'bending', r%bending, err, default='dynamic', lower=.true.)
+    call rd_string(g, 'bending_form', r%bending_form, err, default='angle', lower=.true.)
+    call rd_string(g, 'mass', r%mass, err, default='consistent', lower=.true.)
+    call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
+    if (err%ok() .and. r%n_elements < 1) call err%set(ERR_INPUT, g%where() // &
+      ': variable ''n_elements'' must be at least 1')
+    call positive(g, 'E', r%e_modulus, err)
+    call positive(g, 'A', r%area, err)
+    call positive(g, 'I', r%inertia, err)
+    call positive(g, 'rho', r%density, err)
+    call positive(g, 'G', r%shear_modulus, err, zero_ok=.true.)
+    call positive(g, 'shear_factor', r%shear_factor, err)
+    call positive(g, 'damping', r%damping, err, zero_ok=.true.)
+  end subroutine read_link
+
+  subroutine read_hinge(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(hinge_rec_t), intent(out) :: r
+    type(error_t), intent(inout) :: err
+    call rd_string(g, 'label', r%label, err)
+    call rd_string(g, 'node', r%node, err)
+    call rd_string(g, 'link', r%link, err)
+    call rd_string(g, 'mode', r%mode, err, default='dynamic', lower=.true.)
+    call rd_string(g, 'motion', r%motion, err, default='')
+    call rd_real(g, 'stiffness', r%stiffness, err, default=0.0_wp)
+    call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
+    call positive(g, 'stiffness', r%stiffness, err, zero_ok=.true.)
+    call positive(g, 'damping', r%damping, err, zero_ok=.true.)
+    if (err%ok() .and. r%mode == 'prescribed' .and. len(r%motion) == 0) call err%set(ERR_INPUT, &
+      g%where() // ': variable ''motion'' is required when mode = ''prescribed''')
+  end subroutine read_hinge
+
+  subroutine read_truss(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(truss_rec_t), intent(out) :: r
+    type(error_t), intent(inout) :: err
+    call rd_string(g, 'label', r%label, err)
+    call rd_string(g, 'from', r%from, err)
+    call rd_string(g, 'to', r%to, err)
+    call rd_real(g, 'E', r%e_modulus, err)
+    call rd_real(g, 'A', r%area, err)
+    call rd_real(g, 'rho', r%density, err, default=0.0_wp)
+    call rd_string(g, 'mode', r%mode, err, default='dynamic', lower=.true.)
+    call rd_string(g, 'mass', r%mass, err, default='consistent', lower=.true.)
+    call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
+    call positive(g, 'E', r%e_modulus, err)
+    call positive(g, 'A', r%area, err)
+    call positive(g, 'rho', r%density, err, zero_ok=.true.)
+    call positive(g, 'damping', r%damping, err, zero_ok=.true.)
+  end subroutine read_truss
+
+  subroutine read_mass(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(mass_rec_t), intent(out) :: r
+    type(error_t), intent(inout) :: err
+    call rd_string(g, 'node', r%node, err)
+    call rd_real(g, 'm', r%m, err, default=0.0_wp)
+    call rd_real(g, 'J', r%j, err, default=0.0_wp)
+    call positive(g, 'm', r%m, err, zero_ok=.true.)
+    call positive(g, 'J', r%j, err, zero_ok=.true.)
+  end subroutine read_mass
+
+  subroutine read_force(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(force_rec_t), intent(out) :: r
+    type(error_t), intent(inout) :: err
+    call rd_string(g, 'node', r%node, err)
+    call rd_real(g, 'fx', r%fx, err, default=0.0_wp)
+    call rd_real(g, 'fy', r%fy, err, default=0.0_wp)
+    call rd_real(g, 'moment', r%moment, err, default=0.0_wp)
+  end subroutine read_force
+
+  subroutine read_motion(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(motion_rec_t), intent(out) :: r
+    type(error_t), intent(inout) :: err
+    call rd_string(g, 'label', r%label, err)
+    call rd_string(g, 'law', r%law, err, default='cubic', lower=.true.)
+    call rd_real(g, 'start', r%start, err, default=0.0_wp)
+    if (.not. err%ok()) return
+    if (r%law == 'constant') then
+      call rd_real(g, 'end', r%end, err, default=r%start)
+      call rd_real(g, 'duration', r%duration, err, default=0.0_wp)
+    else
+      call rd_real(g, 'end', r%end, err)
+      call rd_real(g, 'duration', r%duration, err)
+      call positive(g, 'duration', r%duration, err)
+    end if
+    call rd_real(g, 't0', r%t0, err, default=0.0_wp)
+  end subroutine read_motion
+
+  subroutine read_static(g, scene, err)
+    type(nml_group_t), intent(inout) :: g
+    type(scene_t), intent(inout) :: scene
+    type(error_t), intent(inout) :: err
+    scene%static%active = .true.
+    call rd_int(g, 'n_steps', scene%static%n_steps, err, default=10)
+    call rd_real(g, 'tol', scene%static%tol, err, default=1.0e-10_wp)
+    call rd_int(g, 'max_iter', scene%static%max_iter, err, default=30)
+    call positive(g, 'tol', scene%static%tol, err)
+    if (err%ok() .and. (scene%static%n_steps < 1 .or. scene%static%max_iter < 1)) &
+      call err%set(ERR_INPUT, g%where() // ': n_steps and max_iter must be at least 1')
+  end subroutine read_static
+
+  subroutine read_modal(g, scene, err)
+    type(nml_group_t), intent(inout) :: g
+    type(scene_t), intent(inout) :: scene
+    type(error_t), intent(inout) :: err
+    scene%modal%active = .true.
+    call rd_int(g, 'n_modes', scene%modal%n_modes, err, default=0)
+    call rd_real(g, 'time', scene%modal%time, err, default=0.0_wp)
+    if (err%ok() .and. scene%modal%n_modes < 0) call err%set(ERR_INPUT, g%where() // &
+      ': variable ''n_modes'' must not be negative (0 means all)')
+  end subroutine read_modal
+
+  subroutine read_dynamic(g, scene, err)
+    type(nml_group_t), intent(inout) :: g
+    type(scene_t), intent(inout) :: scene
+    type(error_t), intent(inout) :: err
+    associate (d => scene%dynamic)
+      d%active = .true.
+      call rd_real(g, 't_end', d%t_end, err)
+      call rd_real(g, 'output_dt', d%output_dt, err, default=1.0e-3_wp)
+      call rd_string(g, 'integrator', d%integrator, err, default='bdf', lower=.true.)
+      call rd_string(g, 'jacobian', d%jacobian, err, default='system', lower=.true.)
+      call rd_real(g, 'rtol', d%rtol, err, default=1.0e-6_wp)
+      call rd_real(g, 'atol', d%atol, err, default=1.0e-8_wp)
+      call rd_real(g, 'max_step', d%max_step, err, default=0.0_wp)
+      call rd_int(g, 'max_order', d%max_order, err, default=5)
+      call rd_real(g, 'dt', d%dt, err, default=1.0e-3_wp)
+      call rd_real(g, 'rho_inf', d%rho_inf, err, default=0.8_wp)
+      call positive(g, 't_end', d%t_end, err)
+      call positive(g, 'output_dt', d%output_dt, err)
+      call positive(g, 'rtol', d%rtol, err)
+      call positive(g, 'atol', d%atol, err)
+      call positive(g, 'max_step', d%max_step, err, zero_ok=.true.)
+      call positive(g, 'dt', d%dt, err)
+      if (.not. err%ok()) return
+      if (d%integrator /= 'bdf' .and. d%integrator /= 'galpha') then
+        call err%set(ERR_INPUT, g%where() // ': variable ''integrator'': ''' // d%integrator // &
+          ''' is not bdf or galpha')
+      else if (d%jacobian /= 'system' .and. d%jacobian /= 'internal') then
+        call err%set(ERR_INPUT, g%where() // ': variable ''jacobian'': ''' // d%jacobian // &
+          ''' is not system or internal')
+      else if (d%max_order < 1 .or. d%max_order > 5) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''max_order'' must be 1 to 5')
+      else if (d%rho_inf < 0 .or. d%rho_inf > 1) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''rho_inf'' must be in [0, 1]')
+      end if
+    end associate
+  end subroutine read_dynamic
+
+  subroutine read_output(g, scene, err)
+    type(nml_group_t), intent(inout) :: g
+    type(scene_t), intent(inout) :: scene
+    type(error_t), intent(inout) :: err
+    type(string_t), allocatable :: labels(:)
+    type(error_t) :: e
+    integer :: i
+    if (.not. err%ok()) return
+    call g%get_string_array('nodes', labels, e)
+    if (.not. e%ok()) then
+      err = e
+      return
+    end if
+    allocate(scene%output_nodes(size(labels)))
+    do i = 1, size(labels)
+      scene%output_nodes(i) = label_t(labels(i)%s)
+    end do
+  end subroutine read_output
+end module io_scene

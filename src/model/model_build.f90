@@ -1,0 +1,483 @@
+!> Turns a scene (plain records) into a finalised model: meshes links into beams, gives
+!> hinged link ends rotations of their own, places masses, loads and motions, and checks
+!> references and values. Messages name the group, the record's label and the variable; the
+!> caller puts the file name in front.
+module model_build
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_INPUT, ERR_MODEL
+  use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC
+  use elements_beam, only: beam_t, BENDING_ANGLE, BENDING_SINE
+  use elements_hinge, only: hinge_t
+  use elements_truss, only: truss_t
+  use motion_law, only: motion_t, law_from_name, LAW_CONSTANT
+  use model_system, only: model_t, COORD_X, COORD_Y, COORD_PHI
+  use model_scene, only: scene_t, link_rec_t
+  implicit none
+  private
+  public :: build_model, mode_class_from_name
+
+  !> Work data of one build; lives only during build_model.
+  type :: builder_t
+    integer, allocatable :: node_xy(:)      !< first coordinate (x) of each scene node
+    integer, allocatable :: node_rot(:)     !< rotation coordinate of each node, 0 until used
+    integer, allocatable :: hinge_rot(:)    !< rotation coordinate of each hinged link end
+  end type builder_t
+
+contains
+
+  pure integer function mode_class_from_name(name) result(c)
+    character(len=*), intent(in) :: name
+    select case (name)
+    case ('rigid'); c = MODE_RIGID
+    case ('released'); c = MODE_RELEASED
+    case ('prescribed'); c = MODE_PRESCRIBED
+    case ('dynamic'); c = MODE_DYNAMIC
+    case default; c = 0
+    end select
+  end function mode_class_from_name
+
+  subroutine build_model(scene, model, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(out) :: model
+    type(error_t), intent(out) :: err
+    type(builder_t) :: b
+    integer :: i
+    call model%init()
+    model%gravity = scene%gravity
+    call add_nodes(scene, model, b, err); if (.not. err%ok()) return
+    call add_motions(scene, model, err); if (.not. err%ok()) return
+    call check_hinges(scene, b, err); if (.not. err%ok()) return
+    call add_links(scene, model, b, err); if (.not. err%ok()) return
+    call add_hinges(scene, model, b, err); if (.not. err%ok()) return
+    call add_trusses(scene, model, b, err); if (.not. err%ok()) return
+    call add_masses_and_loads(scene, model, b, err); if (.not. err%ok()) return
+    call check_connected(model, err); if (.not. err%ok()) return
+    do i = 1, size(scene%nodes)
+      call model%add_node_label(scene%nodes(i)%label, [b%node_xy(i), b%node_xy(i) + 1, &
+        b%node_rot(i)])
+    end do
+    call model%finalize(err)
+  end subroutine build_model
+
+  integer function node_index(scene, label) result(idx)
+    type(scene_t), intent(in) :: scene
+    character(len=*), intent(in) :: label
+    do idx = 1, size(scene%nodes)
+      if (scene%nodes(idx)%label == label) return
+    end do
+    idx = 0
+  end function node_index
+
+  integer function link_index(scene, label) result(idx)
+    type(scene_t), intent(in) :: scene
+    character(len=*), intent(in) :: label
+    do idx = 1, size(scene%links)
+      if (scene%links(idx)%label == label) return
+    end do
+    idx = 0
+  end function link_index
+
+  integer function motion_index(scene, label) result(idx)
+    type(scene_t), intent(in) :: scene
+    character(len=*), intent(in) :: label
+    do idx = 1, size(scene%motions)
+      if (scene%motions(idx)%label == label) return
+    end do
+    idx = 0
+  end function motion_index
+
+  !> Error unless value > 0.
+  subroutine require_positive(value, where, var, err)
+    real(wp), intent(in) :: value
+    character(len=*), intent(in) :: where, var
+    type(error_t), intent(inout) :: err
+    character(len=40) :: buf
+    if (value > 0.0_wp) return
+    write(buf, '(g0)') value
+    call err%set(ERR_INPUT, where // ': variable ''' // var // ''' must be positive, got ' // &
+      trim(buf))
+  end subroutine require_positive
+
+  subroutine require_node(scene, label, where, var, idx, err)
+    type(scene_t), intent(in) :: scene
+    character(len=*), intent(in) :: label, where, var
+    integer, intent(out) :: idx
+    type(error_t), intent(inout) :: err
+    idx = node_index(scene, label)
+    if (idx == 0) call err%set(ERR_INPUT, where // ': variable ''' // var // &
+      ''': node ''' // label // ''' is not defined (no &node with that label)')
+  end subroutine require_node
+
+  subroutine add_nodes(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(inout) :: b
+    type(error_t), intent(inout) :: err
+    integer :: i, ix, iy
+    allocate(b%node_xy(size(scene%nodes)), b%node_rot(size(scene%nodes)))
+    b%node_rot = 0
+    do i = 1, size(scene%nodes)
+      associate (n => scene%nodes(i))
+        if (node_index(scene, n%label) /= i) then
+          call err%set(ERR_INPUT, 'group &node: label ''' // n%label // ''' is defined twice')
+          return
+        end if
+        ix = model%add_coord(n%x, COORD_X, n%fix_x, 'node ''' // n%label // ''' x')
+        iy = model%add_coord(n%y, COORD_Y, n%fix_y, 'node ''' // n%label // ''' y')
+        b%node_xy(i) = ix
+      end associate
+    end do
+  end subroutine add_nodes
+
+  !> Rotation coordinate of a node, created on first use.
+  integer function node_rotation(scene, model, b, i) result(idx)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(inout) :: b
+    integer, intent(in) :: i
+    if (b%node_rot(i) == 0) b%node_rot(i) = model%add_coord(0.0_wp, COORD_PHI, &
+      scene%nodes(i)%fix_phi, 'node ''' // scene%nodes(i)%label // ''' phi')
+    idx = b%node_rot(i)
+  end function node_rotation
+
+  subroutine add_motions(scene, model, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(error_t), intent(inout) :: err
+    type(motion_t) :: mo
+    integer :: i, idx
+    do i = 1, size(scene%motions)
+      associate (r => scene%motions(i))
+        if (motion_index(scene, r%label) /= i) then
+          call err%set(ERR_INPUT, 'group &motion: label ''' // r%label // ''' is defined twice')
+          return
+        end if
+        mo = motion_t(label=r%label, law=law_from_name(r%law), start=r%start, end=r%end, &
+                      t0=r%t0, duration=r%duration)
+        if (mo%law < 0) then
+          call err%set(ERR_INPUT, 'group &motion ''' // r%label // ''': variable ''law'': ' // &
+            'unknown law ''' // r%law // ''' (use constant, cubic, quintic or cycloidal)')
+          return
+        end if
+        if (mo%law /= LAW_CONSTANT) call require_positive(r%duration, 'group &motion ''' // &
+          r%label // '''', 'duration', err)
+        if (.not. err%ok()) return
+        idx = model%add_motion(mo)
+      end associate
+    end do
+  end subroutine add_motions
+
+  !> Every hinge names an existing node and a link that ends there, once.
+  subroutine check_hinges(scene, b, err)
+    type(scene_t), intent(in) :: scene
+    type(builder_t), intent(inout) :: b
+    type(error_t), intent(inout) :: err
+    integer :: h, k, il, in
+    allocate(b%hinge_rot(size(scene%hinges)))
+    b%hinge_rot = 0
+    do h = 1, size(scene%hinges)
+      associate (r => scene%hinges(h), where => 'group &hinge ''' // scene%hinges(h)%label // '''')
+        call require_node(scene, r%node, where, 'node', in, err)
+        if (.not. err%ok()) return
+        il = link_index(scene, r%link)
+        if (il == 0) then
+          call err%set(ERR_INPUT, where // ': variable ''link'': link ''' // r%link // &
+            ''' is not defined (no &link with that label)')
+          return
+        end if
+        if (scene%links(il)%from /= r%node .and. scene%links(il)%to /= r%node) then
+          call err%set(ERR_INPUT, where // ': link ''' // r%link // ''' does not end at node ''' &
+            // r%node // '''')
+          return
+        end if
+        do k = 1, h - 1
+          if (scene%hinges(k)%node == r%node .and. scene%hinges(k)%link == r%link) then
+            call err%set(ERR_INPUT, where // ': link ''' // r%link // ''' already has a hinge ' &
+              // 'at node ''' // r%node // '''')
+            return
+          end if
+        end do
+      end associate
+    end do
+  end subroutine check_hinges
+
+  !> Rotation coordinate a link uses at one of its end nodes.
+  integer function link_end_rotation(scene, model, b, link, node) result(idx)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(inout) :: b
+    character(len=*), intent(in) :: link
+    integer, intent(in) :: node
+    integer :: h
+    do h = 1, size(scene%hinges)
+      if (scene%hinges(h)%link == link .and. scene%hinges(h)%node == scene%nodes(node)%label) then
+        if (b%hinge_rot(h) == 0) b%hinge_rot(h) = model%add_coord(0.0_wp, COORD_PHI, .false., &
+          'link ''' // link // ''' phi at node ''' // scene%nodes(node)%label // '''')
+        idx = b%hinge_rot(h)
+        return
+      end if
+    end do
+    idx = node_rotation(scene, model, b, node)
+  end function link_end_rotation
+
+  subroutine add_links(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(inout) :: b
+    type(error_t), intent(inout) :: err
+    integer :: i, k, ia, ib, p(3), q(3), idx, first_rot, last_rot
+    real(wp) :: xa(2), xb(2), xk(2)
+    type(beam_t) :: beam
+    character(len=12) :: num
+    do i = 1, size(scene%links)
+      associate (r => scene%links(i), where => 'group &link ''' // scene%links(i)%label // '''')
+        if (link_index(scene, r%label) /= i) then
+          call err%set(ERR_INPUT, 'group &link: label ''' // r%label // ''' is defined twice')
+          return
+        end if
+        call require_node(scene, r%from, where, 'from', ia, err)
+        if (err%ok()) call require_node(scene, r%to, where, 'to', ib, err)
+        if (err%ok()) call link_beam(r, where, beam, err)
+        if (.not. err%ok()) return
+        xa = [scene%nodes(ia)%x, scene%nodes(ia)%y]
+        xb = [scene%nodes(ib)%x, scene%nodes(ib)%y]
+        if (norm2(xb - xa) <= 1.0e-12_wp * max(1.0_wp, norm2(xa))) then
+          call err%set(ERR_INPUT, where // ': nodes ''' // r%from // ''' and ''' // r%to // &
+            ''' are at the same place: a link needs a positive length')
+          return
+        end if
+        first_rot = link_end_rotation(scene, model, b, r%label, ia)
+        last_rot = link_end_rotation(scene, model, b, r%label, ib)
+        p = [b%node_xy(ia), b%node_xy(ia) + 1, first_rot]
+        do k = 1, r%n_elements
+          if (k < r%n_elements) then
+            write(num, '(i0)') k
+            xk = xa + (xb - xa) * real(k, wp) / r%n_elements
+            q(1) = model%add_coord(xk(1), COORD_X, .false., r%label // '.' // trim(num) // ' x')
+            q(2) = model%add_coord(xk(2), COORD_Y, .false., r%label // '.' // trim(num) // ' y')
+            q(3) = model%add_coord(0.0_wp, COORD_PHI, .false., r%label // '.' // trim(num) // ' phi')
+            call model%add_node_label(r%label // '.' // trim(num), q)
+          else
+            q = [b%node_xy(ib), b%node_xy(ib) + 1, last_rot]
+          end if
+          write(num, '(i0)') k
+          beam%label = r%label // '#' // trim(num)
+          beam%dofs = [p, q]
+          beam%l0 = norm2(xb - xa) / r%n_elements
+          beam%alpha0 = atan2(xb(2) - xa(2), xb(1) - xa(1))
+          beam%phi0 = model%x0([p(3), q(3)])
+          if (r%shear_modulus > 0) beam%shear_p = 12 * beam%ei / (r%shear_factor * &
+            r%shear_modulus * r%area * beam%l0**2)
+          idx = model%add_element(beam, [0, 0, 0])
+          p = q
+        end do
+      end associate
+    end do
+  end subroutine add_links
+
+  !> Beam properties and mode classes shared by all elements of a link.
+  subroutine link_beam(r, where, beam, err)
+    type(link_rec_t), intent(in) :: r
+    character(len=*), intent(in) :: where
+    type(beam_t), intent(out) :: beam
+    type(error_t), intent(inout) :: err
+    integer :: c_el, c_bend
+    call require_positive(r%e_modulus, where, 'E', err)
+    call require_positive(r%area, where, 'A', err)
+    call require_positive(r%inertia, where, 'I', err)
+    call require_positive(r%density, where, 'rho', err)
+    if (r%n_elements < 1) call err%set(ERR_INPUT, where // ': variable ''n_elements'' must ' // &
+      'be at least 1')
+    if (r%damping < 0) call err%set(ERR_INPUT, where // ': variable ''damping'' must not be negative')
+    if (r%shear_modulus < 0) call err%set(ERR_INPUT, where // ': variable ''G'' must not be negative')
+    if (.not. err%ok()) return
+    c_el = mode_class_from_name(r%elongation)
+    c_bend = mode_class_from_name(r%bending)
+    if (c_el == 0 .or. c_el == MODE_PRESCRIBED) then
+      call err%set(ERR_INPUT, where // ': variable ''elongation'': ''' // r%elongation // &
+        ''' is not rigid, released or dynamic')
+    else if (c_bend == 0 .or. c_bend == MODE_PRESCRIBED) then
+      call err%set(ERR_INPUT, where // ': variable ''bending'': ''' // r%bending // &
+        ''' is not rigid, released or dynamic')
+    end if
+    beam%mode_class = [c_el, c_bend, c_bend]
+    beam%ea = r%e_modulus * r%area
+    beam%ei = r%e_modulus * r%inertia
+    beam%rho_a = r%density * r%area
+    beam%damping = r%damping
+    select case (r%bending_form)
+    case ('angle'); beam%bending = BENDING_ANGLE
+    case ('sine'); beam%bending = BENDING_SINE
+    case default
+      call err%set(ERR_INPUT, where // ': variable ''bending_form'': ''' // r%bending_form // &
+        ''' is neither angle nor sine')
+    end select
+    select case (r%mass)
+    case ('consistent'); beam%consistent = .true.
+    case ('lumped'); beam%consistent = .false.
+    case default
+      call err%set(ERR_INPUT, where // ': variable ''mass'': ''' // r%mass // &
+        ''' is neither consistent nor lumped')
+    end select
+    beam%shear_p = 0.0_wp
+  end subroutine link_beam
+
+  subroutine add_hinges(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(inout) :: b
+    type(error_t), intent(inout) :: err
+    type(hinge_t) :: hinge
+    integer :: h, in, im, idx, c
+    do h = 1, size(scene%hinges)
+      associate (r => scene%hinges(h), where => 'group &hinge ''' // scene%hinges(h)%label // '''')
+        in = node_index(scene, r%node)
+        c = mode_class_from_name(r%mode)
+        if (c == 0) then
+          call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
+            ''' is not rigid, released, prescribed or dynamic')
+          return
+        end if
+        im = 0
+        if (c == MODE_PRESCRIBED) then
+          im = motion_index(scene, r%motion)
+          if (im == 0) then
+            call err%set(ERR_INPUT, where // ': variable ''motion'': motion ''' // r%motion // &
+              ''' is not defined (no &motion with that label)')
+            return
+          end if
+        end if
+        if (r%stiffness < 0 .or. r%damping < 0) then
+          call err%set(ERR_INPUT, where // ': stiffness and damping must not be negative')
+          return
+        end if
+        hinge%label = r%label
+        hinge%dofs = [node_rotation(scene, model, b, in), b%hinge_rot(h)]
+        hinge%phi0 = model%x0(hinge%dofs)
+        hinge%mode_class = [c]
+        hinge%k = r%stiffness
+        hinge%damping = r%damping
+        idx = model%add_element(hinge, [im])
+      end associate
+    end do
+  end subroutine add_hinges
+
+  subroutine add_trusses(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(in) :: b
+    type(error_t), intent(inout) :: err
+    type(truss_t) :: truss
+    integer :: i, ia, ib, idx, c
+    do i = 1, size(scene%trusses)
+      associate (r => scene%trusses(i), where => 'group &truss ''' // scene%trusses(i)%label // '''')
+        call require_node(scene, r%from, where, 'from', ia, err)
+        if (err%ok()) call require_node(scene, r%to, where, 'to', ib, err)
+        if (err%ok()) call require_positive(r%e_modulus, where, 'E', err)
+        if (err%ok()) call require_positive(r%area, where, 'A', err)
+        if (.not. err%ok()) return
+        c = mode_class_from_name(r%mode)
+        if (c == 0 .or. c == MODE_PRESCRIBED) then
+          call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
+            ''' is not rigid, released or dynamic')
+          return
+        end if
+        truss%label = r%label
+        truss%dofs = [b%node_xy(ia), b%node_xy(ia) + 1, b%node_xy(ib), b%node_xy(ib) + 1]
+        truss%l0 = norm2(model%x0(truss%dofs(3:4)) - model%x0(truss%dofs(1:2)))
+        if (truss%l0 <= 0) then
+          call err%set(ERR_INPUT, where // ': nodes ''' // r%from // ''' and ''' // r%to // &
+            ''' are at the same place: a truss needs a positive length')
+          return
+        end if
+        truss%ea = r%e_modulus * r%area
+        truss%rho_a = r%density * r%area
+        truss%consistent = r%mass /= 'lumped'
+        truss%damping = r%damping
+        truss%mode_class = [c]
+        idx = model%add_element(truss, [0])
+      end associate
+    end do
+  end subroutine add_trusses
+
+  subroutine add_masses_and_loads(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(inout) :: b
+    type(error_t), intent(inout) :: err
+    integer :: i, in, ix, ir
+    real(wp), allocatable :: diag(:)
+    do i = 1, size(scene%masses)
+      associate (r => scene%masses(i))
+        call require_node(scene, r%node, 'group &mass #' // itoa(i), 'node', in, err)
+        if (.not. err%ok()) return
+        if (r%m < 0 .or. r%j < 0) then
+          call err%set(ERR_INPUT, 'group &mass #' // itoa(i) // ' (node ''' // r%node // &
+            '''): m and J must not be negative')
+          return
+        end if
+        ix = b%node_xy(in)
+        model%lumped(ix:ix + 1) = model%lumped(ix:ix + 1) + r%m
+        if (r%j > 0) then
+          ir = b%node_rot(in)
+          if (ir == 0) then
+            call err%set(ERR_INPUT, 'group &mass #' // itoa(i) // ': node ''' // r%node // &
+              ''' has no rotation (no beam or hinge ends there), so J cannot be placed')
+            return
+          end if
+          model%lumped(ir) = model%lumped(ir) + r%j
+        end if
+      end associate
+    end do
+    do i = 1, size(scene%forces)
+      associate (r => scene%forces(i))
+        call require_node(scene, r%node, 'group &force #' // itoa(i), 'node', in, err)
+        if (.not. err%ok()) return
+        ix = b%node_xy(in)
+        model%force(ix:ix + 1) = model%force(ix:ix + 1) + [r%fx, r%fy]
+        if (r%moment /= 0) then
+          if (b%node_rot(in) == 0) then
+            call err%set(ERR_INPUT, 'group &force #' // itoa(i) // ': node ''' // r%node // &
+              ''' has no rotation, so a moment cannot be applied')
+            return
+          end if
+          model%force(b%node_rot(in)) = model%force(b%node_rot(in)) + r%moment
+        end if
+      end associate
+    end do
+    do i = 1, model%n_elements
+      allocate(diag(size(model%elements(i)%e%dofs)))
+      call model%elements(i)%e%lumped_mass(diag)
+      model%lumped(model%elements(i)%e%dofs) = model%lumped(model%elements(i)%e%dofs) + diag
+      deallocate(diag)
+    end do
+    model%newton_tol = 1.0e-11_wp * max(1.0e-3_wp, maxval(abs(model%x0)))
+  end subroutine add_masses_and_loads
+
+  !> A free coordinate that no element uses cannot be solved for.
+  subroutine check_connected(model, err)
+    type(model_t), intent(in) :: model
+    type(error_t), intent(inout) :: err
+    logical :: used(model%n_x)
+    integer :: i
+    used = model%fixed
+    do i = 1, model%n_elements
+      used(model%elements(i)%e%dofs) = .true.
+    end do
+    do i = 1, model%n_x
+      if (.not. used(i)) then
+        call err%set(ERR_MODEL, 'coordinate ' // trim(model%coord_name(i)) // &
+          ' is free but no element uses it: fix it or connect the node')
+        return
+      end if
+    end do
+  end subroutine check_connected
+
+  pure function itoa(i) result(s)
+    integer, intent(in) :: i
+    character(len=:), allocatable :: s
+    character(len=12) :: buf
+    write(buf, '(i0)') i
+    s = trim(buf)
+  end function itoa
+end module model_build

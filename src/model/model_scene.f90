@@ -1,0 +1,97 @@
+!> Scene records: the user's description of a planar system as plain data, as read from a
+!> namelist file (io_scene) or made by a program. `model_build` turns a scene into a model.
+!> Units are SI throughout: m, kg, s, N, rad.
+module model_scene
+  use core_kinds, only: wp
+  implicit none
+  private
+  public :: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
+    force_rec_t, motion_rec_t, static_rec_t, modal_rec_t, dynamic_rec_t, label_t
+
+  type :: label_t
+    character(len=:), allocatable :: s
+  end type label_t
+
+  type :: node_rec_t
+    character(len=:), allocatable :: label
+    real(wp) :: x = 0.0_wp, y = 0.0_wp
+    logical :: fix_x = .false., fix_y = .false., fix_phi = .false.
+  end type node_rec_t
+
+  !> A straight link from node `from` to node `to`, meshed into n_elements beams.
+  type :: link_rec_t
+    character(len=:), allocatable :: label, from, to
+    integer :: n_elements = 1
+    real(wp) :: e_modulus = 0.0_wp, area = 0.0_wp, inertia = 0.0_wp, density = 0.0_wp
+    real(wp) :: shear_modulus = 0.0_wp    !< > 0 makes the beams shear-flexible (Timoshenko)
+    real(wp) :: shear_factor = 5.0_wp / 6.0_wp
+    character(len=:), allocatable :: elongation, bending   !< mode classes
+    character(len=:), allocatable :: bending_form          !< 'angle' or 'sine'
+    character(len=:), allocatable :: mass                  !< 'consistent' or 'lumped'
+    real(wp) :: damping = 0.0_wp                           !< stiffness-proportional [s]
+  end type link_rec_t
+
+  !> A hinge at `node` that gives `link` a rotation of its own, relative to the node's.
+  type :: hinge_rec_t
+    character(len=:), allocatable :: label, node, link, mode, motion
+    real(wp) :: stiffness = 0.0_wp, damping = 0.0_wp
+  end type hinge_rec_t
+
+  type :: truss_rec_t
+    character(len=:), allocatable :: label, from, to, mode, mass
+    real(wp) :: e_modulus = 0.0_wp, area = 0.0_wp, density = 0.0_wp, damping = 0.0_wp
+  end type truss_rec_t
+
+  type :: mass_rec_t
+    character(len=:), allocatable :: node
+    real(wp) :: m = 0.0_wp, j = 0.0_wp
+  end type mass_rec_t
+
+  type :: force_rec_t
+    character(len=:), allocatable :: node
+    real(wp) :: fx = 0.0_wp, fy = 0.0_wp, moment = 0.0_wp
+  end type force_rec_t
+
+  type :: motion_rec_t
+    character(len=:), allocatable :: label, law
+    real(wp) :: start = 0.0_wp, end = 0.0_wp, t0 = 0.0_wp, duration = 0.0_wp
+  end type motion_rec_t
+
+  type :: static_rec_t
+    logical :: active = .false.
+    integer :: n_steps = 10
+    real(wp) :: tol = 1.0e-10_wp
+    integer :: max_iter = 30
+  end type static_rec_t
+
+  type :: modal_rec_t
+    logical :: active = .false.
+    integer :: n_modes = 0          !< 0 = all
+    real(wp) :: time = 0.0_wp       !< prescribed motions are evaluated (and locked) at this time
+  end type modal_rec_t
+
+  type :: dynamic_rec_t
+    logical :: active = .false.
+    real(wp) :: t_end = 0.0_wp, output_dt = 1.0e-3_wp
+    character(len=:), allocatable :: integrator, jacobian
+    real(wp) :: rtol = 1.0e-6_wp, atol = 1.0e-8_wp, max_step = 0.0_wp
+    integer :: max_order = 5
+    real(wp) :: dt = 1.0e-3_wp, rho_inf = 0.8_wp
+  end type dynamic_rec_t
+
+  type :: scene_t
+    character(len=:), allocatable :: title
+    real(wp) :: gravity(2) = 0.0_wp
+    type(node_rec_t), allocatable :: nodes(:)
+    type(link_rec_t), allocatable :: links(:)
+    type(hinge_rec_t), allocatable :: hinges(:)
+    type(truss_rec_t), allocatable :: trusses(:)
+    type(mass_rec_t), allocatable :: masses(:)
+    type(force_rec_t), allocatable :: forces(:)
+    type(motion_rec_t), allocatable :: motions(:)
+    type(static_rec_t) :: static
+    type(modal_rec_t) :: modal
+    type(dynamic_rec_t) :: dynamic
+    type(label_t), allocatable :: output_nodes(:)
+  end type scene_t
+end module model_scene

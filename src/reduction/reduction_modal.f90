@@ -1,0 +1,59 @@
+!> Modal analysis at a configuration with the prescribed modes locked:
+!>   K_T v = omega^2 M0 v   on the dynamic coordinates (LAPACK dsygvd).
+!> The eigenvectors come back M0-normalised; they are the basis of the reduced models.
+module reduction_modal
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_NUMERIC, ERR_INPUT
+  use core_linalg, only: sym_gen_eig
+  use dynamics_system, only: dynamics_t
+  use dynamics_static, only: tangent_stiffness
+  implicit none
+  private
+  public :: modal_result_t, modal_analysis
+
+  real(wp), parameter :: TWO_PI = 6.28318530717958647692_wp
+
+  type :: modal_result_t
+    real(wp), allocatable :: omega2(:)        !< eigenvalues [rad^2/s^2]
+    real(wp), allocatable :: frequency_hz(:)  !< sqrt(omega2) / 2 pi (negative sign: unstable)
+    real(wp), allocatable :: shapes(:, :)     !< (n_dy, n_modes), M0-normalised
+    real(wp), allocatable :: node_shapes(:, :, :)  !< (n_x, n_modes) nodal: DF_dy v
+    real(wp), allocatable :: m0(:, :), k0(:, :)
+  end type modal_result_t
+
+contains
+
+  !> n_modes = 0 asks for all of them.
+  subroutine modal_analysis(dyn, t, q_dy, n_modes, res, err)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    integer, intent(in) :: n_modes
+    type(modal_result_t), intent(out) :: res
+    type(error_t), intent(out) :: err
+    real(wp), allocatable :: lambda(:), v(:, :)
+    integer :: n, nm, info
+    n = dyn%model%n_dy
+    nm = n_modes
+    if (nm == 0) nm = n
+    if (nm > n) then
+      call err%set(ERR_INPUT, 'group &modal: n_modes is larger than the number of dynamic ' // &
+        'coordinates')
+      return
+    end if
+    allocate(res%k0(n, n), lambda(n), v(n, n))
+    call tangent_stiffness(dyn, t, q_dy, res%k0, err)
+    if (.not. err%ok()) return
+    res%m0 = dyn%mbar
+    call sym_gen_eig(res%k0, res%m0, lambda, v, info)
+    if (info /= 0) then
+      call err%set(ERR_NUMERIC, 'modal analysis: the eigensolver failed (mass matrix not ' // &
+        'positive definite?)')
+      return
+    end if
+    res%omega2 = lambda(1:nm)
+    res%frequency_hz = sign(sqrt(abs(res%omega2)), res%omega2) / TWO_PI
+    res%shapes = v(:, 1:nm)
+    allocate(res%node_shapes(dyn%model%n_x, nm, 1))
+    res%node_shapes(:, :, 1) = matmul(dyn%kin%df(:, dyn%model%n_rh + 1:), res%shapes)
+  end subroutine modal_analysis
+end module reduction_modal
