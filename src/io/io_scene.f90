@@ -8,7 +8,7 @@ module io_scene
   use core_error, only: error_t, ERR_INPUT
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
-    mass_rec_t, force_rec_t, motion_rec_t, label_t
+    mass_rec_t, force_rec_t, motion_rec_t
   implicit none
   private
   public :: read_scene, load_scene, SCENE_GROUPS
@@ -375,7 +375,7 @@ contains
     end if
     allocate(scene%output_nodes(size(labels)))
     do i = 1, size(labels)
-      scene%output_nodes(i) = label_t(labels(i)%s)
+      scene%output_nodes(i)%s = labels(i)%s
     end do
   end subroutine read_output
 end module io_scene

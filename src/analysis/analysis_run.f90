@@ -1,0 +1,263 @@
+!> One flexmor run: read a scene file, build the model, run the analyses it asks for (static,
+!> then modal, then dynamic, each optional) and write one HDF5 result file. The layout is
+!> documented in docs/output.md. On any error nothing is left on disk.
+module analysis_run
+  use core_kinds, only: wp, i8
+  use core_error, only: error_t, ERR_INPUT
+  use io_namelist, only: nml_file_t
+  use io_scene, only: load_scene
+  use io_hdf5, only: h5_writer_t
+  use model_scene, only: scene_t
+  use model_system, only: model_t
+  use model_build, only: build_model
+  use dynamics_system, only: dynamics_t
+  use dynamics_static, only: static_solve
+  use reduction_modal, only: modal_result_t, modal_analysis
+  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_driver, only: integrate
+  implicit none
+  private
+  public :: run_t, FLEXMOR_VERSION
+
+  character(len=*), parameter :: FLEXMOR_VERSION = '0.1.0'
+
+  !> Everything one run computes, kept so that callers (the sweep) can take metrics from it.
+  type :: run_t
+    type(nml_file_t) :: file
+    type(scene_t) :: scene
+    type(dynamics_t) :: dyn
+    type(modal_result_t) :: modal
+    real(wp), allocatable :: q_static(:), x_static(:, :)
+    real(wp), allocatable :: time(:)
+    type(integrator_stats_t) :: stats
+    integer :: static_iterations = 0
+    real(wp) :: wall_time_s = 0.0_wp
+    logical :: verbose = .true.
+  contains
+    procedure :: load => run_load
+    procedure :: execute => run_execute
+    procedure :: write => run_write
+  end type run_t
+
+contains
+
+  !> Read the scene file and build the model.
+  subroutine run_load(this, path, err)
+    class(run_t), intent(inout) :: this
+    character(len=*), intent(in) :: path
+    type(error_t), intent(out) :: err
+    type(model_t) :: model
+    call load_scene(path, this%file, this%scene, err)
+    if (.not. err%ok()) return
+    call build_model(this%scene, model, err)
+    if (err%ok()) call check_output_nodes(this%scene, model, err)
+    if (err%ok()) then
+      allocate(this%q_static(model%n_dy))
+      this%q_static = 0.0_wp
+      call this%dyn%init(model, 0.0_wp, this%q_static, err)
+    end if
+    if (.not. err%ok()) call err%prefix(path // ': ')
+  end subroutine run_load
+
+  subroutine check_output_nodes(scene, model, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(in) :: model
+    type(error_t), intent(inout) :: err
+    integer :: i
+    do i = 1, size(scene%output_nodes)
+      if (model%find_node(scene%output_nodes(i)%s) == 0) then
+        call err%set(ERR_INPUT, 'group &output: variable ''nodes'': node ''' // &
+          scene%output_nodes(i)%s // ''' is not defined')
+        return
+      end if
+    end do
+  end subroutine check_output_nodes
+
+  !> Run the analyses the scene asks for.
+  subroutine run_execute(this, err)
+    class(run_t), intent(inout) :: this
+    type(error_t), intent(out) :: err
+    integer(i8) :: c0, c1, rate
+    call system_clock(c0, rate)
+    if (this%scene%static%active) then
+      call run_static(this, err)
+      if (.not. err%ok()) return
+    end if
+    if (this%scene%modal%active) then
+      call modal_analysis(this%dyn, this%scene%modal%time, this%q_static, &
+        this%scene%modal%n_modes, this%modal, err)
+      if (.not. err%ok()) return
+      if (this%verbose) write(*, '(a,*(f0.3,:,", "))') 'modal: frequencies [Hz]: ', &
+        this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz)))
+    end if
+    if (this%scene%dynamic%active) then
+      call run_dynamic(this, err)
+      if (.not. err%ok()) return
+    end if
+    call system_clock(c1)
+    this%wall_time_s = real(c1 - c0, wp) / real(rate, wp)
+  end subroutine run_execute
+
+  subroutine run_static(this, err)
+    type(run_t), intent(inout) :: this
+    type(error_t), intent(out) :: err
+    associate (s => this%scene%static)
+      allocate(this%x_static(this%dyn%model%n_x, s%n_steps))
+      call static_solve(this%dyn, 0.0_wp, s%n_steps, s%tol, s%max_iter, this%q_static, &
+        this%x_static, this%static_iterations, err)
+    end associate
+    if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a)') 'static: ', &
+      this%scene%static%n_steps, ' load steps, ', this%static_iterations, ' Newton iterations'
+  end subroutine run_static
+
+  subroutine run_dynamic(this, err)
+    type(run_t), intent(inout) :: this
+    type(error_t), intent(out) :: err
+    type(integrator_options_t) :: opts
+    real(wp), allocatable :: breaks(:), v0(:)
+    integer :: nt, k, i
+    associate (d => this%scene%dynamic)
+      nt = max(1, nint(d%t_end / d%output_dt)) + 1
+      allocate(this%time(nt))
+      do k = 1, nt
+        this%time(k) = min(d%t_end, (k - 1) * d%output_dt)
+      end do
+      if (this%time(nt) < d%t_end) this%time = [this%time, d%t_end]
+      nt = size(this%time)
+      opts%method = d%integrator
+      opts%rtol = d%rtol
+      opts%atol = d%atol
+      opts%max_step = d%max_step
+      opts%max_order = d%max_order
+      opts%jacobian = d%jacobian
+      opts%dt = d%dt
+      opts%rho_inf = d%rho_inf
+    end associate
+    allocate(breaks(0))
+    do i = 1, this%dyn%model%n_motions
+      breaks = [breaks, this%dyn%model%motions(i)%breakpoints()]
+    end do
+    call this%dyn%allocate_history(nt)
+    allocate(v0(this%dyn%model%n_dy))
+    v0 = 0.0_wp
+    call integrate(this%dyn, opts, this%time, this%q_static, v0, breaks, this%stats, err)
+    if (.not. err%ok() .and. allocated(this%dyn%last_error%message)) &
+      err%message = err%message // ' (' // this%dyn%last_error%message // ')'
+    if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a,i0,a)') 'dynamic: ', &
+      this%stats%n_steps, ' steps, ', this%stats%n_rhs_evals, ' evaluations, ', &
+      this%stats%n_jac_evals, ' Jacobians'
+  end subroutine run_dynamic
+
+  !> Write the result file (temporary name, renamed on success).
+  subroutine run_write(this, path, err)
+    class(run_t), intent(inout) :: this
+    character(len=*), intent(in) :: path
+    type(error_t), intent(out) :: err
+    type(h5_writer_t) :: h5
+    call h5%open(path, err)
+    if (err%ok()) call write_attributes(this, h5, err)
+    if (err%ok() .and. this%scene%static%active) call write_static(this, h5, err)
+    if (err%ok() .and. this%scene%modal%active) call write_modal(this, h5, err)
+    if (err%ok() .and. this%scene%dynamic%active) call write_dynamic(this, h5, err)
+    if (err%ok()) call h5%commit(err)
+    if (.not. err%ok()) call h5%abort()
+  end subroutine run_write
+
+  subroutine write_attributes(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    call h5%write_string_attr('/', 'flexmor_version', FLEXMOR_VERSION, err)
+    if (err%ok()) call h5%write_string_attr('/', 'input', this%file%text, err)
+    if (err%ok()) call h5%write_string_attr('/', 'input_file', this%file%path, err)
+    if (err%ok()) call h5%write_string_attr('/', 'title', this%scene%title, err)
+    if (err%ok()) call h5%write_string_attr('/', 'status', 'ok', err)
+    if (err%ok()) call h5%write_real_attr('/', 'wall_time_s', this%wall_time_s, err)
+    if (err%ok()) call h5%write_int_attr('/', 'n_dynamic_coordinates', this%dyn%model%n_dy, err)
+    if (err%ok()) call h5%write_int_attr('/', 'n_elements', this%dyn%model%n_elements, err)
+    if (err%ok()) call h5%write_int_attr('/', 'n_kinematic_solves', this%dyn%kin%n_solves, err)
+    if (.not. this%scene%dynamic%active) return
+    associate (s => this%stats, d => this%scene%dynamic)
+      if (err%ok()) call h5%write_string_attr('/', 'integrator', d%integrator, err)
+      if (err%ok()) call h5%write_real_attr('/', 'rtol', d%rtol, err)
+      if (err%ok()) call h5%write_real_attr('/', 'atol', d%atol, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_steps', s%n_steps, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_rhs_evals', s%n_rhs_evals, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_jac_evals', s%n_jac_evals, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_err_test_fails', s%n_err_test_fails, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_nonlin_fails', s%n_nonlin_fails, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_restarts', s%n_restarts, err)
+    end associate
+  end subroutine write_attributes
+
+  !> Node positions (n, 3) and rotations (n) of the output nodes from coordinate histories.
+  subroutine write_nodes(this, h5, group, x, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    character(len=*), intent(in) :: group
+    real(wp), intent(in) :: x(:, :)
+    type(error_t), intent(inout) :: err
+    real(wp) :: pos(3, size(x, 2))
+    integer :: i, in, ic(3)
+    do i = 1, size(this%scene%output_nodes)
+      associate (label => this%scene%output_nodes(i)%s)
+        in = this%dyn%model%find_node(label)
+        ic = this%dyn%model%node_coord(:, in)
+        pos(1, :) = x(ic(1), :)
+        pos(2, :) = x(ic(2), :)
+        pos(3, :) = 0.0_wp
+        if (err%ok()) call h5%write_real_2d(group // '/nodes/' // label // '/position', pos, &
+          err, units='m')
+        if (ic(3) > 0 .and. err%ok()) call h5%write_real_1d(group // '/nodes/' // label // &
+          '/rotation', x(ic(3), :), err, units='rad')
+      end associate
+    end do
+  end subroutine write_nodes
+
+  subroutine write_static(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    integer :: k, n
+    n = this%scene%static%n_steps
+    call h5%write_real_1d('/static/load_factor', [(real(k, wp) / n, k=1, n)], err)
+    if (err%ok()) call h5%write_real_1d('/static/q', this%q_static, err)
+    call write_nodes(this, h5, '/static', this%x_static, err)
+  end subroutine write_static
+
+  subroutine write_modal(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    real(wp), allocatable :: shape(:, :)
+    integer :: i, in, ic(3)
+    call h5%write_real_1d('/modal/frequency_hz', this%modal%frequency_hz, err, units='Hz')
+    if (err%ok()) call h5%write_real_2d('/modal/shapes', this%modal%shapes, err)
+    if (err%ok()) call h5%write_real_attr('/modal', 'time', this%scene%modal%time, err)
+    do i = 1, size(this%scene%output_nodes)
+      in = this%dyn%model%find_node(this%scene%output_nodes(i)%s)
+      ic = this%dyn%model%node_coord(:, in)
+      allocate(shape(3, size(this%modal%frequency_hz)))
+      shape(1, :) = this%modal%node_shapes(ic(1), :, 1)
+      shape(2, :) = this%modal%node_shapes(ic(2), :, 1)
+      shape(3, :) = 0.0_wp
+      if (err%ok()) call h5%write_real_2d('/modal/nodes/' // this%scene%output_nodes(i)%s // &
+        '/shape', shape, err, units='m')
+      deallocate(shape)
+    end do
+  end subroutine write_modal
+
+  subroutine write_dynamic(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    call h5%write_real_1d('/time', this%time, err, units='s')
+    call write_nodes(this, h5, '', this%dyn%x_hist, err)
+    if (err%ok()) call h5%write_real_2d('/q', this%dyn%q_hist, err)
+    if (err%ok()) call h5%write_real_2d('/qd', this%dyn%v_hist, err)
+    if (err%ok()) call h5%write_real_1d('/energy/kinetic', this%dyn%energy_hist(1, :), err, &
+      units='J')
+    if (err%ok()) call h5%write_real_1d('/energy/potential', this%dyn%energy_hist(2, :), err, &
+      units='J')
+  end subroutine write_dynamic
+end module analysis_run
