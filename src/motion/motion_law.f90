@@ -51,8 +51,10 @@ contains
       p = this%start; pd = 0.0_wp; pdd = 0.0_wp
       return
     end if
+    ! Right-continuous at both ends: at t0 the motion has started (its acceleration jumps
+    ! there), at t0 + duration it is held. Integrators start segments at breakpoints.
     s = (t - this%t0) / this%duration
-    if (s <= 0.0_wp) then
+    if (s < 0.0_wp) then
       p = this%start; pd = 0.0_wp; pdd = 0.0_wp
       return
     else if (s >= 1.0_wp) then

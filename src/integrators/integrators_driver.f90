@@ -1,0 +1,256 @@
+!> One entry point for all time integrators: checks the options, walks the output times and
+!> breakpoints, restarts the method at each breakpoint and hands every output to the system.
+module integrators_driver
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_INPUT, ERR_IO
+  use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use integrators_cvode, only: cvode_solver_t
+  use integrators_galpha, only: galpha_solver_t
+  implicit none
+  private
+  public :: integrate
+
+  !> The method chosen by opts%method behind one set of calls for the segment loop.
+  type :: stepper_t
+    character(len=16) :: method = ''
+    type(cvode_solver_t) :: bdf
+    type(galpha_solver_t) :: galpha
+  end type stepper_t
+
+contains
+
+  !> Integrate q'' = a(t, q, v) from (t_out(1), q0, v0) and call sys%record at every t_out(k),
+  !> k = 1 included. `breakpoints` are times where a(t, ...) jumps: each one inside
+  !> (t_out(1), t_out(end)) is landed on exactly and the method restarted there; a is never
+  !> evaluated at a breakpoint itself but one rounding step to its left or right, so that
+  !> both segments see their own side of the jump.
+  subroutine integrate(sys, opts, t_out, q0, v0, breakpoints, stats, err)
+    class(ode2_system_t), intent(inout), target :: sys
+    type(integrator_options_t), intent(in) :: opts
+    real(wp), intent(in) :: t_out(:)
+    real(wp), intent(in) :: q0(:), v0(:)
+    real(wp), intent(in) :: breakpoints(:)
+    type(integrator_stats_t), intent(out) :: stats
+    type(error_t), intent(out) :: err
+    type(stepper_t) :: stepper
+    real(wp) :: q(size(q0)), v(size(v0))
+
+    call check_options(opts, t_out, q0, v0, err)
+    if (.not. err%ok()) return
+    q = q0
+    v = v0
+    call record_output(sys, 1, t_out(1), q, v, err)
+    if (.not. err%ok() .or. size(t_out) == 1) return
+
+    stepper%method = opts%method
+    call run_segments(stepper, sys, opts, t_out, &
+      breakpoints_inside(breakpoints, t_out(1), t_out(size(t_out))), q, v, err)
+    call stepper_stats(stepper, stats)
+    call stepper_finish(stepper)
+  end subroutine integrate
+
+  subroutine run_segments(stepper, sys, opts, t_out, bps, q, v, err)
+    type(stepper_t), intent(inout) :: stepper
+    class(ode2_system_t), intent(inout), target :: sys
+    type(integrator_options_t), intent(in) :: opts
+    real(wp), intent(in) :: t_out(:), bps(:)
+    real(wp), intent(inout) :: q(:), v(:)
+    type(error_t), intent(inout) :: err
+    real(wp) :: t, t_end
+    integer :: k, ib
+
+    t = t_out(1)
+    t_end = t_out(size(t_out))
+    ib = 1
+    call stepper_start(stepper, sys, opts, t, q, v, segment_end(bps, ib, t_end), &
+      -huge(1.0_wp), eval_limit(bps, ib), err)
+    if (.not. err%ok()) return
+    do k = 2, size(t_out)
+      do while (ib <= size(bps))
+        if (bps(ib) > t_out(k)) exit
+        if (.not. reached(t, bps(ib))) then
+          call stepper_advance(stepper, sys, bps(ib), q, v, err)
+          if (.not. err%ok()) return
+        end if
+        t = bps(ib)
+        ib = ib + 1
+        call stepper_restart(stepper, sys, t, q, v, segment_end(bps, ib, t_end), &
+          nearest(t, 1.0_wp), eval_limit(bps, ib), err)
+        if (.not. err%ok()) return
+      end do
+      if (.not. reached(t, t_out(k))) then
+        call stepper_advance(stepper, sys, t_out(k), q, v, err)
+        if (.not. err%ok()) return
+        t = t_out(k)
+      end if
+      call record_output(sys, k, t, q, v, err)
+      if (.not. err%ok()) return
+    end do
+  end subroutine run_segments
+
+  !> Targets within a few roundoffs of t count as reached: CVODE refuses to step to them.
+  pure logical function reached(t, target)
+    real(wp), intent(in) :: t, target
+    reached = target - t <= 4 * spacing(max(abs(t), abs(target)))
+  end function reached
+
+  !> Where the current segment ends: the next breakpoint or the last output time.
+  pure real(wp) function segment_end(bps, ib, t_end)
+    real(wp), intent(in) :: bps(:), t_end
+    integer, intent(in) :: ib
+    segment_end = t_end
+    if (ib <= size(bps)) segment_end = bps(ib)
+  end function segment_end
+
+  !> Latest time at which a may be evaluated in the current segment.
+  pure real(wp) function eval_limit(bps, ib)
+    real(wp), intent(in) :: bps(:)
+    integer, intent(in) :: ib
+    eval_limit = huge(1.0_wp)
+    if (ib <= size(bps)) eval_limit = nearest(bps(ib), -1.0_wp)
+  end function eval_limit
+
+  !> The breakpoints strictly inside (t_first, t_last), sorted, without repeats.
+  pure function breakpoints_inside(breakpoints, t_first, t_last) result(bps)
+    real(wp), intent(in) :: breakpoints(:), t_first, t_last
+    real(wp), allocatable :: bps(:)
+    real(wp) :: rest(size(breakpoints)), lowest
+    integer :: n, m
+
+    n = count(breakpoints > t_first .and. breakpoints < t_last)
+    rest(1:n) = pack(breakpoints, breakpoints > t_first .and. breakpoints < t_last)
+    allocate(bps(0))
+    do while (n > 0)
+      lowest = minval(rest(1:n))
+      bps = [bps, lowest]
+      m = count(rest(1:n) > lowest)
+      rest(1:m) = pack(rest(1:n), rest(1:n) > lowest)
+      n = m
+    end do
+  end function breakpoints_inside
+
+  subroutine record_output(sys, k, t, q, v, err)
+    class(ode2_system_t), intent(inout) :: sys
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t, q(:), v(:)
+    type(error_t), intent(inout) :: err
+    integer :: status
+    call sys%record(k, t, q, v, status)
+    if (status /= 0) call err%set(ERR_IO, 'integrate: record returned status ' // &
+      int_str(status) // ' at output ' // int_str(k) // ' (t = ' // real_str(t) // ')')
+  end subroutine record_output
+
+  subroutine check_options(opts, t_out, q0, v0, err)
+    type(integrator_options_t), intent(in) :: opts
+    real(wp), intent(in) :: t_out(:), q0(:), v0(:)
+    type(error_t), intent(inout) :: err
+    character(len=*), parameter :: ctx = 'integrator options: '
+    integer :: n
+
+    n = size(t_out)
+    if (n < 1) call err%set(ERR_INPUT, ctx // 'no output times')
+    if (n > 1) then
+      if (.not. all(t_out(2:) > t_out(:n - 1))) call err%set(ERR_INPUT, &
+        ctx // 'output times must be strictly increasing')
+    end if
+    if (size(q0) /= size(v0) .or. size(q0) < 1) call err%set(ERR_INPUT, ctx // &
+      'q0 and v0 must have the same, non-zero size')
+    if (.not. opts%rtol > 0) call err%set(ERR_INPUT, ctx // 'rtol must be > 0, got ' // &
+      real_str(opts%rtol))
+    if (.not. opts%atol > 0) call err%set(ERR_INPUT, ctx // 'atol must be > 0, got ' // &
+      real_str(opts%atol))
+    if (opts%max_steps < 1) call err%set(ERR_INPUT, ctx // 'max_steps must be >= 1')
+    select case (opts%method)
+    case ('bdf')
+      if (opts%max_order < 1 .or. opts%max_order > 5) call err%set(ERR_INPUT, ctx // &
+        'max_order must be in 1..5, got ' // int_str(opts%max_order))
+      if (.not. opts%max_step >= 0) call err%set(ERR_INPUT, ctx // &
+        'max_step must be >= 0 (0: no limit), got ' // real_str(opts%max_step))
+      if (opts%jacobian /= 'system' .and. opts%jacobian /= 'internal') call err%set(ERR_INPUT, &
+        ctx // "jacobian must be 'system' or 'internal', got '" // trim(opts%jacobian) // "'")
+    case ('galpha')
+      if (.not. opts%dt > 0) call err%set(ERR_INPUT, ctx // 'dt must be > 0, got ' // &
+        real_str(opts%dt))
+      if (.not. (opts%rho_inf >= 0 .and. opts%rho_inf <= 1)) call err%set(ERR_INPUT, ctx // &
+        'rho_inf must be in [0, 1], got ' // real_str(opts%rho_inf))
+    case default
+      call err%set(ERR_INPUT, ctx // "unknown method '" // trim(opts%method) // &
+        "' (expected 'bdf' or 'galpha')")
+    end select
+  end subroutine check_options
+
+  ! ---- dispatch to the chosen method --------------------------------------------------------
+
+  subroutine stepper_start(s, sys, opts, t0, q, v, t_stop, t_lo, t_hi, err)
+    type(stepper_t), intent(inout) :: s
+    class(ode2_system_t), intent(inout), target :: sys
+    type(integrator_options_t), intent(in) :: opts
+    real(wp), intent(in) :: t0, q(:), v(:), t_stop, t_lo, t_hi
+    type(error_t), intent(inout) :: err
+    select case (s%method)
+    case ('bdf')
+      call s%bdf%start(sys, opts, t0, q, v, t_stop, t_lo, t_hi, err)
+    case ('galpha')
+      call s%galpha%start(sys, opts, t0, q, v, t_lo, t_hi, err)
+    end select
+  end subroutine stepper_start
+
+  subroutine stepper_advance(s, sys, t_target, q, v, err)
+    type(stepper_t), intent(inout) :: s
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: t_target
+    real(wp), intent(inout) :: q(:), v(:)
+    type(error_t), intent(inout) :: err
+    select case (s%method)
+    case ('bdf')
+      call s%bdf%advance(t_target, q, v, err)
+    case ('galpha')
+      call s%galpha%advance(sys, t_target, q, v, err)
+    end select
+  end subroutine stepper_advance
+
+  subroutine stepper_restart(s, sys, t, q, v, t_stop, t_lo, t_hi, err)
+    type(stepper_t), intent(inout) :: s
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: t, q(:), v(:), t_stop, t_lo, t_hi
+    type(error_t), intent(inout) :: err
+    select case (s%method)
+    case ('bdf')
+      call s%bdf%restart(t, q, v, t_stop, t_lo, t_hi, err)
+    case ('galpha')
+      call s%galpha%restart(sys, t, q, v, t_lo, t_hi, err)
+    end select
+  end subroutine stepper_restart
+
+  subroutine stepper_stats(s, stats)
+    type(stepper_t), intent(in) :: s
+    type(integrator_stats_t), intent(out) :: stats
+    select case (s%method)
+    case ('bdf')
+      call s%bdf%get_stats(stats)
+    case ('galpha')
+      call s%galpha%get_stats(stats)
+    end select
+  end subroutine stepper_stats
+
+  subroutine stepper_finish(s)
+    type(stepper_t), intent(inout) :: s
+    call s%bdf%finish()
+  end subroutine stepper_finish
+
+  function real_str(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=:), allocatable :: s
+    character(len=32) :: buf
+    write(buf, '(g0.10)') x
+    s = trim(adjustl(buf))
+  end function real_str
+
+  function int_str(i) result(s)
+    integer, intent(in) :: i
+    character(len=:), allocatable :: s
+    character(len=16) :: buf
+    write(buf, '(i0)') i
+    s = trim(buf)
+  end function int_str
+end module integrators_driver

@@ -1,0 +1,426 @@
+!> Fixed-step generalized-alpha method (Chung & Hulbert 1993) for q'' = a(t, q, v), in the
+!> form of Arnold & Brüls (2007) with the acceleration-like variable `acc`:
+!>
+!>     q+   = q + h v + h^2 (1/2 - beta) acc + h^2 beta acc+
+!>     v+   = v + h (1 - gamma) acc + h gamma acc+
+!>     (1 - alpha_m) acc+ + alpha_m acc = (1 - alpha_f) qdd+ + alpha_f qdd,   qdd+ = a(t+, q+, v+)
+!>
+!> with alpha_m = (2 rho - 1)/(rho + 1), alpha_f = rho/(rho + 1), gamma = 1/2 + alpha_f - alpha_m,
+!> beta = (gamma + 1/2)^2 / 4: second order, unconditionally stable for linear problems, and
+!> rho = rho_inf is the spectral radius at h omega -> infinity (1: no numerical damping, 0:
+!> unresolved modes annihilated in one step). Newton iterates on qdd+.
+!>
+!> Steps are dt, shortened evenly so that output times and breakpoints are landed on exactly.
+!> The Newton matrix I - c_q da/dq - c_v da/dv comes from sys%jacobian (opts%jacobian does not
+!> apply) and is kept across iterations and steps: the Jacobian is re-evaluated only after a
+!> slow or failed Newton solve or a restart, the matrix refactored when h changes. Newton stops
+!> when its update of q and v is below a tenth of rtol/atol. A step that still fails is halved,
+!> locally and at most max_halvings times.
+module integrators_galpha
+  use core_kinds, only: wp, i8
+  use core_error, only: error_t, ERR_NUMERIC
+  use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  implicit none
+  private
+  public :: galpha_solver_t
+
+  integer, parameter :: max_newton_iters = 8
+  !> Converging in more iterations than this makes the next step refresh the Jacobian.
+  integer, parameter :: slow_newton_iters = 3
+  !> Newton stops when the change of q and v is below this fraction of rtol/atol.
+  real(wp), parameter :: newton_tol = 0.1_wp
+  !> A contraction rate above this counts as divergence.
+  real(wp), parameter :: max_newton_rate = 0.9_wp
+  !> Local step halvings after failed steps before giving up.
+  integer, parameter :: max_halvings = 10
+  !> Successful steps at a halved step size before trying the double again.
+  integer, parameter :: steps_before_growth = 2
+  !> A shortened step this close to the distance left (relative) lands on the target.
+  real(wp), parameter :: landing_slack = 1.0e-8_wp
+
+  integer, parameter :: STEP_OK = 0, STEP_NEWTON_FAILED = 1, STEP_RECOVERABLE = 2, &
+    STEP_FATAL = 3
+
+  type :: galpha_solver_t
+    private
+    integer :: n = 0
+    real(wp) :: dt = 0, rtol = 0, atol = 0
+    real(wp) :: alpha_m = 0, alpha_f = 0, beta = 0, gamma = 0
+    integer(i8) :: max_steps = 0
+    !> Accepted state: time, position, velocity, true and acceleration-like accelerations.
+    real(wp) :: t = 0
+    real(wp), allocatable :: q(:), v(:), qdd(:), acc(:)
+    !> Step that produced `acc`: acc approximates qdd at t + (alpha_m - alpha_f) h_last.
+    real(wp) :: h_last = 0
+    !> accel is evaluated at times clamped into [t_lo, t_hi] (see the driver).
+    real(wp) :: t_lo = -huge(1.0_wp), t_hi = huge(1.0_wp)
+    real(wp), allocatable :: dadq(:, :), dadv(:, :)
+    !> LU factors of the iteration matrix I - c_q da/dq - c_v da/dv for the step h_lu.
+    real(wp), allocatable :: lu(:, :)
+    integer, allocatable :: pivots(:)
+    real(wp) :: h_lu = 0
+    logical :: have_jac = .false., jac_is_current = .false., refresh_jac = .true.
+    logical :: lu_valid = .false.
+    integer :: halvings = 0, steps_at_level = 0
+    !> The last non-zero status of accel, for the error message.
+    integer :: bad_status = 0
+    type(integrator_stats_t) :: stats
+  contains
+    procedure :: start => galpha_start
+    procedure :: advance => galpha_advance
+    procedure :: restart => galpha_restart
+    procedure :: get_stats => galpha_get_stats
+  end type galpha_solver_t
+
+contains
+
+  subroutine galpha_start(this, sys, opts, t0, q, v, t_lo, t_hi, err)
+    class(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    type(integrator_options_t), intent(in) :: opts
+    real(wp), intent(in) :: t0, q(:), v(:), t_lo, t_hi
+    type(error_t), intent(inout) :: err
+    real(wp) :: rho
+
+    this%n = size(q)
+    this%dt = opts%dt
+    this%rtol = opts%rtol
+    this%atol = opts%atol
+    this%max_steps = opts%max_steps
+    rho = opts%rho_inf
+    this%alpha_m = (2 * rho - 1) / (rho + 1)
+    this%alpha_f = rho / (rho + 1)
+    this%gamma = 0.5_wp + this%alpha_f - this%alpha_m
+    this%beta = 0.25_wp * (this%gamma + 0.5_wp)**2
+    this%stats = integrator_stats_t()
+    allocate(this%q(this%n), this%v(this%n), this%qdd(this%n), this%acc(this%n))
+    allocate(this%dadq(this%n, this%n), this%dadv(this%n, this%n), this%lu(this%n, this%n))
+    allocate(this%pivots(this%n))
+    this%have_jac = .false.
+    call set_initial_state(this, sys, t0, q, v, t_lo, t_hi, err)
+  end subroutine galpha_start
+
+  !> Start again after a jump of a(t, ...) at t: the acceleration history is no longer valid.
+  subroutine galpha_restart(this, sys, t, q, v, t_lo, t_hi, err)
+    class(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: t, q(:), v(:), t_lo, t_hi
+    type(error_t), intent(inout) :: err
+    this%stats%n_restarts = this%stats%n_restarts + 1
+    call set_initial_state(this, sys, t, q, v, t_lo, t_hi, err)
+  end subroutine galpha_restart
+
+  subroutine set_initial_state(this, sys, t, q, v, t_lo, t_hi, err)
+    type(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: t, q(:), v(:), t_lo, t_hi
+    type(error_t), intent(inout) :: err
+    integer :: status
+
+    this%t = t
+    this%q = q
+    this%v = v
+    this%t_lo = t_lo
+    this%t_hi = t_hi
+    call sys%accel(clamped(this, t), q, v, this%qdd, status)
+    this%stats%n_rhs_evals = this%stats%n_rhs_evals + 1
+    if (status /= 0) then
+      call err%set(ERR_NUMERIC, 'galpha: accel returned status ' // int_str(status) // &
+        ' at the initial time t = ' // real_str(t))
+      return
+    end if
+    this%acc = this%qdd
+    ! acc = qdd, so the step-size rescaling of acc is a no-op whatever h_last is.
+    this%h_last = this%dt
+    this%refresh_jac = .true.
+    this%halvings = 0
+    this%steps_at_level = 0
+  end subroutine set_initial_state
+
+  !> Step to t_target exactly and return the state there.
+  subroutine galpha_advance(this, sys, t_target, q, v, err)
+    class(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: t_target
+    real(wp), intent(out) :: q(:), v(:)
+    type(error_t), intent(inout) :: err
+    real(wp) :: h
+    logical :: lands
+    integer :: outcome
+
+    do while (this%t < t_target)
+      if (this%stats%n_steps >= this%max_steps) then
+        call err%set(ERR_NUMERIC, 'galpha: max_steps reached at t = ' // real_str(this%t))
+        return
+      end if
+      call choose_step(this, t_target, h, lands)
+      call refresh_iteration_matrix(this, sys, h, err)
+      if (.not. err%ok()) return
+      call take_step(this, sys, h, merge(t_target, this%t + h, lands), outcome)
+      select case (outcome)
+      case (STEP_OK)
+        call after_success(this)
+      case (STEP_FATAL)
+        call err%set(ERR_NUMERIC, 'galpha: accel returned status ' // &
+          int_str(this%bad_status) // ' in the step from t = ' // real_str(this%t) // &
+          ' to ' // real_str(this%t + h))
+        return
+      case default
+        call after_failure(this, outcome, h, err)
+        if (.not. err%ok()) return
+      end select
+    end do
+    q = this%q
+    v = this%v
+  end subroutine galpha_advance
+
+  !> The nominal step (dt, halved after failures), shortened evenly over the distance left so
+  !> that the target is hit exactly without a tiny last step.
+  subroutine choose_step(this, t_target, h, lands)
+    type(galpha_solver_t), intent(in) :: this
+    real(wp), intent(in) :: t_target
+    real(wp), intent(out) :: h
+    logical, intent(out) :: lands
+    real(wp) :: h_nominal, left, n_steps
+
+    h_nominal = this%dt / 2.0_wp**this%halvings
+    left = t_target - this%t
+    n_steps = left / h_nominal
+    lands = n_steps <= 1 + landing_slack
+    if (lands) then
+      h = left
+    else if (n_steps < 1.0e9_wp) then
+      h = left / aint(n_steps + (1 - landing_slack))
+    else
+      h = h_nominal
+    end if
+  end subroutine choose_step
+
+  subroutine after_success(this)
+    type(galpha_solver_t), intent(inout) :: this
+    this%stats%n_steps = this%stats%n_steps + 1
+    this%jac_is_current = .false.
+    if (this%halvings > 0) then
+      this%steps_at_level = this%steps_at_level + 1
+      if (this%steps_at_level >= steps_before_growth) then
+        this%halvings = this%halvings - 1
+        this%steps_at_level = 0
+      end if
+    end if
+  end subroutine after_success
+
+  !> A stale Jacobian gets one more try with a fresh one; otherwise halve the step.
+  subroutine after_failure(this, outcome, h, err)
+    type(galpha_solver_t), intent(inout) :: this
+    integer, intent(in) :: outcome
+    real(wp), intent(in) :: h
+    type(error_t), intent(inout) :: err
+    this%stats%n_nonlin_fails = this%stats%n_nonlin_fails + 1
+    if (outcome == STEP_NEWTON_FAILED .and. .not. this%jac_is_current) then
+      this%refresh_jac = .true.
+      return
+    end if
+    this%halvings = this%halvings + 1
+    this%steps_at_level = 0
+    if (this%halvings > max_halvings) then
+      if (outcome == STEP_RECOVERABLE) then
+        call err%set(ERR_NUMERIC, 'galpha: the system kept returning a recoverable status at t = ' &
+          // real_str(this%t) // ' with the step halved ' // int_str(max_halvings) // &
+          ' times (h = ' // real_str(h) // ')')
+      else
+        call err%set(ERR_NUMERIC, 'galpha: Newton did not converge at t = ' // &
+          real_str(this%t) // ' with the step halved ' // int_str(max_halvings) // &
+          ' times (h = ' // real_str(h) // ')')
+      end if
+    end if
+  end subroutine after_failure
+
+  !> Evaluate the Jacobian when asked to, and refactor when it or the step has changed.
+  subroutine refresh_iteration_matrix(this, sys, h, err)
+    type(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: h
+    type(error_t), intent(inout) :: err
+    integer :: status
+
+    if (this%refresh_jac .or. .not. this%have_jac) then
+      call sys%jacobian(clamped(this, this%t), this%q, this%v, this%dadq, this%dadv, status)
+      this%stats%n_jac_evals = this%stats%n_jac_evals + 1
+      if (status < 0 .or. (status > 0 .and. .not. this%have_jac)) then
+        call err%set(ERR_NUMERIC, 'galpha: jacobian returned status ' // int_str(status) // &
+          ' at t = ' // real_str(this%t))
+        return
+      end if
+      ! After a recoverable failure the previous Jacobian is still a usable Newton matrix.
+      if (status == 0) then
+        this%have_jac = .true.
+        this%lu_valid = .false.
+      end if
+      this%jac_is_current = .true.
+      this%refresh_jac = .false.
+    end if
+    if (.not. this%lu_valid .or. abs(h - this%h_lu) > 1.0e-6_wp * h) then
+      call factor_iteration_matrix(this, h)
+    end if
+  end subroutine refresh_iteration_matrix
+
+  subroutine factor_iteration_matrix(this, h)
+    type(galpha_solver_t), intent(inout) :: this
+    real(wp), intent(in) :: h
+    real(wp) :: c_q, c_v
+    integer :: i
+    call newton_coefficients(this, h, c_q, c_v)
+    this%lu = -c_q * this%dadq - c_v * this%dadv
+    do i = 1, this%n
+      this%lu(i, i) = this%lu(i, i) + 1
+    end do
+    call lu_factor(this%lu, this%pivots, this%lu_valid)
+    this%h_lu = h
+  end subroutine factor_iteration_matrix
+
+  !> d(q+)/d(qdd+) and d(v+)/d(qdd+).
+  pure subroutine newton_coefficients(this, h, c_q, c_v)
+    type(galpha_solver_t), intent(in) :: this
+    real(wp), intent(in) :: h
+    real(wp), intent(out) :: c_q, c_v
+    real(wp) :: ratio
+    ratio = (1 - this%alpha_f) / (1 - this%alpha_m)
+    c_q = h**2 * this%beta * ratio
+    c_v = h * this%gamma * ratio
+  end subroutine newton_coefficients
+
+  !> One step from this%t to t_new = this%t + h; the state is updated only on success.
+  subroutine take_step(this, sys, h, t_new, outcome)
+    type(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: h, t_new
+    integer, intent(out) :: outcome
+    real(wp), dimension(this%n) :: acc0, acc_known, q_known, v_known, x, q1, v1, f, dx
+    real(wp) :: c_q, c_v, dnorm, dnorm_old, rate
+    integer :: iter, status
+
+    outcome = STEP_NEWTON_FAILED
+    if (.not. this%lu_valid) return
+    ! acc lags qdd by (alpha_m - alpha_f) h_last; a new step size needs the lag for h.
+    acc0 = this%qdd + (h / this%h_last) * (this%acc - this%qdd)
+    acc_known = (this%alpha_f * this%qdd - this%alpha_m * acc0) / (1 - this%alpha_m)
+    q_known = this%q + h * this%v + h**2 * ((0.5_wp - this%beta) * acc0 + this%beta * acc_known)
+    v_known = this%v + h * ((1 - this%gamma) * acc0 + this%gamma * acc_known)
+    call newton_coefficients(this, h, c_q, c_v)
+
+    x = this%qdd
+    dnorm_old = huge(1.0_wp)
+    do iter = 1, max_newton_iters
+      q1 = q_known + c_q * x
+      v1 = v_known + c_v * x
+      call sys%accel(clamped(this, t_new), q1, v1, f, status)
+      this%stats%n_rhs_evals = this%stats%n_rhs_evals + 1
+      if (status /= 0) then
+        this%bad_status = status
+        outcome = merge(STEP_FATAL, STEP_RECOVERABLE, status < 0)
+        return
+      end if
+      dx = f - x
+      call lu_solve(this%lu, this%pivots, dx)
+      x = x + dx
+      dnorm = max(weighted_norm(this, c_q * dx, q1), weighted_norm(this, c_v * dx, v1))
+      if (dnorm <= newton_tol) exit
+      rate = dnorm / dnorm_old
+      if (iter > 1 .and. rate > max_newton_rate) return
+      dnorm_old = dnorm
+    end do
+    if (dnorm > newton_tol) return
+
+    if (iter > slow_newton_iters) this%refresh_jac = .true.
+    this%q = q_known + c_q * x
+    this%v = v_known + c_v * x
+    this%acc = acc_known + (1 - this%alpha_f) / (1 - this%alpha_m) * x
+    this%qdd = x
+    this%t = t_new
+    this%h_last = h
+    outcome = STEP_OK
+  end subroutine take_step
+
+  !> max |d_i| / (atol + rtol |x_i|)
+  pure real(wp) function weighted_norm(this, d, x)
+    type(galpha_solver_t), intent(in) :: this
+    real(wp), intent(in) :: d(:), x(:)
+    weighted_norm = maxval(abs(d) / (this%atol + this%rtol * abs(x)))
+  end function weighted_norm
+
+  pure real(wp) function clamped(this, t)
+    type(galpha_solver_t), intent(in) :: this
+    real(wp), intent(in) :: t
+    clamped = min(max(t, this%t_lo), this%t_hi)
+  end function clamped
+
+  subroutine galpha_get_stats(this, stats)
+    class(galpha_solver_t), intent(in) :: this
+    type(integrator_stats_t), intent(out) :: stats
+    stats = this%stats
+  end subroutine galpha_get_stats
+
+  !> LU with partial pivoting (the iteration matrices are small and dense); ok = .false. when
+  !> a pivot is zero.
+  pure subroutine lu_factor(a, pivots, ok)
+    real(wp), intent(inout) :: a(:, :)
+    integer, intent(out) :: pivots(:)
+    logical, intent(out) :: ok
+    integer :: j, p, n
+    real(wp) :: row(size(a, 2))
+
+    n = size(a, 1)
+    ok = .false.
+    do j = 1, n
+      p = j - 1 + maxloc(abs(a(j:, j)), dim=1)
+      pivots(j) = p
+      if (.not. abs(a(p, j)) > 0) return
+      if (p /= j) then
+        row = a(j, :)
+        a(j, :) = a(p, :)
+        a(p, :) = row
+      end if
+      a(j + 1:, j) = a(j + 1:, j) / a(j, j)
+      a(j + 1:, j + 1:) = a(j + 1:, j + 1:) - &
+        matmul(a(j + 1:, j:j), a(j:j, j + 1:))
+    end do
+    ok = .true.
+  end subroutine lu_factor
+
+  pure subroutine lu_solve(lu, pivots, b)
+    real(wp), intent(in) :: lu(:, :)
+    integer, intent(in) :: pivots(:)
+    real(wp), intent(inout) :: b(:)
+    integer :: i, n
+    real(wp) :: tmp
+
+    n = size(b)
+    do i = 1, n
+      tmp = b(i)
+      b(i) = b(pivots(i))
+      b(pivots(i)) = tmp
+    end do
+    do i = 2, n
+      b(i) = b(i) - dot_product(lu(i, 1:i - 1), b(1:i - 1))
+    end do
+    do i = n, 1, -1
+      b(i) = (b(i) - dot_product(lu(i, i + 1:n), b(i + 1:n))) / lu(i, i)
+    end do
+  end subroutine lu_solve
+
+  function real_str(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=:), allocatable :: s
+    character(len=32) :: buf
+    write(buf, '(g0.10)') x
+    s = trim(adjustl(buf))
+  end function real_str
+
+  function int_str(i) result(s)
+    integer, intent(in) :: i
+    character(len=:), allocatable :: s
+    character(len=16) :: buf
+    write(buf, '(i0)') i
+    s = trim(buf)
+  end function int_str
+end module integrators_galpha

@@ -1,0 +1,91 @@
+!> The second-order system every flexmor integrator advances:
+!>     q'' = a(t, q, v),   v = q'
+!> The model (full or reduced) extends `ode2_system_t`; the integrators know nothing else of it.
+!>
+!> Status codes of the callbacks follow SUNDIALS: 0 ok, > 0 recoverable (the integrator cuts the
+!> step and retries, e.g. a kinematic Newton solve that did not converge), < 0 fatal.
+module integrators_system
+  use core_kinds, only: wp, i8
+  implicit none
+  private
+  public :: ode2_system_t, integrator_options_t, integrator_stats_t
+
+  type, abstract :: ode2_system_t
+  contains
+    !> Accelerations a(t, q, v).
+    procedure(accel_iface), deferred :: accel
+    !> Called at every requested output time with the state there.
+    procedure(record_iface), deferred :: record
+    !> Jacobians da/dq and da/dv (n x n). The default is forward differences of `accel`;
+    !> a model may override it with its linearised matrices.
+    procedure :: jacobian => system_fd_jacobian
+  end type ode2_system_t
+
+  abstract interface
+    subroutine accel_iface(this, t, q, v, a, status)
+      import :: ode2_system_t, wp
+      class(ode2_system_t), intent(inout) :: this
+      real(wp), intent(in) :: t, q(:), v(:)
+      real(wp), intent(out) :: a(:)
+      integer, intent(out) :: status
+    end subroutine accel_iface
+
+    subroutine record_iface(this, k, t, q, v, status)
+      import :: ode2_system_t, wp
+      class(ode2_system_t), intent(inout) :: this
+      integer, intent(in) :: k          !< index into the output times
+      real(wp), intent(in) :: t, q(:), v(:)
+      integer, intent(out) :: status
+    end subroutine record_iface
+  end interface
+
+  !> Options common to all integrators; each method reads the ones that apply to it.
+  type :: integrator_options_t
+    character(len=16) :: method = 'bdf'      !< 'bdf' (CVODE), 'galpha' (fixed step, ours)
+    real(wp) :: rtol = 1.0e-6_wp              !< relative tolerance (adaptive methods)
+    real(wp) :: atol = 1.0e-8_wp              !< absolute tolerance (adaptive methods)
+    real(wp) :: max_step = 0.0_wp             !< largest step, 0 = no limit (adaptive methods)
+    integer :: max_order = 5                  !< BDF order limit (1..5)
+    integer(i8) :: max_steps = 10000000_i8    !< step limit over the whole run
+    character(len=16) :: jacobian = 'system'  !< 'system' (ode2_system_t%jacobian) or 'internal'
+    real(wp) :: dt = 1.0e-3_wp                !< step of fixed-step methods
+    real(wp) :: rho_inf = 0.8_wp              !< generalized-alpha spectral radius at infinity
+  end type integrator_options_t
+
+  !> Counters written to the output so runs can be compared.
+  type :: integrator_stats_t
+    integer(i8) :: n_steps = 0
+    integer(i8) :: n_rhs_evals = 0        !< calls of `accel`
+    integer(i8) :: n_jac_evals = 0        !< Jacobian evaluations
+    integer(i8) :: n_err_test_fails = 0   !< steps rejected by the error test
+    integer(i8) :: n_nonlin_fails = 0     !< Newton (corrector) convergence failures
+    integer(i8) :: n_restarts = 0         !< re-initialisations at breakpoints
+  end type integrator_stats_t
+
+contains
+
+  subroutine system_fd_jacobian(this, t, q, v, dadq, dadv, status)
+    class(ode2_system_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
+    integer, intent(out) :: status
+    real(wp) :: a0(size(q)), a1(size(q)), qp(size(q)), vp(size(q)), h
+    integer :: j
+    call this%accel(t, q, v, a0, status)
+    if (status /= 0) return
+    do j = 1, size(q)
+      qp = q
+      h = sqrt(epsilon(1.0_wp)) * max(abs(q(j)), 1.0e-3_wp)
+      qp(j) = q(j) + h
+      call this%accel(t, qp, v, a1, status)
+      if (status /= 0) return
+      dadq(:, j) = (a1 - a0) / h
+      vp = v
+      h = sqrt(epsilon(1.0_wp)) * max(abs(v(j)), 1.0e-2_wp)
+      vp(j) = v(j) + h
+      call this%accel(t, q, vp, a1, status)
+      if (status /= 0) return
+      dadv(:, j) = (a1 - a0) / h
+    end do
+  end subroutine system_fd_jacobian
+end module integrators_system

@@ -1,0 +1,175 @@
+!> Oscillator with a force that switches off at t_b: q'' = -omega^2 q + F(t), F = F0 before
+!> t_b and 0 after. Given t_b as a breakpoint, both methods land on it, restart there and keep
+!> their accuracy (galpha its second order); the jump is never evaluated at t_b itself.
+module breakpoint_test_system
+  use core_kinds, only: wp
+  use integrators_system, only: ode2_system_t
+  implicit none
+  private
+  public :: switched_oscillator_t
+
+  real(wp), parameter :: pi = acos(-1.0_wp)
+
+  type, extends(ode2_system_t) :: switched_oscillator_t
+    real(wp) :: omega = 2 * pi, force = 20, t_b = 0.37_wp
+    !> Which side of the jump F(t_b) belongs to: the integrators must not care.
+    logical :: force_at_t_b = .false.
+    real(wp) :: max_error = 0
+    integer :: n_evals_at_t_b = 0
+  contains
+    procedure :: accel => switched_accel
+    procedure :: record => switched_record
+    procedure :: jacobian => switched_jacobian
+  end type switched_oscillator_t
+
+contains
+
+  subroutine switched_accel(this, t, q, v, a, status)
+    class(switched_oscillator_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: a(:)
+    integer, intent(out) :: status
+    logical :: on
+    if (.not. abs(t - this%t_b) > 0) this%n_evals_at_t_b = this%n_evals_at_t_b + 1
+    on = t < this%t_b .or. (this%force_at_t_b .and. .not. t > this%t_b)
+    a = -this%omega**2 * q
+    if (on) a = a + this%force
+    status = 0
+  end subroutine switched_accel
+
+  subroutine switched_jacobian(this, t, q, v, dadq, dadv, status)
+    class(switched_oscillator_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
+    integer, intent(out) :: status
+    dadq = -this%omega**2
+    dadv = 0
+    status = 0
+  end subroutine switched_jacobian
+
+  !> Exact solution from rest at q = 0: forced response, then free vibration from t_b.
+  subroutine switched_record(this, k, t, q, v, status)
+    class(switched_oscillator_t), intent(inout) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t, q(:), v(:)
+    integer, intent(out) :: status
+    real(wp) :: w, q_static, q_b, v_b, q_exact, v_exact
+    w = this%omega
+    q_static = this%force / w**2
+    if (t <= this%t_b) then
+      q_exact = q_static * (1 - cos(w * t))
+      v_exact = q_static * w * sin(w * t)
+    else
+      q_b = q_static * (1 - cos(w * this%t_b))
+      v_b = q_static * w * sin(w * this%t_b)
+      q_exact = q_b * cos(w * (t - this%t_b)) + v_b / w * sin(w * (t - this%t_b))
+      v_exact = -q_b * w * sin(w * (t - this%t_b)) + v_b * cos(w * (t - this%t_b))
+    end if
+    this%max_error = max(this%max_error, abs(q(1) - q_exact) + abs(v(1) - v_exact) / w)
+    status = 0
+  end subroutine switched_record
+end module breakpoint_test_system
+
+program test_integrators_breakpoint
+  use core_kinds, only: wp
+  use core_error, only: error_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_driver, only: integrate
+  use breakpoint_test_system, only: switched_oscillator_t
+  use testing, only: suite_t
+  implicit none
+  type(suite_t) :: suite
+  real(wp), allocatable :: t_out(:)
+  type(integrator_options_t) :: bdf, galpha
+  integer :: i
+
+  call suite%init('integrators: breakpoints')
+  t_out = [(0.1_wp * i, i = 0, 10)]
+  bdf = integrator_options_t(method='bdf', rtol=1.0e-7_wp, atol=1.0e-9_wp)
+  galpha = integrator_options_t(method='galpha', dt=0.008_wp, rho_inf=0.8_wp)
+
+  call check_bdf(0.37_wp, .false.)
+  call check_bdf(0.37_wp, .true.)
+  call check_bdf(0.4_wp, .false.)
+  call check_galpha(0.37_wp, .false.)
+  call check_galpha(0.37_wp, .true.)
+  call check_galpha(0.4_wp, .true.)
+  call check_outside_and_repeated()
+  call suite%finish()
+
+contains
+
+  subroutine run(opts, t_b, force_at_t_b, breakpoints, sys, stats, err)
+    type(integrator_options_t), intent(in) :: opts
+    real(wp), intent(in) :: t_b
+    logical, intent(in) :: force_at_t_b
+    real(wp), intent(in) :: breakpoints(:)
+    type(switched_oscillator_t), intent(out) :: sys
+    type(integrator_stats_t), intent(out) :: stats
+    type(error_t), intent(out) :: err
+    character(len=160) :: line
+    sys%t_b = t_b
+    sys%force_at_t_b = force_at_t_b
+    call integrate(sys, opts, t_out, [0.0_wp], [0.0_wp], breakpoints, stats, err)
+    write(line, '(a,a,f5.2,a,i0,a,l1,a,es9.2,a,i0,a,i0,a,i0,a,i0)') trim(opts%method), &
+      ' t_b', t_b, ' breakpoints ', size(breakpoints), ' F(t_b) on ', force_at_t_b, &
+      ': error', sys%max_error, ', steps ', stats%n_steps, ', accel ', stats%n_rhs_evals, &
+      ', err test fails ', stats%n_err_test_fails, ', restarts ', stats%n_restarts
+    write(*, '(4x,a)') trim(line)
+  end subroutine run
+
+  subroutine check_bdf(t_b, force_at_t_b)
+    real(wp), intent(in) :: t_b
+    logical, intent(in) :: force_at_t_b
+    type(switched_oscillator_t) :: sys, sys_blind
+    type(integrator_stats_t) :: stats, stats_blind
+    type(error_t) :: err
+    real(wp) :: none(0)
+    call run(bdf, t_b, force_at_t_b, [t_b], sys, stats, err)
+    call suite%check(err%ok() .and. stats%n_restarts == 1, 'bdf restarts once at t_b')
+    call suite%check(sys%max_error < 100 * bdf%rtol, 'bdf is accurate across the jump')
+    call suite%check(sys%n_evals_at_t_b == 0, 'bdf never evaluates a at t_b itself')
+    call run(bdf, t_b, force_at_t_b, none, sys_blind, stats_blind, err)
+    call suite%check(err%ok() .and. stats_blind%n_restarts == 0, &
+      'bdf also runs without being told of the jump')
+    call suite%check(stats%n_err_test_fails < stats_blind%n_err_test_fails, &
+      'the restart saves the error test failures at the jump')
+  end subroutine check_bdf
+
+  subroutine check_galpha(t_b, force_at_t_b)
+    real(wp), intent(in) :: t_b
+    logical, intent(in) :: force_at_t_b
+    type(integrator_options_t) :: opts
+    type(switched_oscillator_t) :: sys, sys_fine, sys_blind, sys_blind_fine
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    real(wp) :: none(0)
+    opts = galpha
+    call run(opts, t_b, force_at_t_b, [t_b], sys, stats, err)
+    call suite%check(err%ok() .and. stats%n_restarts == 1, 'galpha restarts once at t_b')
+    call suite%check(sys%n_evals_at_t_b == 0, 'galpha never evaluates a at t_b itself')
+    opts%dt = galpha%dt / 2
+    call run(opts, t_b, force_at_t_b, [t_b], sys_fine, stats, err)
+    call suite%close(sys%max_error / sys_fine%max_error, 4.0_wp, 0.0_wp, 0.6_wp, &
+      'galpha stays second order across the jump')
+    ! Told nothing, galpha steps over the jump and drops to first order.
+    call run(galpha, t_b, force_at_t_b, none, sys_blind, stats, err)
+    call run(opts, t_b, force_at_t_b, none, sys_blind_fine, stats, err)
+    call suite%check(sys_blind%max_error > 2 * sys%max_error, &
+      'the breakpoint makes galpha more accurate')
+  end subroutine check_galpha
+
+  subroutine check_outside_and_repeated()
+    type(switched_oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    call run(bdf, 0.37_wp, .false., [2.0_wp, 0.37_wp, -1.0_wp, 0.0_wp, 1.0_wp, 0.37_wp], &
+      sys, stats, err)
+    call suite%check(err%ok() .and. stats%n_restarts == 1, &
+      'breakpoints outside (t0, t_end) and repeats are ignored')
+    ! A breakpoint a rounding error after an output time: no step to take, only a restart.
+    call run(bdf, 0.4_wp, .false., [nearest(0.4_wp, 1.0_wp)], sys, stats, err)
+    call suite%check(err%ok() .and. stats%n_restarts == 1 .and. sys%max_error < 100 * bdf%rtol, &
+      'a breakpoint next to an output time is handled')
+  end subroutine check_outside_and_repeated
+end program test_integrators_breakpoint

@@ -1,0 +1,187 @@
+!> Undamped linear oscillator q'' = -omega^2 q against its exact solution, for both methods:
+!> BDF's error follows rtol, generalized-alpha's shrinks fourfold when dt halves.
+module oscillator_test_system
+  use core_kinds, only: wp
+  use integrators_system, only: ode2_system_t
+  implicit none
+  private
+  public :: oscillator_t
+
+  real(wp), parameter :: pi = acos(-1.0_wp)
+
+  type, extends(ode2_system_t) :: oscillator_t
+    real(wp) :: omega = 2 * pi
+    real(wp) :: max_error = 0       !< largest |q - q_exact| + |v - v_exact| / omega at outputs
+    integer :: n_records = 0
+    logical :: times_exact = .true.
+    real(wp), allocatable :: t_expected(:)
+  contains
+    procedure :: accel => oscillator_accel
+    procedure :: record => oscillator_record
+    procedure :: jacobian => oscillator_jacobian
+  end type oscillator_t
+
+contains
+
+  subroutine oscillator_accel(this, t, q, v, a, status)
+    class(oscillator_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: a(:)
+    integer, intent(out) :: status
+    a = -this%omega**2 * q
+    status = 0
+  end subroutine oscillator_accel
+
+  subroutine oscillator_jacobian(this, t, q, v, dadq, dadv, status)
+    class(oscillator_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
+    integer, intent(out) :: status
+    dadq = -this%omega**2
+    dadv = 0
+    status = 0
+  end subroutine oscillator_jacobian
+
+  !> Exact solution from q(0) = 1, v(0) = 0.
+  subroutine oscillator_record(this, k, t, q, v, status)
+    class(oscillator_t), intent(inout) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t, q(:), v(:)
+    integer, intent(out) :: status
+    real(wp) :: err
+    err = abs(q(1) - cos(this%omega * t)) + abs(v(1) + this%omega * sin(this%omega * t)) / this%omega
+    this%max_error = max(this%max_error, err)
+    this%n_records = this%n_records + 1
+    if (allocated(this%t_expected)) then
+      this%times_exact = this%times_exact .and. .not. abs(t - this%t_expected(k)) > 0
+    end if
+    status = 0
+  end subroutine oscillator_record
+end module oscillator_test_system
+
+program test_integrators_oscillator
+  use core_kinds, only: wp
+  use core_error, only: error_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_driver, only: integrate
+  use oscillator_test_system, only: oscillator_t
+  use testing, only: suite_t
+  implicit none
+  type(suite_t) :: suite
+  real(wp), allocatable :: t_out(:)
+  real(wp) :: no_breakpoints(0)
+  integer :: i
+
+  call suite%init('integrators: linear oscillator')
+  t_out = [(0.125_wp * i, i = 0, 16)]
+  call check_bdf()
+  call check_galpha(0.8_wp)
+  call check_galpha(1.0_wp)
+  call check_galpha(0.0_wp)
+  call check_galpha_uneven_steps()
+  call suite%finish()
+
+contains
+
+  subroutine run(opts, sys, stats, err)
+    type(integrator_options_t), intent(in) :: opts
+    type(oscillator_t), intent(out) :: sys
+    type(integrator_stats_t), intent(out) :: stats
+    type(error_t), intent(out) :: err
+    sys%t_expected = t_out
+    call integrate(sys, opts, t_out, [1.0_wp], [0.0_wp], no_breakpoints, stats, err)
+  end subroutine run
+
+  subroutine check_bdf()
+    type(integrator_options_t) :: opts
+    type(oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    real(wp) :: errors(3), rtols(3)
+    integer :: i
+    character(len=80) :: line
+
+    rtols = [1.0e-4_wp, 1.0e-6_wp, 1.0e-8_wp]
+    do i = 1, 3
+      opts = integrator_options_t(method='bdf', rtol=rtols(i), atol=1.0e-2_wp * rtols(i))
+      call run(opts, sys, stats, err)
+      call suite%check(err%ok(), 'bdf runs at rtol ' // es(rtols(i)))
+      errors(i) = sys%max_error
+      write(line, '(a,es8.1,a,es9.2,a,i0,a,i0,a,i0)') 'bdf rtol', rtols(i), ': error', &
+        errors(i), ', steps ', stats%n_steps, ', accel ', stats%n_rhs_evals, ', jac ', &
+        stats%n_jac_evals
+      write(*, '(4x,a)') trim(line)
+      call suite%check(sys%n_records == size(t_out) .and. sys%times_exact, &
+        'bdf records every output time exactly')
+      call suite%check(stats%n_steps > 0 .and. stats%n_rhs_evals > stats%n_steps .and. &
+        stats%n_jac_evals > 0 .and. stats%n_restarts == 0, 'bdf counters are filled')
+      call suite%check(errors(i) < 200 * rtols(i), 'bdf error is of the order of rtol')
+    end do
+    call suite%check(errors(2) < 0.1_wp * errors(1) .and. errors(3) < 0.1_wp * errors(2), &
+      'bdf error shrinks with rtol')
+
+    opts = integrator_options_t(method='bdf', rtol=1.0e-6_wp, atol=1.0e-8_wp, jacobian='internal')
+    call run(opts, sys, stats, err)
+    call suite%check(err%ok() .and. sys%max_error < 200 * opts%rtol, &
+      'bdf with the internal Jacobian is as accurate')
+  end subroutine check_bdf
+
+  subroutine check_galpha(rho_inf)
+    real(wp), intent(in) :: rho_inf
+    type(integrator_options_t) :: opts
+    type(oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    real(wp) :: errors(3), dts(3), ratio
+    integer :: i
+    character(len=100) :: line
+
+    dts = [1.0_wp / 64, 1.0_wp / 128, 1.0_wp / 256]
+    do i = 1, 3
+      opts = integrator_options_t(method='galpha', dt=dts(i), rho_inf=rho_inf)
+      call run(opts, sys, stats, err)
+      call suite%check(err%ok() .and. sys%n_records == size(t_out) .and. sys%times_exact, &
+        'galpha runs, rho_inf ' // fx(rho_inf) // ' dt ' // es(dts(i)))
+      errors(i) = sys%max_error
+      write(line, '(a,f4.2,a,es9.2,a,es9.2,a,i0,a,i0,a,i0)') 'galpha rho_inf ', rho_inf, &
+        ' dt', dts(i), ': error', errors(i), ', steps ', stats%n_steps, ', accel ', &
+        stats%n_rhs_evals, ', jac ', stats%n_jac_evals
+      write(*, '(4x,a)') trim(line)
+      call suite%check(stats%n_steps == nint(2 / dts(i), kind(stats%n_steps)), &
+        'galpha takes exactly (t_end - t0) / dt steps')
+    end do
+    do i = 2, 3
+      ratio = errors(i - 1) / errors(i)
+      call suite%close(ratio, 4.0_wp, 0.0_wp, 0.4_wp, 'galpha second order: error ratio ~4')
+    end do
+  end subroutine check_galpha
+
+  !> dt does not divide the output interval: the steps are shortened, outputs still exact.
+  subroutine check_galpha_uneven_steps()
+    type(integrator_options_t) :: opts
+    type(oscillator_t) :: sys, sys_fine
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    opts = integrator_options_t(method='galpha', dt=0.0113_wp, rho_inf=0.8_wp)
+    call run(opts, sys, stats, err)
+    call suite%check(err%ok() .and. sys%times_exact, 'galpha lands on outputs with uneven dt')
+    call suite%check(stats%n_steps == 16 * ceiling(0.125_wp / opts%dt), &
+      'galpha shortens steps evenly within each output interval')
+    opts%dt = opts%dt / 2
+    call run(opts, sys_fine, stats, err)
+    call suite%close(sys%max_error / sys_fine%max_error, 4.0_wp, 0.0_wp, 0.6_wp, &
+      'galpha stays second order with shortened steps')
+  end subroutine check_galpha_uneven_steps
+
+  function es(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=9) :: s
+    write(s, '(es9.2)') x
+  end function es
+
+  function fx(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=4) :: s
+    write(s, '(f4.2)') x
+  end function fx
+end program test_integrators_oscillator
