@@ -79,6 +79,18 @@ contains
     type(error_t), intent(out) :: err
     integer(i8) :: c0, c1, rate
     call system_clock(c0, rate)
+    call run_analyses(this, err)
+    if (.not. err%ok()) then
+      call err%prefix(this%file%path // ': ')
+      return
+    end if
+    call system_clock(c1)
+    this%wall_time_s = real(c1 - c0, wp) / real(rate, wp)
+  end subroutine run_execute
+
+  subroutine run_analyses(this, err)
+    type(run_t), intent(inout) :: this
+    type(error_t), intent(out) :: err
     if (this%scene%static%active) then
       call run_static(this, err)
       if (.not. err%ok()) return
@@ -92,11 +104,8 @@ contains
     end if
     if (this%scene%dynamic%active) then
       call run_dynamic(this, err)
-      if (.not. err%ok()) return
     end if
-    call system_clock(c1)
-    this%wall_time_s = real(c1 - c0, wp) / real(rate, wp)
-  end subroutine run_execute
+  end subroutine run_analyses
 
   subroutine run_static(this, err)
     type(run_t), intent(inout) :: this
@@ -129,7 +138,9 @@ contains
       opts%atol = d%atol
       opts%max_step = d%max_step
       opts%max_order = d%max_order
-      opts%jacobian = d%jacobian
+      opts%jacobian = 'system'
+      if (d%jacobian == 'internal') opts%jacobian = 'internal'
+      this%dyn%jacobian_kind = d%jacobian
       opts%dt = d%dt
       opts%rho_inf = d%rho_inf
     end associate
@@ -187,6 +198,8 @@ contains
       if (err%ok()) call h5%write_int_attr('/', 'n_err_test_fails', s%n_err_test_fails, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_nonlin_fails', s%n_nonlin_fails, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_restarts', s%n_restarts, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_model_evals', this%dyn%n_evals, err)
+      if (err%ok()) call h5%write_string_attr('/', 'jacobian', d%jacobian, err)
     end associate
   end subroutine write_attributes
 

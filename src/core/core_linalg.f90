@@ -99,14 +99,17 @@ contains
   end subroutine chol_solve
 
   !> Solve a general dense system a x = b (b overwritten by x); info /= 0 if singular.
-  subroutine solve_dense(a, b, info)
+  !> rcond_pivot: smallest over largest pivot, to catch near-singular systems.
+  subroutine solve_dense(a, b, info, rcond_pivot)
     real(wp), intent(in) :: a(:, :)
     real(wp), intent(inout) :: b(:)
     integer, intent(out) :: info
-    real(wp) :: lu(size(a, 1), size(a, 2)), rhs(size(b), 1)
+    real(wp), intent(out), optional :: rcond_pivot
+    real(wp) :: lu(size(a, 1), size(a, 2)), rhs(size(b), 1), rc
     integer :: ipiv(size(a, 1))
     lu = a
-    call dgetrf(size(a, 1), size(a, 1), lu, max(size(a, 1), 1), ipiv, info)
+    call lu_factor(lu, ipiv, info, rc)
+    if (present(rcond_pivot)) rcond_pivot = rc
     if (info /= 0) return
     rhs(:, 1) = b
     call dgetrs('N', size(a, 1), 1, lu, max(size(a, 1), 1), ipiv, rhs, max(size(a, 1), 1), info)

@@ -27,10 +27,10 @@ contains
     real(wp), intent(in) :: t, q_dy(:)
     real(wp), intent(out) :: fl(:)
     type(error_t), intent(out) :: err
-    real(wp) :: a(size(q_dy)), zero(size(q_dy))
-    zero = 0.0_wp
-    call dyn%evaluate(t, q_dy, zero, a, err)
-    fl = dyn%gen_force + dyn%stresses(dyn%full_q(t, q_dy), [dyn%full_q(t, zero) * 0.0_wp])
+    real(wp) :: a(size(q_dy)), q(dyn%model%n_q)
+    q = dyn%full_q(t, q_dy)
+    call dyn%evaluate(t, q_dy, 0.0_wp * q_dy, a, err)
+    fl = dyn%gen_force + dyn%stresses(q, 0.0_wp * q)
   end subroutine load_force
 
   !> Tangent stiffness K_T at (t, q_dy); leaves the mass matrix of that state in dyn%mbar.
@@ -39,19 +39,13 @@ contains
     real(wp), intent(in) :: t, q_dy(:)
     real(wp), intent(out) :: k(:, :)
     type(error_t), intent(out) :: err
-    real(wp) :: unit(dyn%model%n_q), zero(dyn%model%n_q), fp(size(q_dy)), fm(size(q_dy))
+    real(wp) :: fp(size(q_dy)), fm(size(q_dy))
     real(wp) :: qp(size(q_dy)), h, a(size(q_dy)), v0(size(q_dy))
-    integer :: j, nr
+    integer :: j
     logical :: was_locked
     was_locked = dyn%locked
     dyn%locked = .true.
-    nr = dyn%model%n_rh
-    zero = 0.0_wp
-    do j = 1, size(q_dy)
-      unit = 0.0_wp
-      unit(nr + j) = 1.0_wp
-      k(:, j) = dyn%stresses(unit, zero)
-    end do
+    k = dyn%k_dd
     if (has_loads(dyn)) then
       h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
       do j = 1, size(q_dy)
@@ -82,7 +76,7 @@ contains
     integer, intent(out) :: iterations
     type(error_t), intent(out) :: err
     real(wp) :: k(size(q_dy), size(q_dy)), r(size(q_dy)), a(size(q_dy)), v0(size(q_dy))
-    real(wp) :: lambda, scale
+    real(wp) :: lambda, scale, rcond
     integer :: step, it, info
     character(len=200) :: msg
     if (n_steps < 1 .or. max_iter < 1 .or. tol <= 0) then
@@ -99,8 +93,8 @@ contains
         call tangent_stiffness(dyn, t, q_dy, k, err)
         if (.not. err%ok()) exit
         r = dyn%gen_force
-        call solve_dense(k, r, info)
-        if (info /= 0) then
+        call solve_dense(k, r, info, rcond)
+        if (info /= 0 .or. rcond < 1.0e-12_wp) then
           write(msg, '(a,f8.5,a)') 'static analysis: the tangent stiffness is singular at ' // &
             'load factor ', lambda, ' (buckling or a mechanism)'
           call err%set(ERR_NUMERIC, trim(msg))

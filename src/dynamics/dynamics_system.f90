@@ -4,13 +4,13 @@
 !> mode values taken from q itself (DF_e restricted to the dynamic columns is the identity on
 !> dynamic modes and zero elsewhere, so DF_e^T sigma reduces to sigma_dy).
 module dynamics_system
-  use core_kinds, only: wp
+  use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use core_linalg, only: chol_factor, chol_solve
   use model_system, only: model_t, COORD_X, COORD_Y
   use model_kinematics, only: kinematics_t
   use elements_base, only: MODE_DYNAMIC
-  use integrators_system, only: ode2_system_t
+  use integrators_system, only: ode2_system_t, system_fd_jacobian
   implicit none
   private
   public :: dynamics_t
@@ -22,6 +22,12 @@ module dynamics_system
     logical :: locked = .false.               !< prescribed modes held still (statics, modes)
     real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last evaluation
     real(wp), allocatable :: gen_force(:)     !< right-hand side of the last evaluation
+    real(wp), allocatable :: k_dd(:, :)       !< structural stiffness dsigma_dy/dq_dy (constant)
+    real(wp), allocatable :: d_dd(:, :)       !< structural damping dsigma_dy/dv_dy (constant)
+    !> Jacobian for implicit integrators: 'linearised' (-Mbar^-1 K0, -Mbar^-1 D0 at the current
+    !> state: the stiff structural part, exact enough for Newton) or 'fd' (forward differences).
+    character(len=16) :: jacobian_kind = 'linearised'
+    integer(i8) :: n_evals = 0                !< evaluations of the equations of motion
     ! History at the output times (filled by record):
     real(wp), allocatable :: x_hist(:, :), q_hist(:, :), v_hist(:, :), energy_hist(:, :)
     type(error_t) :: last_error               !< why the last callback returned non-zero
@@ -32,6 +38,7 @@ module dynamics_system
     procedure :: evaluate => dyn_evaluate
     procedure :: accel => dyn_accel
     procedure :: record => dyn_record
+    procedure :: jacobian => dyn_jacobian
     procedure :: energy => dyn_energy
     procedure :: stresses => dyn_stresses
     procedure :: allocate_history => dyn_allocate_history
@@ -46,10 +53,21 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: t0, q_dy0(:)
     type(error_t), intent(out) :: err
-    real(wp) :: a(model%n_dy)
+    real(wp) :: a(model%n_dy), unit(model%n_q), zero(model%n_q)
+    integer :: j
     this%model = model
     call this%kin%init(this%model)
+    if (allocated(this%mbar)) deallocate(this%mbar, this%gen_force, this%k_dd, this%d_dd)
+    this%n_evals = 0
     allocate(this%mbar(model%n_dy, model%n_dy), this%gen_force(model%n_dy))
+    allocate(this%k_dd(model%n_dy, model%n_dy), this%d_dd(model%n_dy, model%n_dy))
+    zero = 0.0_wp
+    do j = 1, model%n_dy
+      unit = 0.0_wp
+      unit(model%n_rh + j) = 1.0_wp
+      this%k_dd(:, j) = this%stresses(unit, zero)
+      this%d_dd(:, j) = this%stresses(zero, unit)
+    end do
     call this%evaluate(t0, q_dy0, 0.0_wp * q_dy0, a, err)
     if (.not. err%ok()) call err%prefix('initial configuration: ')
   end subroutine dyn_init
@@ -119,6 +137,7 @@ contains
     real(wp) :: pot
     integer :: iel, i, info, nr, nd
     character(len=120) :: msg
+    this%n_evals = this%n_evals + 1
     associate (m => this%model, df => this%kin%df)
       nr = m%n_rh
       nd = m%n_dy
@@ -188,6 +207,29 @@ contains
       a = 0.0_wp
     end if
   end subroutine dyn_accel
+
+  subroutine dyn_jacobian(this, t, q, v, dadq, dadv, status)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
+    integer, intent(out) :: status
+    real(wp) :: a(size(q)), chol(size(q), size(q))
+    integer :: j, info
+    if (this%jacobian_kind == 'fd') then
+      call system_fd_jacobian(this, t, q, v, dadq, dadv, status)
+      return
+    end if
+    call this%accel(t, q, v, a, status)
+    if (status /= 0) return
+    chol = this%mbar
+    call chol_factor(chol, info)
+    do j = 1, size(q)
+      dadq(:, j) = -this%k_dd(:, j)
+      dadv(:, j) = -this%d_dd(:, j)
+      call chol_solve(chol, dadq(:, j))
+      call chol_solve(chol, dadv(:, j))
+    end do
+  end subroutine dyn_jacobian
 
   subroutine dyn_allocate_history(this, nt)
     class(dynamics_t), intent(inout) :: this

@@ -154,6 +154,8 @@ contains
     diag = 0.0_wp
     if (this%consistent) return
     diag([1, 2, 4, 5]) = this%rho_a * this%l0 / 2
+    ! Rotary inertia of each half about its node, so that the bending modes keep a mass.
+    diag([3, 6]) = this%rho_a * this%l0**3 / 24
   end subroutine beam_lumped_mass
 
   !> Material point r(xi) = x_p + xi lv + c perp(lv), c = (H2 e2 - H4 e3) / l0 (cubic Hermite

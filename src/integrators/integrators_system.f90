@@ -8,7 +8,7 @@ module integrators_system
   use core_kinds, only: wp, i8
   implicit none
   private
-  public :: ode2_system_t, integrator_options_t, integrator_stats_t
+  public :: ode2_system_t, integrator_options_t, integrator_stats_t, system_fd_jacobian
 
   type, abstract :: ode2_system_t
   contains

@@ -332,7 +332,7 @@ contains
       call rd_real(g, 't_end', d%t_end, err)
       call rd_real(g, 'output_dt', d%output_dt, err, default=1.0e-3_wp)
       call rd_string(g, 'integrator', d%integrator, err, default='bdf', lower=.true.)
-      call rd_string(g, 'jacobian', d%jacobian, err, default='system', lower=.true.)
+      call rd_string(g, 'jacobian', d%jacobian, err, default='linearised', lower=.true.)
       call rd_real(g, 'rtol', d%rtol, err, default=1.0e-6_wp)
       call rd_real(g, 'atol', d%atol, err, default=1.0e-8_wp)
       call rd_real(g, 'max_step', d%max_step, err, default=0.0_wp)
@@ -349,9 +349,9 @@ contains
       if (d%integrator /= 'bdf' .and. d%integrator /= 'galpha') then
         call err%set(ERR_INPUT, g%where() // ': variable ''integrator'': ''' // d%integrator // &
           ''' is not bdf or galpha')
-      else if (d%jacobian /= 'system' .and. d%jacobian /= 'internal') then
+      else if (all(d%jacobian /= [character(len=10) :: 'linearised', 'fd', 'internal'])) then
         call err%set(ERR_INPUT, g%where() // ': variable ''jacobian'': ''' // d%jacobian // &
-          ''' is not system or internal')
+          ''' is not linearised, fd or internal')
       else if (d%max_order < 1 .or. d%max_order > 5) then
         call err%set(ERR_INPUT, g%where() // ': variable ''max_order'' must be 1 to 5')
       else if (d%rho_inf < 0 .or. d%rho_inf > 1) then

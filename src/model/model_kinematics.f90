@@ -35,6 +35,7 @@ contains
   subroutine kin_init(this, model)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
+    if (allocated(this%q)) deallocate(this%q, this%lu, this%ipiv, this%df)
     this%x = model%x0
     allocate(this%q(model%n_q), this%lu(model%n_c, model%n_c), this%ipiv(model%n_c))
     allocate(this%df(model%n_x, model%n_q))

@@ -1,0 +1,131 @@
+"""Every bad input gets a one-line error naming the file (and group/variable where there is
+one), a non-zero exit status, no backtrace, no NaN, and no result file left behind."""
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+BIN = os.environ.get("FLEXMOR_BIN", str(ROOT / "build-debug" / "bin" / "flexmor"))
+
+GOOD = """
+&node label = 'base', x = 0, y = 0, fixed = .true. /
+&node label = 'tip', x = 1, y = 0 /
+&link label = 'arm', from = 'base', to = 'tip', n_elements = 2,
+      E = 7.0e10, A = 1.0e-4, I = 1.0e-9, rho = 2700 /
+&hinge label = 'j1', node = 'base', link = 'arm', mode = 'prescribed', motion = 'm1' /
+&motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.05 /
+&mass node = 'tip', m = 0.1 /
+&modal /
+&dynamic t_end = 0.02, output_dt = 1e-3 /
+"""
+
+
+def run(tmp_path, text, args=None):
+    nml = tmp_path / "scene.nml"
+    nml.write_text(text)
+    out = tmp_path / "out.h5"
+    cmd = [BIN, str(nml), "-o", str(out)] if args is None else [BIN] + args
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    return proc, out
+
+
+def assert_clean_error(proc, out, *fragments):
+    assert proc.returncode != 0, proc.stdout + proc.stderr
+    err = proc.stderr.strip()
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("flexmor: error: "), err
+    for fragment in fragments:
+        assert fragment in err, f"{fragment!r} not in {err!r}"
+    for bad in ("Backtrace", "Error termination", "NaN", " nan", "Infinity"):
+        assert bad not in proc.stdout + proc.stderr
+    assert not out.exists()
+    assert not list(out.parent.glob("*.h5*")), list(out.parent.glob("*"))
+
+
+def test_good_scene_runs(tmp_path):
+    proc, out = run(tmp_path, GOOD)
+    assert proc.returncode == 0, proc.stderr
+    assert out.exists()
+
+
+def test_missing_file(tmp_path):
+    proc, out = run(tmp_path, GOOD, [str(tmp_path / "nope.nml"), "-o", str(tmp_path / "out.h5")])
+    assert_clean_error(proc, tmp_path / "out.h5", "nope.nml")
+
+
+def test_unreadable_file(tmp_path):
+    (tmp_path / "dir.nml").mkdir()
+    proc, _ = run(tmp_path, GOOD, [str(tmp_path / "dir.nml"), "-o", str(tmp_path / "out.h5")])
+    assert_clean_error(proc, tmp_path / "out.h5", "dir.nml")
+
+
+def test_no_arguments(tmp_path):
+    proc, out = run(tmp_path, GOOD, [])
+    assert_clean_error(proc, out, "usage")
+
+
+CASES = {
+    "unknown group": (GOOD + "&solver tol = 1 /\n", ["scene.nml", "&solver"]),
+    "unknown variable": (GOOD.replace("t_end = 0.02", "t_end = 0.02, dtt = 1"),
+                         ["&dynamic", "dtt"]),
+    "wrong type": (GOOD.replace("E = 7.0e10", "E = 'steel'"), ["&link", "'e'"]),
+    "wrong type logical": (GOOD.replace("fixed = .true.", "fixed = 3"), ["&node", "fixed"]),
+    "missing required": (GOOD.replace("E = 7.0e10,", ""), ["&link", "'e'", "missing"]),
+    "zero area": (GOOD.replace("A = 1.0e-4", "A = 0"), ["&link", "'A'", "positive"]),
+    "negative inertia": (GOOD.replace("I = 1.0e-9", "I = -1e-9"), ["&link", "'I'"]),
+    "zero density": (GOOD.replace("rho = 2700", "rho = 0"), ["&link", "'rho'"]),
+    "negative length": (GOOD.replace("x = 1, y = 0", "x = 0, y = 0"),
+                        ["arm", "same place"]),
+    "undefined node": (GOOD.replace("to = 'tip'", "to = 'tp'"), ["&link", "'to'", "'tp'"]),
+    "undefined mass node": (GOOD.replace("&mass node = 'tip'", "&mass node = 'top'"),
+                            ["&mass", "'top'"]),
+    "undefined motion": (GOOD.replace("motion = 'm1'", "motion = 'm2'"), ["&hinge", "'m2'"]),
+    "undefined output node": (GOOD + "&output nodes = 'tip', 'elbow' /\n", ["&output", "elbow"]),
+    "mechanism (too few conditions)": (
+        GOOD.replace("mode = 'prescribed', motion = 'm1'", "mode = 'released'"),
+        ["do not solve", "mechanism"]),
+    "over-constrained (too many dynamic)": (
+        GOOD.replace("&node label = 'tip', x = 1, y = 0 /",
+                     "&node label = 'tip', x = 1, y = 0, fixed = .true. /"),
+        ["do not solve", "over-constrained"]),
+    "singular mass": (
+        GOOD + "&node label = 'b', x = 1, y = 1 /\n"
+               "&link label = 'arm2', from = 'tip', to = 'b', E = 7e10, A = 1e-4, I = 1e-9, "
+               "rho = 2700 /\n"
+               "&hinge label = 'j3', node = 'b', link = 'arm2', mode = 'dynamic', "
+               "stiffness = 10 /\n",
+        ["mass matrix is singular"]),
+    "zero time step": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'galpha', dt = 0"),
+                       ["&dynamic", "'dt'"]),
+    "negative end time": (GOOD.replace("t_end = 0.02", "t_end = -1"), ["&dynamic", "'t_end'"]),
+    "zero output step": (GOOD.replace("output_dt = 1e-3", "output_dt = 0"), ["'output_dt'"]),
+    "unknown integrator": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'rk4'"),
+                           ["'integrator'", "rk4"]),
+    "unknown law": (GOOD.replace("law = 'cubic'", "law = 'cubik'"), ["&motion", "cubik"]),
+    "unknown mode class": (GOOD.replace("mode = 'prescribed'", "mode = 'rigidd'"),
+                           ["&hinge", "rigidd"]),
+    "unterminated string": (GOOD.replace("label = 'arm'", "label = 'arm"), ["scene.nml"]),
+    "group not closed": (GOOD.replace("&modal /", "&modal"), ["scene.nml"]),
+    "no nodes": ("&modal /\n", ["&node"]),
+    "twice defined node": (GOOD + "&node label = 'tip', x = 2, y = 0 /\n", ["tip", "twice"]),
+    "static newton": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
+                                   "&static n_steps = 1, max_iter = 1, tol = 1e-14 /"),
+                      ["static", "did not converge"]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_bad_input(tmp_path, name):
+    text, fragments = CASES[name]
+    proc, out = run(tmp_path, text)
+    assert_clean_error(proc, out, *fragments)
+
+
+def test_dynamic_failure_reports_time(tmp_path):
+    """A motion far too violent for the model: the run stops with the time, not NaN."""
+    text = GOOD.replace("end = 0.5, duration = 0.05", "end = 2000, duration = 0.001")
+    text = text.replace("t_end = 0.02", "t_end = 0.02, rtol = 1e-3")
+    proc, out = run(tmp_path, text)
+    assert_clean_error(proc, out, "t =")
