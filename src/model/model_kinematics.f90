@@ -100,8 +100,8 @@ contains
       if (rmax /= rmax) exit
       call lu_factor(this%lu, this%ipiv, info, rcond, worst)
       if (info /= 0 .or. rcond < SINGULAR_PIVOT) then
-        call err%set(ERR_MODEL, 'the kinematic Jacobian is singular: coordinate ''' // &
-          trim(model%coord_name(model%calc_coord(worst))) // ''' is not determined by ' // &
+        call err%set(ERR_MODEL, 'the kinematic Jacobian is singular: coordinate ' // &
+          trim(model%coord_name(model%calc_coord(worst))) // ' is not determined by ' // &
           'the rigid, prescribed and dynamic modes (check the mode classes and supports)')
         this%x = x_start
         return
