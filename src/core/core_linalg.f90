@@ -3,7 +3,7 @@ module core_linalg
   use core_kinds, only: wp
   implicit none
   private
-  public :: lu_factor, lu_solve, chol_factor, chol_solve, sym_gen_eig, solve_dense
+  public :: lu_factor, lu_solve, lu_solve_vector, chol_factor, chol_solve, sym_gen_eig, solve_dense
 
   interface
     subroutine dgetrf(m, n, a, lda, ipiv, info)
@@ -82,6 +82,15 @@ contains
     if (n == 0 .or. size(b, 2) == 0) return
     call dgetrs('N', n, size(b, 2), a, n, ipiv, b, n, info)
   end subroutine lu_solve
+
+  subroutine lu_solve_vector(a, ipiv, b)
+    real(wp), intent(in) :: a(:, :)
+    integer, intent(in) :: ipiv(:)
+    real(wp), intent(inout) :: b(:)
+    integer :: info
+    if (size(b) == 0) return
+    call dgetrs('N', size(b), 1, a, size(b), ipiv, b, size(b), info)
+  end subroutine lu_solve_vector
 
   !> Cholesky factorisation in place (lower). info = k > 0: leading minor k not positive.
   subroutine chol_factor(a, info)

@@ -9,6 +9,7 @@ module integrators_cvode
   use, intrinsic :: iso_c_binding, only: c_ptr, c_null_ptr, c_int, c_long, c_double, c_int64_t, &
     c_char, c_size_t, c_loc, c_funloc, c_f_pointer, c_associated
   use core_kinds, only: wp, i8
+  use core_strings, only: int_str, real_str
   use core_error, only: error_t, ERR_NUMERIC, ERR_INTERNAL
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
   use fsundials_context_mod, only: FSUNContext_Create, FSUNContext_Free
@@ -402,19 +403,5 @@ contains
     end do
   end function c_string
 
-  function real_str(x) result(s)
-    real(wp), intent(in) :: x
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    write(buf, '(g0.10)') x
-    s = trim(adjustl(buf))
-  end function real_str
 
-  function int_str(i) result(s)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=16) :: buf
-    write(buf, '(i0)') i
-    s = trim(buf)
-  end function int_str
 end module integrators_cvode

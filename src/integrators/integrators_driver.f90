@@ -2,6 +2,7 @@
 !> breakpoints, restarts the method at each breakpoint and hands every output to the system.
 module integrators_driver
   use core_kinds, only: wp
+  use core_strings, only: int_str, real_str
   use core_error, only: error_t, ERR_INPUT, ERR_IO
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
   use integrators_cvode, only: cvode_solver_t
@@ -238,19 +239,5 @@ contains
     call s%bdf%finish()
   end subroutine stepper_finish
 
-  function real_str(x) result(s)
-    real(wp), intent(in) :: x
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    write(buf, '(g0.10)') x
-    s = trim(adjustl(buf))
-  end function real_str
 
-  function int_str(i) result(s)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=16) :: buf
-    write(buf, '(i0)') i
-    s = trim(buf)
-  end function int_str
 end module integrators_driver

@@ -18,6 +18,8 @@
 !> locally and at most max_halvings times.
 module integrators_galpha
   use core_kinds, only: wp, i8
+  use core_strings, only: int_str, real_str
+  use core_linalg, only: lu_factor, lu_solve_vector
   use core_error, only: error_t, ERR_NUMERIC
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
   implicit none
@@ -268,13 +270,14 @@ contains
     type(galpha_solver_t), intent(inout) :: this
     real(wp), intent(in) :: h
     real(wp) :: c_q, c_v
-    integer :: i
+    integer :: i, info
     call newton_coefficients(this, h, c_q, c_v)
     this%lu = -c_q * this%dadq - c_v * this%dadv
     do i = 1, this%n
       this%lu(i, i) = this%lu(i, i) + 1
     end do
-    call lu_factor(this%lu, this%pivots, this%lu_valid)
+    call lu_factor(this%lu, this%pivots, info)
+    this%lu_valid = info == 0
     this%h_lu = h
   end subroutine factor_iteration_matrix
 
@@ -321,7 +324,7 @@ contains
         return
       end if
       dx = f - x
-      call lu_solve(this%lu, this%pivots, dx)
+      call lu_solve_vector(this%lu, this%pivots, dx)
       x = x + dx
       dnorm = max(weighted_norm(this, c_q * dx, q1), weighted_norm(this, c_v * dx, v1))
       if (dnorm <= newton_tol) exit
@@ -360,67 +363,6 @@ contains
     stats = this%stats
   end subroutine galpha_get_stats
 
-  !> LU with partial pivoting (the iteration matrices are small and dense); ok = .false. when
-  !> a pivot is zero.
-  pure subroutine lu_factor(a, pivots, ok)
-    real(wp), intent(inout) :: a(:, :)
-    integer, intent(out) :: pivots(:)
-    logical, intent(out) :: ok
-    integer :: j, p, n
-    real(wp) :: row(size(a, 2))
 
-    n = size(a, 1)
-    ok = .false.
-    do j = 1, n
-      p = j - 1 + maxloc(abs(a(j:, j)), dim=1)
-      pivots(j) = p
-      if (.not. abs(a(p, j)) > 0) return
-      if (p /= j) then
-        row = a(j, :)
-        a(j, :) = a(p, :)
-        a(p, :) = row
-      end if
-      a(j + 1:, j) = a(j + 1:, j) / a(j, j)
-      a(j + 1:, j + 1:) = a(j + 1:, j + 1:) - &
-        matmul(a(j + 1:, j:j), a(j:j, j + 1:))
-    end do
-    ok = .true.
-  end subroutine lu_factor
 
-  pure subroutine lu_solve(lu, pivots, b)
-    real(wp), intent(in) :: lu(:, :)
-    integer, intent(in) :: pivots(:)
-    real(wp), intent(inout) :: b(:)
-    integer :: i, n
-    real(wp) :: tmp
-
-    n = size(b)
-    do i = 1, n
-      tmp = b(i)
-      b(i) = b(pivots(i))
-      b(pivots(i)) = tmp
-    end do
-    do i = 2, n
-      b(i) = b(i) - dot_product(lu(i, 1:i - 1), b(1:i - 1))
-    end do
-    do i = n, 1, -1
-      b(i) = (b(i) - dot_product(lu(i, i + 1:n), b(i + 1:n))) / lu(i, i)
-    end do
-  end subroutine lu_solve
-
-  function real_str(x) result(s)
-    real(wp), intent(in) :: x
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    write(buf, '(g0.10)') x
-    s = trim(adjustl(buf))
-  end function real_str
-
-  function int_str(i) result(s)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=16) :: buf
-    write(buf, '(i0)') i
-    s = trim(buf)
-  end function int_str
 end module integrators_galpha

@@ -5,6 +5,7 @@
 module model_build
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT, ERR_MODEL
+  use core_strings, only: int_str
   use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC
   use elements_beam, only: beam_t, BENDING_ANGLE, BENDING_SINE
   use elements_hinge, only: hinge_t
@@ -409,10 +410,10 @@ contains
     real(wp), allocatable :: diag(:)
     do i = 1, size(scene%masses)
       associate (r => scene%masses(i))
-        call require_node(scene, r%node, 'group &mass #' // itoa(i), 'node', in, err)
+        call require_node(scene, r%node, 'group &mass #' // int_str(i), 'node', in, err)
         if (.not. err%ok()) return
         if (r%m < 0 .or. r%j < 0) then
-          call err%set(ERR_INPUT, 'group &mass #' // itoa(i) // ' (node ''' // r%node // &
+          call err%set(ERR_INPUT, 'group &mass #' // int_str(i) // ' (node ''' // r%node // &
             '''): m and J must not be negative')
           return
         end if
@@ -421,7 +422,7 @@ contains
         if (r%j > 0) then
           ir = b%node_rot(in)
           if (ir == 0) then
-            call err%set(ERR_INPUT, 'group &mass #' // itoa(i) // ': node ''' // r%node // &
+            call err%set(ERR_INPUT, 'group &mass #' // int_str(i) // ': node ''' // r%node // &
               ''' has no rotation (no beam or hinge ends there), so J cannot be placed')
             return
           end if
@@ -431,13 +432,13 @@ contains
     end do
     do i = 1, size(scene%forces)
       associate (r => scene%forces(i))
-        call require_node(scene, r%node, 'group &force #' // itoa(i), 'node', in, err)
+        call require_node(scene, r%node, 'group &force #' // int_str(i), 'node', in, err)
         if (.not. err%ok()) return
         ix = b%node_xy(in)
         model%force(ix:ix + 1) = model%force(ix:ix + 1) + [r%fx, r%fy]
         if (r%moment /= 0) then
           if (b%node_rot(in) == 0) then
-            call err%set(ERR_INPUT, 'group &force #' // itoa(i) // ': node ''' // r%node // &
+            call err%set(ERR_INPUT, 'group &force #' // int_str(i) // ': node ''' // r%node // &
               ''' has no rotation, so a moment cannot be applied')
             return
           end if
@@ -473,11 +474,4 @@ contains
     end do
   end subroutine check_connected
 
-  pure function itoa(i) result(s)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=12) :: buf
-    write(buf, '(i0)') i
-    s = trim(buf)
-  end function itoa
 end module model_build
