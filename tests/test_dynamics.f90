@@ -46,19 +46,35 @@ program test_dynamics
   character(len=:), allocatable :: two_link
 
   call suite%init('dynamics: energy conservation, Jacobians, damping, prescribed motion')
+  call lap('')
   call load_two_link(two_link)
   if (len(two_link) > 0) then
     call free_vibration(two_link)
+    call lap('free vibration')
     call damped_vibration(two_link)
+    call lap('damping')
     call jacobian_options(two_link)
+    call lap('jacobians')
     call benchmark_run(two_link)
+    call lap('benchmark')
   end if
   call pendulum()
+  call lap('pendulum')
   call suite%finish()
 
 contains
 
   ! ------------------------------------------------------------------ utilities
+
+  !> CPU time since the last call, printed.
+  subroutine lap(what)
+    character(len=*), intent(in) :: what
+    real(wp), save :: last = -1.0_wp
+    real(wp) :: now
+    call cpu_time(now)
+    if (last >= 0) write(*, '(a,f6.2,a)') '    [' // what // ': ', now - last, ' s CPU]'
+    last = now
+  end subroutine lap
 
   function source_dir() result(dir)
     character(len=:), allocatable :: dir
@@ -256,7 +272,7 @@ contains
     e0 = e(1)
     drift = maxval(abs(e - e0)) / e0
     write(*, '(a,es10.3,a,es10.3,a,i0,a)') '    E0 = ', e0, ' J, tip deflection ', &
-      tip_bdf(2, 1) - 0.0_wp, ' m, BDF: ', stats%n_steps, ' steps'
+      tip_bdf(2, 1), ' m, BDF: ', stats%n_steps, ' steps'
     write(*, '(a,es10.3)') '    BDF rtol 1e-8: max |E - E0| / E0 = ', drift
     call suite%check(e0 > 0 .and. dyn%energy_hist(1, 1) == 0, &
       'free vibration: starts at rest with elastic energy only')
@@ -301,8 +317,7 @@ contains
     type(integrator_stats_t) :: stats
     type(error_t) :: err
     real(wp), allocatable :: t(:), e(:), q0(:), tip(:, :)
-    real(wp) :: scale, drift, angle
-    integer :: in, ic(3)
+    real(wp) :: scale, drift, angle, drop
 
     call make(PENDULUM_TEXT, dyn, err)
     call expect_ok(err, 'pendulum: model builds and initialises')
@@ -318,8 +333,6 @@ contains
     if (.not. err%ok()) return
     e = total_energy(dyn)
     tip = tip_history(dyn)
-    in = dyn%model%find_node('tip')
-    ic = dyn%model%node_coord(:, in)
     angle = maxval(atan2(-tip(2, :), tip(1, :)))
     scale = maxval(dyn%energy_hist(1, :))
     drift = maxval(abs(e - e(1))) / scale
@@ -327,6 +340,11 @@ contains
       ' dynamic coordinates, largest swing ', angle * 180 / PI, ' deg, max kinetic ', scale, &
       ' J, BDF: max |E - E0| / max T = ', drift
     call suite%check(angle > 60 * PI / 180, 'pendulum: swings through more than 60 degrees')
+    ! Through the bottom the kinetic energy is the drop of the rigid pendulum (tip mass at
+    ! 0.8 m, rod of 7800 * 2e-4 * 0.8 kg with its centre at 0.4 m); the link bends a little.
+    drop = 9.81_wp * (0.5_wp * 0.8_wp + 7800 * 2.0e-4_wp * 0.8_wp * 0.4_wp)
+    call suite%close(scale, drop, 1.0e-2_wp, 0.0_wp, &
+      'pendulum: largest kinetic energy = potential drop of the rigid pendulum (1%)')
     call suite%check(drift < 1.0e-6_wp, 'pendulum: BDF rtol 1e-8 conserves E (with gravity) ' &
       // 'to 1e-6 of the largest kinetic energy')
 
@@ -342,8 +360,8 @@ contains
     drift = maxval(abs(e - e(1))) / scale
     write(*, '(a,es10.3,a,es10.3,a)') '    galpha rho_inf = 1: max |E - E0| / max T = ', drift, &
       ', tip vs BDF ', tip_distance(tip_history(dyn), tip), ' m'
-    call suite%check(drift < 1.0e-3_wp, 'pendulum: generalized-alpha rho_inf = 1 keeps E ' // &
-      'to 1e-3 (nonlinear: not exactly conserving)')
+    call suite%check(drift < 1.0e-5_wp, 'pendulum: generalized-alpha rho_inf = 1 keeps E ' // &
+      'to 1e-5 (nonlinear: not exactly conserving)')
   end subroutine pendulum
 
   ! ------------------------------------------------------------------ 3. damping
@@ -441,7 +459,7 @@ contains
     t = linspace(0.0_wp, 0.2_wp, 21)
     opts%method = 'bdf'
     opts%rtol = 1.0e-8_wp
-    opts%atol = 1.0e-10_wp
+    opts%atol = 1.0e-9_wp
     do j = 1, 3
       call make(text, dyn, err)
       if (.not. err%ok()) exit
@@ -507,7 +525,7 @@ contains
     t = linspace(0.0_wp, 0.6_wp, 61)
     opts%method = 'bdf'
     opts%rtol = 1.0e-9_wp
-    opts%atol = 1.0e-11_wp
+    opts%atol = 1.0e-9_wp
     call run(dyn, opts, t, q0, stats, err)
     call expect_ok(err, 'benchmark: BDF rtol 1e-9 over 0..0.6 s')
     if (.not. err%ok()) return

@@ -4,12 +4,14 @@
 program flexmor_main
   use, intrinsic :: iso_fortran_env, only: error_unit
   use core_error, only: error_t, ERR_INPUT
+  use core_linalg, only: single_thread_blas
   use analysis_run, only: run_t, FLEXMOR_VERSION
   implicit none
   type(run_t) :: run
   type(error_t) :: err
   character(len=:), allocatable :: input, output
 
+  call single_thread_blas()
   call parse_arguments(input, output, run%verbose, err)
   if (err%ok()) call run%load(input, err)
   if (err%ok()) call run%execute(err)

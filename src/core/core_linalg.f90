@@ -3,7 +3,7 @@ module core_linalg
   use core_kinds, only: wp
   implicit none
   private
-  public :: lu_factor, lu_solve, lu_solve_vector, chol_factor, chol_solve, sym_gen_eig, solve_dense
+  public :: single_thread_blas, lu_factor, lu_solve, lu_solve_vector, chol_factor, chol_solve, sym_gen_eig, solve_dense
 
   interface
     subroutine dgetrf(m, n, a, lda, ipiv, info)
@@ -43,6 +43,11 @@ module core_linalg
       real(wp), intent(out) :: w(*), work(*)
       integer, intent(out) :: iwork(*), info
     end subroutine dsygvd
+  end interface
+
+  interface
+    subroutine single_thread_blas() bind(C, name='flexmor_single_thread_blas')
+    end subroutine single_thread_blas
   end interface
 
 contains

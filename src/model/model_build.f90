@@ -352,6 +352,13 @@ contains
           call err%set(ERR_INPUT, where // ': stiffness and damping must not be negative')
           return
         end if
+        ! Damping is stiffness-proportional (sigma = k (e + damping e_dot)): on a free hinge
+        ! it would silently do nothing.
+        if (r%damping > 0 .and. (r%stiffness == 0 .or. c /= MODE_DYNAMIC)) then
+          call err%set(ERR_INPUT, where // ': variable ''damping'' (a time constant, ' // &
+            'sigma = k (e + damping de/dt)) needs a dynamic hinge with stiffness > 0')
+          return
+        end if
         hinge%label = r%label
         hinge%dofs = [node_rotation(scene, model, b, in), b%hinge_rot(h)]
         hinge%phi0 = model%x0(hinge%dofs)
