@@ -63,8 +63,15 @@ contains
     type(scene_t), intent(in) :: scene
     type(model_t), intent(in) :: model
     type(error_t), intent(inout) :: err
-    integer :: i
+    integer :: i, j
     do i = 1, size(scene%output_nodes)
+      do j = 1, i - 1
+        if (scene%output_nodes(j)%s == scene%output_nodes(i)%s) then
+          call err%set(ERR_INPUT, 'group &output: variable ''nodes'': node ''' // &
+            scene%output_nodes(i)%s // ''' is listed twice')
+          return
+        end if
+      end do
       if (model%find_node(scene%output_nodes(i)%s) == 0) then
         call err%set(ERR_INPUT, 'group &output: variable ''nodes'': node ''' // &
           scene%output_nodes(i)%s // ''' is not defined')
@@ -126,12 +133,14 @@ contains
     real(wp), allocatable :: breaks(:), v0(:)
     integer :: nt, k, i
     associate (d => this%scene%dynamic)
-      nt = max(1, nint(d%t_end / d%output_dt)) + 1
-      allocate(this%time(nt))
-      do k = 1, nt
-        this%time(k) = min(d%t_end, (k - 1) * d%output_dt)
-      end do
-      if (this%time(nt) < d%t_end) this%time = [this%time, d%t_end]
+      ! Output every output_dt, and at t_end exactly (once, even when t_end is not a multiple).
+      nt = floor(d%t_end / d%output_dt * (1 + 1.0e-12_wp)) + 1
+      this%time = [((k - 1) * d%output_dt, k=1, nt)]
+      if (d%t_end - this%time(nt) > 1.0e-9_wp * d%output_dt) then
+        this%time = [this%time, d%t_end]
+      else
+        this%time(nt) = d%t_end
+      end if
       nt = size(this%time)
       opts%method = d%integrator
       opts%rtol = d%rtol

@@ -3,7 +3,7 @@
 module integrators_driver
   use core_kinds, only: wp
   use core_strings, only: int_str, real_str
-  use core_error, only: error_t, ERR_INPUT, ERR_IO
+  use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
   use integrators_cvode, only: cvode_solver_t
   use integrators_galpha, only: galpha_solver_t
@@ -137,7 +137,7 @@ contains
     type(error_t), intent(inout) :: err
     integer :: status
     call sys%record(k, t, q, v, status)
-    if (status /= 0) call err%set(ERR_IO, 'integrate: record returned status ' // &
+    if (status /= 0) call err%set(ERR_NUMERIC, 'integrate: record returned status ' // &
       int_str(status) // ' at output ' // int_str(k) // ' (t = ' // real_str(t) // ')')
   end subroutine record_output
 

@@ -253,6 +253,8 @@ contains
     call rd_string(g, 'mode', r%mode, err, default='dynamic', lower=.true.)
     call rd_string(g, 'mass', r%mass, err, default='consistent', lower=.true.)
     call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
+    if (err%ok() .and. r%mass /= 'consistent' .and. r%mass /= 'lumped') call err%set(ERR_INPUT, &
+      g%where() // ': variable ''mass'': ''' // r%mass // ''' is neither consistent nor lumped')
     call positive(g, 'E', r%e_modulus, err)
     call positive(g, 'A', r%area, err)
     call positive(g, 'rho', r%density, err, zero_ok=.true.)
@@ -288,6 +290,11 @@ contains
     call rd_string(g, 'law', r%law, err, default='cubic', lower=.true.)
     call rd_real(g, 'start', r%start, err, default=0.0_wp)
     if (.not. err%ok()) return
+    if (all(r%law /= [character(len=9) :: 'constant', 'cubic', 'quintic', 'cycloidal'])) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''law'': unknown law ''' // r%law // &
+        ''' (use constant, cubic, quintic or cycloidal)')
+      return
+    end if
     if (r%law == 'constant') then
       call rd_real(g, 'end', r%end, err, default=r%start)
       call rd_real(g, 'duration', r%duration, err, default=0.0_wp)
@@ -352,6 +359,9 @@ contains
       else if (all(d%jacobian /= [character(len=10) :: 'linearised', 'fd', 'internal'])) then
         call err%set(ERR_INPUT, g%where() // ': variable ''jacobian'': ''' // d%jacobian // &
           ''' is not linearised, fd or internal')
+      else if (d%jacobian == 'internal' .and. d%integrator /= 'bdf') then
+        call err%set(ERR_INPUT, g%where() // ': variable ''jacobian'': ''internal'' (CVODE''s' &
+          // ' difference quotients) needs integrator = ''bdf''')
       else if (d%max_order < 1 .or. d%max_order > 5) then
         call err%set(ERR_INPUT, g%where() // ': variable ''max_order'' must be 1 to 5')
       else if (d%rho_inf < 0 .or. d%rho_inf > 1) then

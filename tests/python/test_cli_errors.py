@@ -103,7 +103,17 @@ CASES = {
     "zero output step": (GOOD.replace("output_dt = 1e-3", "output_dt = 0"), ["'output_dt'"]),
     "unknown integrator": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'rk4'"),
                            ["'integrator'", "rk4"]),
-    "unknown law": (GOOD.replace("law = 'cubic'", "law = 'cubik'"), ["&motion", "cubik"]),
+    "unknown law": (GOOD.replace("law = 'cubic'", "law = 'cubik'"), ["&motion", "'law'", "cubik"]),
+    "output node twice": (GOOD + "&output nodes = 'tip', 'tip' /\n", ["&output", "twice"]),
+    "internal jacobian with galpha": (
+        GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'galpha', jacobian = 'internal'"),
+        ["'jacobian'", "bdf"]),
+    "truss mass keyword": (GOOD + "&node label = 'c', x = 1, y = 1, fixed = .true. /\n"
+                           "&truss label = 't', from = 'tip', to = 'c', E = 1e9, A = 1e-6, "
+                           "mass = 'lumpd' /\n", ["&truss", "lumpd"]),
+    "damping on a free hinge": (GOOD.replace("mode = 'prescribed', motion = 'm1'",
+                                             "mode = 'dynamic', damping = 0.1"),
+                                ["&hinge", "'damping'"]),
     "unknown mode class": (GOOD.replace("mode = 'prescribed'", "mode = 'rigidd'"),
                            ["&hinge", "rigidd"]),
     "unterminated string": (GOOD.replace("label = 'arm'", "label = 'arm"), ["scene.nml"]),
@@ -129,3 +139,14 @@ def test_dynamic_failure_reports_time(tmp_path):
     text = text.replace("t_end = 0.02", "t_end = 0.02, rtol = 1e-3")
     proc, out = run(tmp_path, text)
     assert_clean_error(proc, out, "t =")
+
+
+def test_output_times_end_exactly_once(tmp_path):
+    """t_end that is not a multiple of output_dt is written once, at the end."""
+    import h5py
+    proc, out = run(tmp_path, GOOD.replace("t_end = 0.02, output_dt = 1e-3",
+                                           "t_end = 0.0095, output_dt = 1e-3"))
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        t = f["time"][:]
+    assert len(t) == 11 and t[-1] == 0.0095 and all(t[1:] > t[:-1])
