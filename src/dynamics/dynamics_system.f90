@@ -22,8 +22,10 @@ module dynamics_system
     logical :: locked = .false.               !< prescribed modes held still (statics, modes)
     real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last evaluation
     real(wp), allocatable :: gen_force(:)     !< right-hand side of the last evaluation
-    real(wp), allocatable :: k_dd(:, :)       !< structural stiffness dsigma_dy/dq_dy (constant)
-    real(wp), allocatable :: d_dd(:, :)       !< structural damping dsigma_dy/dv_dy (constant)
+    ! sigma_dy is linear in (q, qd): its constant matrices, assembled once by init.
+    real(wp), allocatable :: k_dd(:, :)       !< structural stiffness dsigma_dy/dq_dy
+    real(wp), allocatable :: d_dd(:, :)       !< structural damping dsigma_dy/dv_dy
+    real(wp), allocatable :: k_dr(:, :), d_dr(:, :)  !< the same w.r.t. the prescribed q_rh
     !> Jacobian for implicit integrators: 'linearised' (-Mbar^-1 K0, -Mbar^-1 D0 at the current
     !> state: the stiff structural part, exact enough for Newton) or 'fd' (forward differences).
     character(len=16) :: jacobian_kind = 'linearised'
@@ -57,17 +59,23 @@ contains
     integer :: j
     this%model = model
     call this%kin%init(this%model)
-    if (allocated(this%mbar)) deallocate(this%mbar, this%gen_force, this%k_dd, this%d_dd)
+    if (allocated(this%mbar)) deallocate(this%mbar, this%gen_force)
     this%n_evals = 0
     allocate(this%mbar(model%n_dy, model%n_dy), this%gen_force(model%n_dy))
-    allocate(this%k_dd(model%n_dy, model%n_dy), this%d_dd(model%n_dy, model%n_dy))
-    zero = 0.0_wp
-    do j = 1, model%n_dy
-      unit = 0.0_wp
-      unit(model%n_rh + j) = 1.0_wp
-      this%k_dd(:, j) = this%stresses(unit, zero)
-      this%d_dd(:, j) = this%stresses(zero, unit)
-    end do
+    block
+      real(wp) :: k_q(model%n_dy, model%n_q), d_q(model%n_dy, model%n_q)
+      zero = 0.0_wp
+      do j = 1, model%n_q
+        unit = 0.0_wp
+        unit(j) = 1.0_wp
+        k_q(:, j) = element_stresses(this%model, unit, zero)
+        d_q(:, j) = element_stresses(this%model, zero, unit)
+      end do
+      this%k_dr = k_q(:, 1:model%n_rh)
+      this%k_dd = k_q(:, model%n_rh + 1:)
+      this%d_dr = d_q(:, 1:model%n_rh)
+      this%d_dd = d_q(:, model%n_rh + 1:)
+    end block
     call this%evaluate(t0, q_dy0, 0.0_wp * q_dy0, a, err)
     if (.not. err%ok()) call err%prefix('initial configuration: ')
   end subroutine dyn_init
@@ -97,14 +105,25 @@ contains
     q(this%model%n_rh + 1:) = q_dy
   end function dyn_full_q
 
-  !> Stress resultants of the dynamic modes, in q_dy order.
-  function dyn_stresses(this, q, qd) result(sigma)
+  !> Stress resultants of the dynamic modes, in q_dy order, for full q = (q_rh, q_dy).
+  pure function dyn_stresses(this, q, qd) result(sigma)
     class(dynamics_t), intent(in) :: this
     real(wp), intent(in) :: q(:), qd(:)
     real(wp) :: sigma(this%model%n_dy)
+    integer :: nr
+    nr = this%model%n_rh
+    sigma = matmul(this%k_dd, q(nr + 1:)) + matmul(this%d_dd, qd(nr + 1:)) &
+      + matmul(this%k_dr, q(1:nr)) + matmul(this%d_dr, qd(1:nr))
+  end function dyn_stresses
+
+  !> sigma_dy = S (e + beta e_dot) element by element; used once to build the matrices.
+  function element_stresses(m, q, qd) result(sigma)
+    type(model_t), intent(in) :: m
+    real(wp), intent(in) :: q(:), qd(:)
+    real(wp) :: sigma(m%n_dy)
     real(wp), allocatable :: e(:), ed(:), s(:, :)
     integer :: iel, j, nm
-    associate (m => this%model)
+    block
       sigma = 0.0_wp
       do iel = 1, m%n_elements
         nm = m%elements(iel)%e%n_modes()
@@ -122,8 +141,8 @@ contains
         end do
         deallocate(e, ed, s)
       end do
-    end associate
-  end function dyn_stresses
+    end block
+  end function element_stresses
 
   !> Accelerations of the dynamic coordinates; also leaves mbar and gen_force for callers.
   subroutine dyn_evaluate(this, t, q_dy, v_dy, a, err)
@@ -155,11 +174,10 @@ contains
         if (m%coord_kind(i) == COORD_X) rhs(i) = rhs(i) + this%load_factor * m%lumped(i) * m%gravity(1)
         if (m%coord_kind(i) == COORD_Y) rhs(i) = rhs(i) + this%load_factor * m%lumped(i) * m%gravity(2)
       end do
-      this%mbar = 0.0_wp
-      do i = 1, m%n_x
-        if (m%lumped(i) > 0) this%mbar = this%mbar + m%lumped(i) * &
-          matmul(reshape(df(i, nr + 1:), [nd, 1]), reshape(df(i, nr + 1:), [1, nd]))
-      end do
+      associate (rows => m%lumped_rows)
+        this%mbar = matmul(transpose(df(rows, nr + 1:)), &
+                           spread(m%lumped(rows), 2, nd) * df(rows, nr + 1:))
+      end associate
       do iel = 1, m%n_elements
         associate (el => m%elements(iel)%e)
           if (.not. el%has_inertia()) cycle

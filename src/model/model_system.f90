@@ -51,6 +51,7 @@ module model_system
     integer, allocatable :: calc_coord(:)     !< calculable index -> coordinate
     integer, allocatable :: row_q(:)          !< kinematic row -> q index (0 for rigid rows)
     integer, allocatable :: q_mode(:)         !< q index -> mode index
+    integer, allocatable :: lumped_rows(:)    !< coordinates that carry a lumped mass
     real(wp) :: newton_tol = 1.0e-11_wp       !< kinematic residual tolerance [m or rad]
     logical :: finalized = .false.
   contains
@@ -170,6 +171,7 @@ contains
       end if
     end do
     this%calc_coord = pack([(i, i=1, this%n_x)], .not. this%fixed)
+    this%lumped_rows = pack([(i, i=1, this%n_x)], this%lumped > 0)
     this%n_rigid = count(this%modes%class == MODE_RIGID)
     this%n_rh = count(this%modes%class == MODE_PRESCRIBED)
     this%n_dy = count(this%modes%class == MODE_DYNAMIC)
