@@ -15,16 +15,14 @@ program test_dynamics
   use core_kinds, only: wp, i8
   use core_error, only: error_t
   use io_namelist, only: nml_file_t
-  use io_scene, only: read_scene
   use model_scene, only: scene_t
-  use model_build, only: build_model
-  use model_system, only: model_t
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: static_solve
   use reduction_modal, only: modal_result_t, modal_analysis
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use integrators_driver, only: integrate
   use testing, only: suite_t
+  use test_scenes, only: rtxt, source_dir, make_dynamics
   implicit none
 
   character(len=*), parameter :: NL = new_line('a')
@@ -76,18 +74,6 @@ contains
     last = now
   end subroutine lap
 
-  function source_dir() result(dir)
-    character(len=:), allocatable :: dir
-    character(len=1024) :: buf
-    integer :: n, stat
-    call get_environment_variable('FLEXMOR_SOURCE_DIR', buf, n, stat)
-    if (stat == 0 .and. n > 0) then
-      dir = trim(buf)
-    else
-      dir = '.'
-    end if
-  end function source_dir
-
   subroutine load_two_link(text)
     character(len=:), allocatable, intent(out) :: text
     type(nml_file_t) :: f
@@ -120,14 +106,6 @@ contains
     t = t // text(p:)
   end function replaced
 
-  function rtxt(v) result(s)
-    real(wp), intent(in) :: v
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    write(buf, '(es24.16e3)') v
-    s = trim(adjustl(buf))
-  end function rtxt
-
   !> The two-link with both joints held at 0 (the motion laws replaced by constants).
   function held(text) result(t)
     character(len=*), intent(in) :: text
@@ -141,18 +119,8 @@ contains
     type(dynamics_t), intent(out) :: dyn
     type(error_t), intent(out) :: err
     real(wp), intent(in), optional :: q0(:)
-    type(nml_file_t) :: f
     type(scene_t) :: scene
-    type(model_t) :: model
-    real(wp), allocatable :: q(:)
-    call f%parse(text, 'test', err)
-    if (err%ok()) call read_scene(f, scene, err)
-    if (err%ok()) call build_model(scene, model, err)
-    if (.not. err%ok()) return
-    allocate(q(model%n_dy))
-    q = 0.0_wp
-    if (present(q0)) q = q0
-    call dyn%init(model, 0.0_wp, q, err)
+    call make_dynamics(text, scene, dyn, err, q0)
   end subroutine make
 
   function linspace(a, b, n) result(t)

@@ -17,6 +17,7 @@
 program test_elements
   use core_kinds, only: wp
   use testing, only: suite_t
+  use fd_helpers, only: lcg_t, relerr, flat
   use elements_base, only: element_t, MODE_RIGID, MODE_DYNAMIC
   use elements_beam, only: beam_t, BENDING_ANGLE, BENDING_SINE
   use elements_truss, only: truss_t
@@ -36,7 +37,7 @@ program test_elements
     'consistent mass vs textbook', 'h vs Lagrange FD of M', 'weight vs -FD of potential', &
     'frame invariance of M and h']
   real(wp) :: worst(N_CAT) = 0.0_wp
-  integer :: seed = 20240611
+  type(lcg_t) :: rng = lcg_t(seed=20240611)
   type(suite_t) :: ts
   integer :: i
 
@@ -58,36 +59,6 @@ program test_elements
 contains
 
   ! ------------------------------------------------------------------ utilities
-
-  !> Deterministic uniform numbers in [a, b) (a 64-bit-free LCG, same on every platform).
-  real(wp) function rnd(a, b)
-    real(wp), intent(in) :: a, b
-    seed = modulo(seed * 16807, 2147483647)
-    if (seed <= 0) seed = seed + 2147483646
-    rnd = a + (b - a) * real(seed, wp) / 2147483647.0_wp
-  end function rnd
-
-  function rnd_vec(n, a, b) result(v)
-    integer, intent(in) :: n
-    real(wp), intent(in) :: a, b
-    real(wp) :: v(n)
-    integer :: k
-    do k = 1, n
-      v(k) = rnd(a, b)
-    end do
-  end function rnd_vec
-
-  !> max |a - b| / max(max |b|, floor)
-  pure real(wp) function relerr(a, b, floor)
-    real(wp), intent(in) :: a(:), b(:), floor
-    relerr = maxval(abs(a - b)) / max(maxval(abs(b)), floor)
-  end function relerr
-
-  pure function flat(m) result(v)
-    real(wp), intent(in) :: m(:, :)
-    real(wp) :: v(size(m))
-    v = reshape(m, [size(m)])
-  end function flat
 
   !> A check on an achieved relative error; records the worst per category.
   subroutine expect(what, err, tol, cat)
@@ -398,13 +369,13 @@ contains
       if (k <= 5) then
         c = cfg(:, k)
       else
-        c = [rnd(-2.0_wp, 2.0_wp), rnd(-2.0_wp, 2.0_wp), rnd(-PI, PI), rnd(0.9_wp, 1.1_wp), &
-             rnd(-0.8_wp, 0.8_wp), rnd(-0.8_wp, 0.8_wp)]
+        c = [rng%uniform(-2.0_wp, 2.0_wp), rng%uniform(-2.0_wp, 2.0_wp), rng%uniform(-PI, PI), &
+             rng%uniform(0.9_wp, 1.1_wp), rng%uniform(-0.8_wp, 0.8_wp), rng%uniform(-0.8_wp, 0.8_wp)]
       end if
       write(what, '(a,a,a,i0)') 'beam/', fname, ' cfg ', k
       x = beam_config(b, c(1:2), c(3), c(4) * b%l0, c(5), c(6))
-      v = rnd_vec(6, -1.0_wp, 1.0_wp)
-      xd = rnd_vec(6, -2.0_wp, 2.0_wp)
+      v = rng%uniform_vec(6, -1.0_wp, 1.0_wp)
+      xd = rng%uniform_vec(6, -2.0_wp, 2.0_wp)
       call evaluate(b, x, ev, de)
       e = ev
       ee = beam_expected(b, c(4) * b%l0, c(5), c(6))
@@ -572,13 +543,13 @@ contains
     tr = make_truss(1.3_wp)
     do c = 1, 6
       write(what, '(a,i0)') 'truss cfg ', c
-      beta = rnd(-PI, PI)
+      beta = rng%uniform(-PI, PI)
       if (c == 1) beta = 2.5_wp
-      l = tr%l0 * rnd(0.8_wp, 1.2_wp)
-      x(1:2) = rnd_vec(2, -2.0_wp, 2.0_wp)
+      l = tr%l0 * rng%uniform(0.8_wp, 1.2_wp)
+      x(1:2) = rng%uniform_vec(2, -2.0_wp, 2.0_wp)
       x(3:4) = x(1:2) + l * [cos(beta), sin(beta)]
-      v = rnd_vec(4, -1.0_wp, 1.0_wp)
-      xd = rnd_vec(4, -2.0_wp, 2.0_wp)
+      v = rng%uniform_vec(4, -1.0_wp, 1.0_wp)
+      xd = rng%uniform_vec(4, -2.0_wp, 2.0_wp)
       call evaluate(tr, x, e, de)
       call expect(trim(what) // ' e = l - l0', abs(e(1) - (l - tr%l0)) / tr%l0, 1.0e-14_wp, C_E)
       call check_derivatives(tr, x, v, trim(what), 1.0e-2_wp * dot_product(v, v))
@@ -633,8 +604,8 @@ contains
     hg%k = 42.0_wp
     do c = 1, 4
       write(what, '(a,i0)') 'hinge cfg ', c
-      x = rnd_vec(2, -3.0_wp, 3.0_wp)
-      v = rnd_vec(2, -1.0_wp, 1.0_wp)
+      x = rng%uniform_vec(2, -3.0_wp, 3.0_wp)
+      v = rng%uniform_vec(2, -1.0_wp, 1.0_wp)
       call evaluate(hg, x, e, de)
       call expect(trim(what) // ' e = (phi_q - phi_q0) - (phi_p - phi_p0)', &
         abs(e(1) - ((x(2) - hg%phi0(2)) - (x(1) - hg%phi0(1)))), 1.0e-14_wp, C_E)

@@ -3,23 +3,20 @@
 !> their accuracy (galpha its second order); the jump is never evaluated at t_b itself.
 module breakpoint_test_system
   use core_kinds, only: wp
-  use integrators_system, only: ode2_system_t
+  use test_oscillators, only: oscillator_t
   implicit none
   private
   public :: switched_oscillator_t
 
-  real(wp), parameter :: pi = acos(-1.0_wp)
-
-  type, extends(ode2_system_t) :: switched_oscillator_t
-    real(wp) :: omega = 2 * pi, force = 20, t_b = 0.37_wp
+  !> The linear oscillator of test_oscillators (its Jacobian) with the switched force.
+  type, extends(oscillator_t) :: switched_oscillator_t
+    real(wp) :: force = 20, t_b = 0.37_wp
     !> Which side of the jump F(t_b) belongs to: the integrators must not care.
     logical :: force_at_t_b = .false.
-    real(wp) :: max_error = 0
     integer :: n_evals_at_t_b = 0
   contains
     procedure :: accel => switched_accel
     procedure :: record => switched_record
-    procedure :: jacobian => switched_jacobian
   end type switched_oscillator_t
 
 contains
@@ -36,16 +33,6 @@ contains
     if (on) a = a + this%force
     status = 0
   end subroutine switched_accel
-
-  subroutine switched_jacobian(this, t, q, v, dadq, dadv, status)
-    class(switched_oscillator_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q(:), v(:)
-    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
-    integer, intent(out) :: status
-    dadq = -this%omega**2
-    dadv = 0
-    status = 0
-  end subroutine switched_jacobian
 
   !> Exact solution from rest at q = 0: forced response, then free vibration from t_b.
   subroutine switched_record(this, k, t, q, v, status)

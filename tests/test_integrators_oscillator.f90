@@ -1,70 +1,11 @@
-!> Undamped linear oscillator q'' = -omega^2 q against its exact solution, for both methods:
-!> BDF's error follows rtol, generalized-alpha's shrinks fourfold when dt halves.
-module oscillator_test_system
-  use core_kinds, only: wp
-  use integrators_system, only: ode2_system_t
-  implicit none
-  private
-  public :: oscillator_t
-
-  real(wp), parameter :: pi = acos(-1.0_wp)
-
-  type, extends(ode2_system_t) :: oscillator_t
-    real(wp) :: omega = 2 * pi
-    real(wp) :: max_error = 0       !< largest |q - q_exact| + |v - v_exact| / omega at outputs
-    integer :: n_records = 0
-    logical :: times_exact = .true.
-    real(wp), allocatable :: t_expected(:)
-  contains
-    procedure :: accel => oscillator_accel
-    procedure :: record => oscillator_record
-    procedure :: jacobian => oscillator_jacobian
-  end type oscillator_t
-
-contains
-
-  subroutine oscillator_accel(this, t, q, v, a, status)
-    class(oscillator_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q(:), v(:)
-    real(wp), intent(out) :: a(:)
-    integer, intent(out) :: status
-    a = -this%omega**2 * q
-    status = 0
-  end subroutine oscillator_accel
-
-  subroutine oscillator_jacobian(this, t, q, v, dadq, dadv, status)
-    class(oscillator_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q(:), v(:)
-    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
-    integer, intent(out) :: status
-    dadq = -this%omega**2
-    dadv = 0
-    status = 0
-  end subroutine oscillator_jacobian
-
-  !> Exact solution from q(0) = 1, v(0) = 0.
-  subroutine oscillator_record(this, k, t, q, v, status)
-    class(oscillator_t), intent(inout) :: this
-    integer, intent(in) :: k
-    real(wp), intent(in) :: t, q(:), v(:)
-    integer, intent(out) :: status
-    real(wp) :: err
-    err = abs(q(1) - cos(this%omega * t)) + abs(v(1) + this%omega * sin(this%omega * t)) / this%omega
-    this%max_error = max(this%max_error, err)
-    this%n_records = this%n_records + 1
-    if (allocated(this%t_expected)) then
-      this%times_exact = this%times_exact .and. .not. abs(t - this%t_expected(k)) > 0
-    end if
-    status = 0
-  end subroutine oscillator_record
-end module oscillator_test_system
-
+!> Undamped linear oscillator q'' = -omega^2 q (test_oscillators) against its exact solution,
+!> for both methods: BDF's error follows rtol, generalized-alpha's shrinks fourfold when dt halves.
 program test_integrators_oscillator
   use core_kinds, only: wp
   use core_error, only: error_t
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use integrators_driver, only: integrate
-  use oscillator_test_system, only: oscillator_t
+  use test_oscillators, only: oscillator_t
   use testing, only: suite_t
   implicit none
   type(suite_t) :: suite

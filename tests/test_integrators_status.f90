@@ -4,6 +4,7 @@
 module status_test_system
   use core_kinds, only: wp
   use integrators_system, only: ode2_system_t
+  use test_oscillators, only: oscillator_error
   implicit none
   private
   public :: failing_oscillator_t
@@ -45,8 +46,7 @@ contains
     integer, intent(in) :: k
     real(wp), intent(in) :: t, q(:), v(:)
     integer, intent(out) :: status
-    this%max_error = max(this%max_error, abs(q(1) - cos(this%omega * t)) + &
-      abs(v(1) + this%omega * sin(this%omega * t)) / this%omega)
+    this%max_error = max(this%max_error, oscillator_error(this%omega, t, q(1), v(1)))
     this%n_records = this%n_records + 1
     status = 0
     if (k == this%k_record_fail) status = this%record_status

@@ -17,6 +17,7 @@ program test_kinematics
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_MODEL
   use testing, only: suite_t
+  use fd_helpers, only: lcg_t, relerr, flat
   use io_namelist, only: nml_file_t
   use io_scene, only: read_scene
   use model_scene, only: scene_t
@@ -53,7 +54,7 @@ program test_kinematics
 
   type(suite_t) :: ts
   character(len=:), allocatable :: two_link
-  integer :: seed = 777
+  type(lcg_t) :: rng = lcg_t(seed=777)
 
   call ts%init('kinematics')
   call load_two_link(two_link)
@@ -67,28 +68,6 @@ program test_kinematics
 contains
 
   ! ------------------------------------------------------------------ utilities
-
-  real(wp) function rnd(a, b)
-    real(wp), intent(in) :: a, b
-    seed = modulo(seed * 16807, 2147483647)
-    if (seed <= 0) seed = seed + 2147483646
-    rnd = a + (b - a) * real(seed, wp) / 2147483647.0_wp
-  end function rnd
-
-  function rnd_vec(n, a, b) result(v)
-    integer, intent(in) :: n
-    real(wp), intent(in) :: a, b
-    real(wp) :: v(n)
-    integer :: k
-    do k = 1, n
-      v(k) = rnd(a, b)
-    end do
-  end function rnd_vec
-
-  pure real(wp) function relerr(a, b, floor)
-    real(wp), intent(in) :: a(:), b(:), floor
-    relerr = maxval(abs(a - b)) / max(maxval(abs(b)), floor)
-  end function relerr
 
   !> Gaussian elimination with partial pivoting (kept here, independent of core_linalg).
   subroutine gauss_solve(a_in, b, info)
@@ -118,12 +97,6 @@ contains
       b(k) = (b(k) - dot_product(a(k, k + 1:), b(k + 1:))) / a(k, k)
     end do
   end subroutine gauss_solve
-
-  pure function flat(m) result(v)
-    real(wp), intent(in) :: m(:, :)
-    real(wp) :: v(size(m))
-    v = reshape(m, [size(m)])
-  end function flat
 
   subroutine expect(what, err, tol)
     character(len=*), intent(in) :: what
@@ -536,8 +509,8 @@ contains
       3.0_wp .and. point_mass(model, 'link1.1') == 0.0_wp, &
       'two-link: point masses 1 kg (elbow) and 3 kg (tip), none elsewhere')
     ! Kinematics at a deformed state.
-    q = [0.7_wp, -1.1_wp, rnd_vec(nd, -4.0e-3_wp, 4.0e-3_wp)]
-    qd = [2.0_wp, -3.0_wp, rnd_vec(nd, -0.05_wp, 0.05_wp)]
+    q = [0.7_wp, -1.1_wp, rng%uniform_vec(nd, -4.0e-3_wp, 4.0e-3_wp)]
+    qd = [2.0_wp, -3.0_wp, rng%uniform_vec(nd, -0.05_wp, 0.05_wp)]
     hq = [[1, 1] * 1.0e-5_wp, [(1.0e-6_wp, i = 1, nd)]]
     call kin%init(model)
     call solve_path(kin, model, q, err)
@@ -547,12 +520,12 @@ contains
     call dyn%init(model, 0.0_wp, [(0.0_wp, i = 1, nd)], err)
     call expect_ok(err, 'two-link: dynamics initialised')
     if (.not. err%ok()) return
-    q_dy = rnd_vec(nd, -2.0e-3_wp, 2.0e-3_wp)
+    q_dy = rng%uniform_vec(nd, -2.0e-3_wp, 2.0e-3_wp)
     call walk(dyn, 0.0_wp, 0.6_wp, q_dy, err)
     call expect_ok(err, 'two-link: walked to t = 0.6')
     if (err%ok()) call check_rest(dyn, 0.6_wp, q_dy, hq, 'two-link at rest')
-    q_dy = rnd_vec(nd, -3.0e-4_wp, 3.0e-4_wp)
-    v_dy = rnd_vec(nd, -0.05_wp, 0.05_wp)
+    q_dy = rng%uniform_vec(nd, -3.0e-4_wp, 3.0e-4_wp)
+    v_dy = rng%uniform_vec(nd, -0.05_wp, 0.05_wp)
     call walk(dyn, 0.6_wp, 0.2_wp, q_dy, err)
     if (err%ok()) call check_lagrange(dyn, 0.2_wp, q_dy, v_dy, hq, 1.0e-5_wp, &
       'two-link t = 0.2')
@@ -599,8 +572,8 @@ contains
     nr = model%n_rh
     nd = model%n_dy
     call ts%check(nd == 15, 'two-link variant: 15 dynamic coordinates')
-    q_dy = rnd_vec(nd, -3.0e-4_wp, 3.0e-4_wp)
-    v_dy = rnd_vec(nd, -0.05_wp, 0.05_wp)
+    q_dy = rng%uniform_vec(nd, -3.0e-4_wp, 3.0e-4_wp)
+    v_dy = rng%uniform_vec(nd, -0.05_wp, 0.05_wp)
     ! Elongations are stiff (EA/l0 ~ 1e8 N/m): keep their values small.
     do iq = nr + 1, nr + nd
       if (model%modes(model%q_mode(iq))%local == 1) then

@@ -10,13 +10,12 @@ program test_verification_modal
   use core_kinds, only: wp
   use core_error, only: error_t
   use io_namelist, only: nml_file_t
-  use io_scene, only: read_scene
   use model_scene, only: scene_t
-  use model_build, only: build_model
-  use model_system, only: model_t
   use dynamics_system, only: dynamics_t
   use reduction_modal, only: modal_result_t, modal_analysis
   use testing, only: suite_t
+  use test_scenes, only: rtxt, itxt, source_dir, make => make_dynamics, &
+    make_from => make_dynamics_from
   implicit none
 
   character(len=*), parameter :: NL = new_line('a')
@@ -43,48 +42,6 @@ program test_verification_modal
 contains
 
   ! ------------------------------------------------------------------ scene text
-
-  function rtxt(v) result(s)
-    real(wp), intent(in) :: v
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    write(buf, '(es24.16e3)') v
-    s = trim(adjustl(buf))
-  end function rtxt
-
-  function itxt(i) result(s)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=16) :: buf
-    write(buf, '(i0)') i
-    s = trim(buf)
-  end function itxt
-
-  !> Parse, read, build and initialise at q_dy = 0 and t = 0.
-  subroutine make_from(f, scene, dyn, err)
-    type(nml_file_t), intent(inout) :: f
-    type(scene_t), intent(out) :: scene
-    type(dynamics_t), intent(out) :: dyn
-    type(error_t), intent(out) :: err
-    type(model_t) :: model
-    real(wp), allocatable :: q0(:)
-    call read_scene(f, scene, err)
-    if (err%ok()) call build_model(scene, model, err)
-    if (.not. err%ok()) return
-    allocate(q0(model%n_dy))
-    q0 = 0.0_wp
-    call dyn%init(model, 0.0_wp, q0, err)
-  end subroutine make_from
-
-  subroutine make(text, scene, dyn, err)
-    character(len=*), intent(in) :: text
-    type(scene_t), intent(out) :: scene
-    type(dynamics_t), intent(out) :: dyn
-    type(error_t), intent(out) :: err
-    type(nml_file_t) :: f
-    call f%parse(text, 'test', err)
-    if (err%ok()) call make_from(f, scene, dyn, err)
-  end subroutine make
 
   !> All frequencies [Hz] at time t in the state q_dy = 0; checks the mode shapes on the way.
   subroutine frequencies(dyn, t, f_hz, err, what)
@@ -201,18 +158,6 @@ contains
   end subroutine clamped_free
 
   ! ------------------------------------------------------------------ two-link benchmark
-
-  function source_dir() result(dir)
-    character(len=:), allocatable :: dir
-    character(len=1024) :: buf
-    integer :: n, stat
-    call get_environment_variable('FLEXMOR_SOURCE_DIR', buf, n, stat)
-    if (stat == 0 .and. n > 0) then
-      dir = trim(buf)
-    else
-      dir = '.'
-    end if
-  end function source_dir
 
   subroutine compare_list(f_hz, what)
     real(wp), intent(in) :: f_hz(:)

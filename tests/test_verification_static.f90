@@ -13,11 +13,10 @@ program test_verification_static
   use io_namelist, only: nml_file_t
   use io_scene, only: read_scene
   use model_scene, only: scene_t
-  use model_build, only: build_model
-  use model_system, only: model_t
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: tangent_stiffness, static_solve
   use testing, only: suite_t
+  use test_scenes, only: rtxt, itxt, make => make_dynamics
   implicit none
 
   character(len=*), parameter :: NL = new_line('a')
@@ -41,22 +40,6 @@ contains
 
   ! ------------------------------------------------------------------ scene text
 
-  function rtxt(v) result(s)
-    real(wp), intent(in) :: v
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    write(buf, '(es24.16e3)') v
-    s = trim(adjustl(buf))
-  end function rtxt
-
-  function itxt(i) result(s)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=16) :: buf
-    write(buf, '(i0)') i
-    s = trim(buf)
-  end function itxt
-
   !> Cantilever along x: node 'root' at 0 (fixed), node 'tip' at LEN, one link of n beams,
   !> tip load (fx, fy); `extra` is appended (e.g. a &static group).
   function cantilever(n, elongation, fx, fy, extra, bending_form) result(t)
@@ -75,24 +58,6 @@ contains
       ", rho = " // rtxt(RHO) // ", elongation = '" // elongation // "'" // form // " /" // NL // &
       "&force node = 'tip', fx = " // rtxt(fx) // ", fy = " // rtxt(fy) // " /" // NL // extra
   end function cantilever
-
-  !> Parse, read, build and initialise at q_dy = 0.
-  subroutine make(text, scene, dyn, err)
-    character(len=*), intent(in) :: text
-    type(scene_t), intent(out) :: scene
-    type(dynamics_t), intent(out) :: dyn
-    type(error_t), intent(out) :: err
-    type(nml_file_t) :: f
-    type(model_t) :: model
-    real(wp), allocatable :: q0(:)
-    call f%parse(text, 'test', err)
-    if (err%ok()) call read_scene(f, scene, err)
-    if (err%ok()) call build_model(scene, model, err)
-    if (.not. err%ok()) return
-    allocate(q0(model%n_dy))
-    q0 = 0.0_wp
-    call dyn%init(model, 0.0_wp, q0, err)
-  end subroutine make
 
   !> Tip (x, y, phi) in the nodal coordinates x.
   function tip_state(dyn, x) result(s)
