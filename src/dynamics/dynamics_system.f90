@@ -22,6 +22,9 @@ module dynamics_system
     logical :: locked = .false.               !< prescribed modes held still (statics, modes)
     real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last evaluation
     real(wp), allocatable :: gen_force(:)     !< right-hand side of the last evaluation
+    !> Constant loads: nodal forces plus gravity on the lumped masses (consistent masses get
+    !> their weight from the elements, as it depends on the configuration).
+    real(wp), allocatable :: load(:)
     ! sigma_dy is linear in (q, qd): its constant matrices, assembled once by init.
     real(wp), allocatable :: k_dd(:, :)       !< structural stiffness dsigma_dy/dq_dy
     real(wp), allocatable :: d_dd(:, :)       !< structural damping dsigma_dy/dv_dy
@@ -58,6 +61,9 @@ contains
     real(wp) :: a(model%n_dy), unit(model%n_q), zero(model%n_q)
     integer :: j
     this%model = model
+    this%load = model%force
+    where (model%coord_kind == COORD_X) this%load = this%load + model%lumped * model%gravity(1)
+    where (model%coord_kind == COORD_Y) this%load = this%load + model%lumped * model%gravity(2)
     call this%kin%init(this%model)
     if (allocated(this%mbar)) deallocate(this%mbar, this%gen_force)
     this%n_evals = 0
@@ -154,7 +160,7 @@ contains
     real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
     real(wp), allocatable :: me(:, :), he(:), fe(:), dfe(:, :)
     real(wp) :: pot
-    integer :: iel, i, info, nr, nd
+    integer :: iel, info, nr, nd
     character(len=120) :: msg
     this%n_evals = this%n_evals + 1
     associate (m => this%model, df => this%kin%df)
@@ -169,11 +175,7 @@ contains
       call this%kin%second(m, qd, conv)
       if (nr > 0) conv = conv + matmul(df(:, 1:nr), pdd)
       xd = matmul(df, qd)
-      rhs = this%load_factor * m%force - m%lumped * conv
-      do i = 1, m%n_x
-        if (m%coord_kind(i) == COORD_X) rhs(i) = rhs(i) + this%load_factor * m%lumped(i) * m%gravity(1)
-        if (m%coord_kind(i) == COORD_Y) rhs(i) = rhs(i) + this%load_factor * m%lumped(i) * m%gravity(2)
-      end do
+      rhs = this%load_factor * this%load - m%lumped * conv
       associate (rows => m%lumped_rows)
         this%mbar = matmul(transpose(df(rows, nr + 1:)), &
                            spread(m%lumped(rows), 2, nd) * df(rows, nr + 1:))
@@ -280,7 +282,7 @@ contains
     real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
     real(wp) :: xd(this%model%n_x), x(this%model%n_x), pot
     real(wp), allocatable :: me(:, :), he(:), fe(:), e(:), s(:, :)
-    integer :: iel, i, nm
+    integer :: iel, nm
     associate (m => this%model)
       call this%prescribed(t, q(1:m%n_rh), qd(1:m%n_rh), pdd)
       q(m%n_rh + 1:) = q_dy
@@ -288,11 +290,7 @@ contains
       x = this%kin%x
       xd = matmul(this%kin%df, qd)
       en(1) = 0.5_wp * sum(m%lumped * xd**2)
-      en(2) = -this%load_factor * dot_product(m%force, x)
-      do i = 1, m%n_x
-        if (m%coord_kind(i) == COORD_X) en(2) = en(2) - this%load_factor * m%lumped(i) * m%gravity(1) * x(i)
-        if (m%coord_kind(i) == COORD_Y) en(2) = en(2) - this%load_factor * m%lumped(i) * m%gravity(2) * x(i)
-      end do
+      en(2) = -this%load_factor * dot_product(this%load, x)
       do iel = 1, m%n_elements
         associate (el => m%elements(iel)%e)
           nm = el%n_modes()
