@@ -7,7 +7,7 @@ module analysis_run
   use io_namelist, only: nml_file_t
   use io_scene, only: load_scene
   use io_hdf5, only: h5_writer_t
-  use model_scene, only: scene_t
+  use model_scene, only: scene_t, dynamic_rec_t
   use model_system, only: model_t
   use model_build, only: build_model
   use dynamics_system, only: dynamics_t
@@ -15,6 +15,10 @@ module analysis_run
   use reduction_modal, only: modal_result_t, modal_analysis
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use integrators_driver, only: integrate
+  use core_strings, only: int_str, real_str
+  use reduction_basis, only: basis_spec_t, basis_t, compute_basis
+  use reduction_system, only: reduced_t
+  use reduction_adaptive, only: update_spec_t, update_log_t, integrate_reduced
   implicit none
   private
   public :: run_t, FLEXMOR_VERSION
@@ -30,6 +34,9 @@ module analysis_run
     real(wp), allocatable :: q_static(:), x_static(:, :)
     real(wp), allocatable :: time(:)
     type(integrator_stats_t) :: stats
+    type(reduced_t), allocatable :: red       !< a reduced dynamic analysis
+    type(basis_t) :: initial_basis            !< its basis at the start
+    type(update_log_t) :: updates             !< its basis checks and updates
     integer :: static_iterations = 0
     real(wp) :: wall_time_s = 0.0_wp
     logical :: verbose = .true.
@@ -131,42 +138,128 @@ contains
     type(error_t), intent(out) :: err
     type(integrator_options_t) :: opts
     real(wp), allocatable :: breaks(:), v0(:)
-    integer :: nt, k, i
-    associate (d => this%scene%dynamic)
-      ! Output every output_dt, and at t_end exactly (once, even when t_end is not a multiple).
-      nt = floor(d%t_end / d%output_dt * (1 + 1.0e-12_wp)) + 1
-      this%time = [((k - 1) * d%output_dt, k=1, nt)]
-      if (d%t_end - this%time(nt) > 1.0e-9_wp * d%output_dt) then
-        this%time = [this%time, d%t_end]
-      else
-        this%time(nt) = d%t_end
-      end if
-      nt = size(this%time)
-      opts%method = d%integrator
-      opts%rtol = d%rtol
-      opts%atol = d%atol
-      opts%max_step = d%max_step
-      opts%max_order = d%max_order
-      opts%jacobian = 'system'
-      if (d%jacobian == 'internal') opts%jacobian = 'internal'
-      this%dyn%jacobian_kind = d%jacobian
-      opts%dt = d%dt
-      opts%rho_inf = d%rho_inf
-    end associate
+    integer :: i
+    this%time = output_times(this%scene%dynamic)
+    opts = integrator_options(this%scene%dynamic)
+    this%dyn%jacobian_kind = this%scene%dynamic%jacobian
     allocate(breaks(0))
     do i = 1, this%dyn%model%n_motions
       breaks = [breaks, this%dyn%model%motions(i)%breakpoints()]
     end do
-    call this%dyn%allocate_history(nt)
-    allocate(v0(this%dyn%model%n_dy))
-    v0 = 0.0_wp
-    call integrate(this%dyn, opts, this%time, this%q_static, v0, breaks, this%stats, err)
+    if (this%scene%reduction%active) then
+      call run_reduced(this, opts, breaks, err)
+    else
+      call this%dyn%allocate_history(size(this%time))
+      allocate(v0(this%dyn%model%n_dy))
+      v0 = 0.0_wp
+      call integrate(this%dyn, opts, this%time, this%q_static, v0, breaks, this%stats, err)
+    end if
     if (.not. err%ok() .and. allocated(this%dyn%last_error%message)) &
       err%message = err%message // ' (' // this%dyn%last_error%message // ')'
     if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a,i0,a)') 'dynamic: ', &
       this%stats%n_steps, ' steps, ', this%stats%n_rhs_evals, ' evaluations, ', &
       this%stats%n_jac_evals, ' Jacobians'
   end subroutine run_dynamic
+
+  !> Output every output_dt, and at t_end exactly (once, even when t_end is not a multiple).
+  function output_times(d) result(time)
+    type(dynamic_rec_t), intent(in) :: d
+    real(wp), allocatable :: time(:)
+    integer :: nt, k
+    nt = floor(d%t_end / d%output_dt * (1 + 1.0e-12_wp)) + 1
+    time = [((k - 1) * d%output_dt, k=1, nt)]
+    if (d%t_end - time(nt) > 1.0e-9_wp * d%output_dt) then
+      time = [time, d%t_end]
+    else
+      time(nt) = d%t_end
+    end if
+  end function output_times
+
+  function integrator_options(d) result(opts)
+    type(dynamic_rec_t), intent(in) :: d
+    type(integrator_options_t) :: opts
+    opts%method = d%integrator
+    opts%rtol = d%rtol
+    opts%atol = d%atol
+    opts%max_step = d%max_step
+    opts%max_order = d%max_order
+    opts%erk_order = d%erk_order
+    opts%jacobian = 'system'
+    if (d%jacobian == 'internal') opts%jacobian = 'internal'
+    opts%dt = d%dt
+    opts%rho_inf = d%rho_inf
+  end function integrator_options
+
+  !> The reduced dynamic analysis: basis at the configuration the input names, then the
+  !> integration in eta. The full model's histories end up in this%dyn as for a full run.
+  subroutine run_reduced(this, opts, breaks, err)
+    type(run_t), intent(inout) :: this
+    type(integrator_options_t), intent(in) :: opts
+    real(wp), intent(in) :: breaks(:)
+    type(error_t), intent(out) :: err
+    type(basis_spec_t) :: spec
+    type(update_spec_t) :: update
+    associate (r => this%scene%reduction)
+      spec%selection = r%selection
+      spec%n_modes = r%n_modes
+      spec%cutoff_hz = r%cutoff_hz
+      spec%auto_factor = r%auto_factor
+      spec%eigensolver = r%eigensolver
+      update%mode = r%update
+      update%interval = r%update_interval
+      update%mac_threshold = r%mac_threshold
+      update%eigensolver = r%eigensolver
+      if (allocated(this%red)) deallocate(this%red)
+      allocate(this%red)
+      this%red%dyn = this%dyn
+      this%red%static_correction = r%static_correction
+      if (allocated(r%basis_prescribed)) then
+        if (size(r%basis_prescribed) /= this%dyn%model%n_rh) then
+          call err%set(ERR_INPUT, 'group &reduction: variable ''basis_prescribed'' needs ' // &
+            int_str(this%dyn%model%n_rh) // ' values, one per prescribed coordinate (' // &
+            prescribed_names(this%dyn%model) // '), got ' // int_str(size(r%basis_prescribed)))
+          return
+        end if
+        call compute_basis(this%red%dyn, spec, r%basis_time, this%q_static, &
+          r%basis_prescribed, basis=this%red%basis, err=err)
+      else
+        call compute_basis(this%red%dyn, spec, r%basis_time, this%q_static, &
+          basis=this%red%basis, err=err)
+      end if
+      if (.not. err%ok()) then
+        call err%prefix('group &reduction: basis configuration (basis_time = ' // &
+          real_str(r%basis_time) // '): ')
+        return
+      end if
+      if (r%static_correction .and. .not. allocated(this%red%basis%k_chol)) then
+        call err%set(ERR_INPUT, 'group &reduction: static_correction needs a positive ' // &
+          'definite stiffness at the basis configuration (a dynamic mode has no stiffness)')
+        return
+      end if
+    end associate
+    this%initial_basis = this%red%basis
+    if (this%verbose) write(*, '(a,i0,a,*(f0.3,:,", "))') 'reduction: ', &
+      this%red%basis%k(), ' modes (' // this%red%basis%reason // '), [Hz]: ', &
+      this%red%basis%frequency_hz
+    call this%red%allocate_history(size(this%time))
+    call integrate_reduced(this%red, update, opts, this%time, breaks, this%stats, &
+      this%updates, err)
+    this%dyn = this%red%dyn
+    if (this%verbose .and. err%ok() .and. update%mode /= 'none') write(*, '(a,i0,a,i0,a)') &
+      'reduction: ', this%updates%n_updates, ' basis updates in ', size(this%updates%time), &
+      ' checks'
+  end subroutine run_reduced
+
+  function prescribed_names(model) result(names)
+    type(model_t), intent(in) :: model
+    character(len=:), allocatable :: names
+    integer :: i
+    names = ''
+    do i = 1, model%n_rh
+      if (i > 1) names = names // ', '
+      names = names // model%q_name(i)
+    end do
+  end function prescribed_names
 
   !> Write the result file (temporary name, renamed on success).
   subroutine run_write(this, path, err)
@@ -179,6 +272,7 @@ contains
     if (err%ok() .and. this%scene%static%active) call write_static(this, h5, err)
     if (err%ok() .and. this%scene%modal%active) call write_modal(this, h5, err)
     if (err%ok() .and. this%scene%dynamic%active) call write_dynamic(this, h5, err)
+    if (err%ok() .and. allocated(this%red)) call write_reduction(this, h5, err)
     if (err%ok()) call h5%commit(err)
     if (.not. err%ok()) call h5%abort()
   end subroutine run_write
@@ -282,4 +376,43 @@ contains
     if (err%ok()) call h5%write_real_1d('/energy/potential', this%dyn%energy_hist(2, :), err, &
       units='J')
   end subroutine write_dynamic
+
+  !> The reduced analysis: basis, reduced coordinates, error indicator and basis updates.
+  subroutine write_reduction(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    character(len=*), parameter :: g = '/reduction'
+    associate (b => this%initial_basis, red => this%red, r => this%scene%reduction)
+      call h5%write_real_2d(g // '/eta', red%eta_hist, err)
+      if (err%ok()) call h5%write_real_2d(g // '/eta_dot', red%eta_dot_hist, err)
+      if (err%ok()) call h5%write_real_2d(g // '/basis', b%v, err)
+      if (err%ok()) call h5%write_real_1d(g // '/frequency_hz', b%frequency_hz, err, units='Hz')
+      if (err%ok()) call h5%write_real_1d(g // '/residual', red%residual, err)
+      if (err%ok() .and. red%has_estimate) call h5%write_real_1d(g // '/error_estimate', &
+        red%estimate, err, units='m')
+      if (err%ok()) call h5%write_int_attr(g, 'n_modes', b%k(), err)
+      if (err%ok()) call h5%write_string_attr(g, 'selection', r%selection, err)
+      if (err%ok()) call h5%write_string_attr(g, 'reason', b%reason, err)
+      if (err%ok()) call h5%write_real_attr(g, 'cutoff_hz', b%cutoff_hz, err)
+      if (err%ok()) call h5%write_real_attr(g, 'motion_bandwidth_hz', b%bandwidth_hz, err)
+      if (err%ok()) call h5%write_real_attr(g, 'basis_time', r%basis_time, err)
+      if (err%ok()) call h5%write_string_attr(g, 'eigensolver', b%solver, err)
+      if (err%ok()) call h5%write_string_attr(g, 'static_correction', &
+        merge('yes', 'no ', r%static_correction), err)
+      if (err%ok()) call h5%write_real_attr(g, 'residual_max', maxval(red%residual), err)
+      if (err%ok() .and. red%has_estimate) call h5%write_real_attr(g, 'error_estimate_max', &
+        maxval(red%estimate), err)
+      if (err%ok()) call h5%write_string_attr(g, 'update', r%update, err)
+      if (err%ok()) call h5%write_int_attr(g, 'n_updates', this%updates%n_updates, err)
+      if (err%ok() .and. size(this%updates%time) > 0) then
+        call h5%write_real_1d(g // '/checks/time', this%updates%time, err, units='s')
+        if (err%ok()) call h5%write_real_1d(g // '/checks/min_mac', this%updates%min_mac, err)
+        if (err%ok()) call h5%write_int_1d(g // '/checks/updated', &
+          merge(1, 0, this%updates%updated), err)
+        if (err%ok()) call h5%write_real_2d(g // '/checks/frequency_hz', &
+          this%updates%frequency_hz, err, units='Hz')
+      end if
+    end associate
+  end subroutine write_reduction
 end module analysis_run

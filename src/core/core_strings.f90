@@ -19,7 +19,15 @@ contains
     real(wp), intent(in) :: x
     character(len=:), allocatable :: s
     character(len=32) :: buf
+    integer :: e, m
     write(buf, '(g0.10)') x
     s = trim(adjustl(buf))
+    ! Trailing zeros of the mantissa say nothing: 50.00000000 -> 50, 0.1000E-02 -> 0.1E-02.
+    e = scan(s, 'Ee')
+    if (e == 0) e = len(s) + 1
+    if (index(s(:e - 1), '.') == 0) return
+    m = verify(s(:e - 1), '0', back=.true.)
+    if (s(m:m) == '.') m = m - 1
+    s = s(:m) // s(e:)
   end function real_str
 end module core_strings

@@ -13,13 +13,16 @@ module dynamics_system
   use integrators_system, only: ode2_system_t, system_fd_jacobian
   implicit none
   private
-  public :: dynamics_t
+  public :: dynamics_t, check_finite
 
   type, extends(ode2_system_t) :: dynamics_t
     type(model_t) :: model
     type(kinematics_t) :: kin
     real(wp) :: load_factor = 1.0_wp          !< scales nodal loads and gravity (static steps)
     logical :: locked = .false.               !< prescribed modes held still (statics, modes)
+    !> When allocated, the prescribed coordinates take these values instead of their motions
+    !> (a configuration named in the input, e.g. for a reduced basis); rates are then zero.
+    real(wp), allocatable :: held_rh(:)
     real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last evaluation
     real(wp), allocatable :: gen_force(:)     !< right-hand side of the last evaluation
     !> Constant loads: nodal forces plus gravity on the lumped masses (consistent masses get
@@ -40,8 +43,10 @@ module dynamics_system
     procedure :: init => dyn_init
     procedure :: prescribed => dyn_prescribed
     procedure :: full_q => dyn_full_q
+    procedure :: assemble => dyn_assemble
     procedure :: evaluate => dyn_evaluate
     procedure :: accel => dyn_accel
+    procedure :: report => dyn_report
     procedure :: record => dyn_record
     procedure :: jacobian => dyn_jacobian
     procedure :: energy => dyn_energy
@@ -96,7 +101,8 @@ contains
       call this%model%motions(this%model%modes(this%model%q_mode(i))%motion)%eval(t, p(i), &
         pd(i), pdd(i))
     end do
-    if (this%locked) then
+    if (allocated(this%held_rh)) p = this%held_rh
+    if (this%locked .or. allocated(this%held_rh)) then
       pd = 0.0_wp
       pdd = 0.0_wp
     end if
@@ -150,18 +156,17 @@ contains
     end block
   end function element_stresses
 
-  !> Accelerations of the dynamic coordinates; also leaves mbar and gen_force for callers.
-  subroutine dyn_evaluate(this, t, q_dy, v_dy, a, err)
+  !> Mass matrix mbar and generalised force gen_force (the right-hand side) at a state:
+  !>   mbar a = gen_force.
+  subroutine dyn_assemble(this, t, q_dy, v_dy, err)
     class(dynamics_t), intent(inout) :: this
     real(wp), intent(in) :: t, q_dy(:), v_dy(:)
-    real(wp), intent(out) :: a(:)
     type(error_t), intent(out) :: err
     real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
     real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
     real(wp), allocatable :: me(:, :), he(:), fe(:), dfe(:, :)
     real(wp) :: pot
-    integer :: iel, info, nr, nd
-    character(len=120) :: msg
+    integer :: iel, nr, nd
     this%n_evals = this%n_evals + 1
     associate (m => this%model, df => this%kin%df)
       nr = m%n_rh
@@ -193,22 +198,43 @@ contains
         end associate
       end do
       this%gen_force = matmul(rhs, df(:, nr + 1:)) - this%stresses(q, qd)
-      a = this%gen_force
-      me = this%mbar
-      call chol_factor(me, info)
-      if (info /= 0) then
-        write(msg, '(a,i0,a)') 'the mass matrix is singular (dynamic coordinate ', info, ', '
-        call err%set(ERR_MODEL, trim(msg) // ' ' // m%q_name(nr + info) // &
-          ', has no inertia: add mass or rotary inertia, or make that mode rigid)')
-        return
-      end if
-      call chol_solve(me, a)
-      if (any(a /= a) .or. any(abs(a) > huge(1.0_wp) / 4)) then
-        write(msg, '(a,es12.5)') 'accelerations are not finite at t = ', t
-        call err%set(ERR_NUMERIC, trim(msg))
-      end if
     end associate
+  end subroutine dyn_assemble
+
+  !> Accelerations of the dynamic coordinates; also leaves mbar and gen_force for callers.
+  subroutine dyn_evaluate(this, t, q_dy, v_dy, a, err)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q_dy(:), v_dy(:)
+    real(wp), intent(out) :: a(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: chol(this%model%n_dy, this%model%n_dy)
+    integer :: info
+    character(len=120) :: msg
+    call this%assemble(t, q_dy, v_dy, err)
+    if (.not. err%ok()) return
+    a = this%gen_force
+    chol = this%mbar
+    call chol_factor(chol, info)
+    if (info /= 0) then
+      write(msg, '(a,i0,a)') 'the mass matrix is singular (dynamic coordinate ', info, ', '
+      call err%set(ERR_MODEL, trim(msg) // ' ' // this%model%q_name(this%model%n_rh + info) // &
+        ', has no inertia: add mass or rotary inertia, or make that mode rigid)')
+      return
+    end if
+    call chol_solve(chol, a)
+    call check_finite(a, t, err)
   end subroutine dyn_evaluate
+
+  !> Accelerations that overflowed or became NaN are an error, never an output.
+  subroutine check_finite(a, t, err)
+    real(wp), intent(in) :: a(:), t
+    type(error_t), intent(inout) :: err
+    character(len=120) :: msg
+    if (any(a /= a) .or. any(abs(a) > huge(1.0_wp) / 4)) then
+      write(msg, '(a,es12.5)') 'accelerations are not finite at t = ', t
+      call err%set(ERR_NUMERIC, trim(msg))
+    end if
+  end subroutine check_finite
 
   subroutine dyn_accel(this, t, q, v, a, status)
     class(dynamics_t), intent(inout) :: this
@@ -217,16 +243,24 @@ contains
     integer, intent(out) :: status
     type(error_t) :: err
     call this%evaluate(t, q, v, a, err)
-    status = 0
-    if (.not. err%ok()) then
-      ! A kinematic solve that fails may succeed with a smaller step: recoverable.
-      status = 1
-      if (err%code == ERR_MODEL) status = -1
-      call this%last_error%clear()
-      call this%last_error%set(err%code, err%message)
-      a = 0.0_wp
-    end if
+    call this%report(err, status)
+    if (status /= 0) a = 0.0_wp
   end subroutine dyn_accel
+
+  !> The integrator callback status of an evaluation's outcome; the error is kept for the
+  !> message. A kinematic solve that fails may succeed with a smaller step: recoverable;
+  !> a model error (singular mass) is not.
+  subroutine dyn_report(this, err, status)
+    class(dynamics_t), intent(inout) :: this
+    type(error_t), intent(in) :: err
+    integer, intent(out) :: status
+    status = 0
+    if (err%ok()) return
+    status = 1
+    if (err%code == ERR_MODEL) status = -1
+    call this%last_error%clear()
+    call this%last_error%set(err%code, err%message)
+  end subroutine dyn_report
 
   subroutine dyn_jacobian(this, t, q, v, dadq, dadv, status)
     class(dynamics_t), intent(inout) :: this

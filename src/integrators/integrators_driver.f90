@@ -7,6 +7,7 @@ module integrators_driver
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
   use integrators_cvode, only: cvode_solver_t
   use integrators_galpha, only: galpha_solver_t
+  use integrators_arkode, only: erk_solver_t
   implicit none
   private
   public :: integrate
@@ -16,6 +17,7 @@ module integrators_driver
     character(len=16) :: method = ''
     type(cvode_solver_t) :: bdf
     type(galpha_solver_t) :: galpha
+    type(erk_solver_t) :: erk
   end type stepper_t
 
 contains
@@ -165,10 +167,14 @@ contains
     case ('bdf')
       if (opts%max_order < 1 .or. opts%max_order > 5) call err%set(ERR_INPUT, ctx // &
         'max_order must be in 1..5, got ' // int_str(opts%max_order))
-      if (.not. opts%max_step >= 0) call err%set(ERR_INPUT, ctx // &
-        'max_step must be >= 0 (0: no limit), got ' // real_str(opts%max_step))
+      call check_max_step(opts, err)
       if (opts%jacobian /= 'system' .and. opts%jacobian /= 'internal') call err%set(ERR_INPUT, &
         ctx // "jacobian must be 'system' or 'internal', got '" // trim(opts%jacobian) // "'")
+    case ('erk')
+      ! The orders for which ARKODE has a default embedded table.
+      if (all(opts%erk_order /= [2, 3, 4, 5, 6, 8])) call err%set(ERR_INPUT, ctx // &
+        'erk_order must be 2, 3, 4, 5, 6 or 8, got ' // int_str(opts%erk_order))
+      call check_max_step(opts, err)
     case ('galpha')
       if (.not. opts%dt > 0) call err%set(ERR_INPUT, ctx // 'dt must be > 0, got ' // &
         real_str(opts%dt))
@@ -176,9 +182,16 @@ contains
         'rho_inf must be in [0, 1], got ' // real_str(opts%rho_inf))
     case default
       call err%set(ERR_INPUT, ctx // "unknown method '" // trim(opts%method) // &
-        "' (expected 'bdf' or 'galpha')")
+        "' (expected 'bdf', 'galpha' or 'erk')")
     end select
   end subroutine check_options
+
+  subroutine check_max_step(opts, err)
+    type(integrator_options_t), intent(in) :: opts
+    type(error_t), intent(inout) :: err
+    if (.not. opts%max_step >= 0) call err%set(ERR_INPUT, 'integrator options: ' // &
+      'max_step must be >= 0 (0: no limit), got ' // real_str(opts%max_step))
+  end subroutine check_max_step
 
   ! ---- dispatch to the chosen method --------------------------------------------------------
 
@@ -193,6 +206,8 @@ contains
       call s%bdf%start(sys, opts, t0, q, v, t_stop, t_lo, t_hi, err)
     case ('galpha')
       call s%galpha%start(sys, opts, t0, q, v, t_lo, t_hi, err)
+    case ('erk')
+      call s%erk%start(sys, opts, t0, q, v, t_stop, t_lo, t_hi, err)
     end select
   end subroutine stepper_start
 
@@ -207,6 +222,8 @@ contains
       call s%bdf%advance(t_target, q, v, err)
     case ('galpha')
       call s%galpha%advance(sys, t_target, q, v, err)
+    case ('erk')
+      call s%erk%advance(t_target, q, v, err)
     end select
   end subroutine stepper_advance
 
@@ -220,6 +237,8 @@ contains
       call s%bdf%restart(t, q, v, t_stop, t_lo, t_hi, err)
     case ('galpha')
       call s%galpha%restart(sys, t, q, v, t_lo, t_hi, err)
+    case ('erk')
+      call s%erk%restart(t, q, v, t_stop, t_lo, t_hi, err)
     end select
   end subroutine stepper_restart
 
@@ -231,12 +250,15 @@ contains
       call s%bdf%get_stats(stats)
     case ('galpha')
       call s%galpha%get_stats(stats)
+    case ('erk')
+      call s%erk%get_stats(stats)
     end select
   end subroutine stepper_stats
 
   subroutine stepper_finish(s)
     type(stepper_t), intent(inout) :: s
     call s%bdf%finish()
+    call s%erk%finish()
   end subroutine stepper_finish
 
 

@@ -41,11 +41,14 @@ module integrators_system
 
   !> Options common to all integrators; each method reads the ones that apply to it.
   type :: integrator_options_t
-    character(len=16) :: method = 'bdf'      !< 'bdf' (CVODE), 'galpha' (fixed step, ours)
+    !> 'bdf' (CVODE), 'galpha' (fixed step, ours), 'erk' (ARKODE explicit Runge-Kutta)
+    character(len=16) :: method = 'bdf'
     real(wp) :: rtol = 1.0e-6_wp              !< relative tolerance (adaptive methods)
     real(wp) :: atol = 1.0e-8_wp              !< absolute tolerance (adaptive methods)
     real(wp) :: max_step = 0.0_wp             !< largest step, 0 = no limit (adaptive methods)
     integer :: max_order = 5                  !< BDF order limit (1..5)
+    !> Order of the explicit Runge-Kutta pair: 2, 3, 4, 5, 6 or 8 (ARKODE's default tables)
+    integer :: erk_order = 5
     integer(i8) :: max_steps = 10000000_i8    !< step limit over the whole run
     character(len=16) :: jacobian = 'system'  !< 'system' (ode2_system_t%jacobian) or 'internal'
     real(wp) :: dt = 1.0e-3_wp                !< step of fixed-step methods

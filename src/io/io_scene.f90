@@ -13,8 +13,9 @@ module io_scene
   private
   public :: read_scene, load_scene, SCENE_GROUPS
 
-  character(len=8), parameter :: SCENE_GROUPS(12) = [character(len=8) :: 'scene', 'node', &
-    'link', 'hinge', 'truss', 'mass', 'force', 'motion', 'static', 'modal', 'dynamic', 'output']
+  character(len=9), parameter :: SCENE_GROUPS(13) = [character(len=9) :: 'scene', 'node', &
+    'link', 'hinge', 'truss', 'mass', 'force', 'motion', 'static', 'modal', 'dynamic', &
+    'reduction', 'output']
 
 contains
 
@@ -36,8 +37,8 @@ contains
     call file%check_known_groups(SCENE_GROUPS, err)
     if (.not. err%ok()) return
     do i = 1, size(SCENE_GROUPS)
-      if (any(SCENE_GROUPS(i) == [character(len=8) :: 'scene', 'static', 'modal', 'dynamic', &
-                                  'output']) .and. file%count(trim(SCENE_GROUPS(i))) > 1) then
+      if (any(SCENE_GROUPS(i) == [character(len=9) :: 'scene', 'static', 'modal', 'dynamic', &
+                                  'reduction', 'output']) .and. file%count(trim(SCENE_GROUPS(i))) > 1) then
         call err%set(ERR_INPUT, file%path // ': group &' // trim(SCENE_GROUPS(i)) // &
           ' may appear only once')
         return
@@ -65,6 +66,7 @@ contains
         case ('static'); call read_static(g, scene, err)
         case ('modal'); call read_modal(g, scene, err)
         case ('dynamic'); call read_dynamic(g, scene, err)
+        case ('reduction'); call read_reduction(g, scene, err)
         case ('output'); call read_output(g, scene, err)
         end select
         if (err%ok()) call g%check_all_used(err)
@@ -78,6 +80,8 @@ contains
       end do
     end if
     if (.not. allocated(scene%title)) scene%title = ''
+    if (scene%reduction%active .and. .not. scene%dynamic%active) call err%set(ERR_INPUT, &
+      file%path // ': group &reduction needs a &dynamic group (it reduces the dynamic analysis)')
   end subroutine read_scene
 
   ! Getter wrappers that keep the first error and skip work after it.
@@ -344,6 +348,7 @@ contains
       call rd_real(g, 'atol', d%atol, err, default=1.0e-8_wp)
       call rd_real(g, 'max_step', d%max_step, err, default=0.0_wp)
       call rd_int(g, 'max_order', d%max_order, err, default=5)
+      call rd_int(g, 'erk_order', d%erk_order, err, default=5)
       call rd_real(g, 'dt', d%dt, err, default=1.0e-3_wp)
       call rd_real(g, 'rho_inf', d%rho_inf, err, default=0.8_wp)
       call positive(g, 't_end', d%t_end, err)
@@ -353,9 +358,11 @@ contains
       call positive(g, 'max_step', d%max_step, err, zero_ok=.true.)
       call positive(g, 'dt', d%dt, err)
       if (.not. err%ok()) return
-      if (d%integrator /= 'bdf' .and. d%integrator /= 'galpha') then
+      if (all(d%integrator /= [character(len=6) :: 'bdf', 'galpha', 'erk'])) then
         call err%set(ERR_INPUT, g%where() // ': variable ''integrator'': ''' // d%integrator // &
-          ''' is not bdf or galpha')
+          ''' is not bdf, galpha or erk')
+      else if (all(d%erk_order /= [2, 3, 4, 5, 6, 8])) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''erk_order'' must be 2, 3, 4, 5, 6 or 8')
       else if (all(d%jacobian /= [character(len=10) :: 'linearised', 'fd', 'internal'])) then
         call err%set(ERR_INPUT, g%where() // ': variable ''jacobian'': ''' // d%jacobian // &
           ''' is not linearised, fd or internal')
@@ -369,6 +376,59 @@ contains
       end if
     end associate
   end subroutine read_dynamic
+
+  subroutine read_reduction(g, scene, err)
+    type(nml_group_t), intent(inout) :: g
+    type(scene_t), intent(inout) :: scene
+    type(error_t), intent(inout) :: err
+    type(error_t) :: e
+    integer :: n_given
+    associate (r => scene%reduction)
+      r%active = .true.
+      n_given = count([g%has('n_modes'), g%has('cutoff_hz'), g%has('auto_factor')])
+      if (n_given /= 1) then
+        call err%set(ERR_INPUT, g%where() // ': give exactly one of n_modes (a count), ' // &
+          'cutoff_hz (a frequency) or auto_factor (a multiple of the motion bandwidth)')
+        return
+      end if
+      if (g%has('n_modes')) then
+        r%selection = 'count'
+        call rd_int(g, 'n_modes', r%n_modes, err)
+        if (err%ok() .and. r%n_modes < 1) call err%set(ERR_INPUT, g%where() // &
+          ': variable ''n_modes'' must be at least 1')
+      else if (g%has('cutoff_hz')) then
+        r%selection = 'cutoff'
+        call rd_real(g, 'cutoff_hz', r%cutoff_hz, err)
+        call positive(g, 'cutoff_hz', r%cutoff_hz, err)
+      else
+        r%selection = 'auto'
+        call rd_real(g, 'auto_factor', r%auto_factor, err)
+        call positive(g, 'auto_factor', r%auto_factor, err)
+      end if
+      call rd_real(g, 'basis_time', r%basis_time, err, default=0.0_wp)
+      if (g%has('basis_prescribed') .and. err%ok()) then
+        call g%get_real_array('basis_prescribed', r%basis_prescribed, e)
+        if (.not. e%ok()) err = e
+      end if
+      call rd_logical(g, 'static_correction', r%static_correction, err, default=.false.)
+      call rd_string(g, 'update', r%update, err, default='none', lower=.true.)
+      call rd_real(g, 'mac_threshold', r%mac_threshold, err, default=0.9_wp)
+      call rd_string(g, 'eigensolver', r%eigensolver, err, default='auto', lower=.true.)
+      if (.not. err%ok()) return
+      if (all(r%update /= [character(len=8) :: 'none', 'interval', 'mac'])) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''update'': ''' // r%update // &
+          ''' is not none, interval or mac')
+      else if (r%update /= 'none') then
+        call rd_real(g, 'update_interval', r%update_interval, err)
+        call positive(g, 'update_interval', r%update_interval, err)
+      end if
+      if (err%ok() .and. .not. (r%mac_threshold > 0 .and. r%mac_threshold <= 1)) &
+        call err%set(ERR_INPUT, g%where() // ': variable ''mac_threshold'' must be in (0, 1]')
+      if (err%ok() .and. all(r%eigensolver /= [character(len=6) :: 'auto', 'lapack', 'arpack'])) &
+        call err%set(ERR_INPUT, g%where() // ': variable ''eigensolver'': ''' // &
+          r%eigensolver // ''' is not auto, lapack or arpack')
+    end associate
+  end subroutine read_reduction
 
   subroutine read_output(g, scene, err)
     type(nml_group_t), intent(inout) :: g

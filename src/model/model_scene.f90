@@ -6,7 +6,7 @@ module model_scene
   implicit none
   private
   public :: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
-    force_rec_t, motion_rec_t, static_rec_t, modal_rec_t, dynamic_rec_t, label_t
+    force_rec_t, motion_rec_t, static_rec_t, modal_rec_t, dynamic_rec_t, reduction_rec_t, label_t
 
   type :: label_t
     character(len=:), allocatable :: s
@@ -75,9 +75,25 @@ module model_scene
     real(wp) :: t_end = 0.0_wp, output_dt = 1.0e-3_wp
     character(len=:), allocatable :: integrator, jacobian
     real(wp) :: rtol = 1.0e-6_wp, atol = 1.0e-8_wp, max_step = 0.0_wp
-    integer :: max_order = 5
+    integer :: max_order = 5, erk_order = 5
     real(wp) :: dt = 1.0e-3_wp, rho_inf = 0.8_wp
   end type dynamic_rec_t
+
+  !> A reduced dynamic analysis: dq_dy = V eta (docs/input.md, &reduction).
+  type :: reduction_rec_t
+    logical :: active = .false.
+    !> How k is chosen: 'count' (n_modes), 'cutoff' (cutoff_hz) or 'auto' (auto_factor times
+    !> the bandwidth of the prescribed motions).
+    character(len=:), allocatable :: selection
+    integer :: n_modes = 0
+    real(wp) :: cutoff_hz = 0.0_wp, auto_factor = 0.0_wp
+    real(wp) :: basis_time = 0.0_wp
+    real(wp), allocatable :: basis_prescribed(:)   !< optional, overrides basis_time
+    logical :: static_correction = .false.
+    character(len=:), allocatable :: update        !< 'none', 'interval' or 'mac'
+    real(wp) :: update_interval = 0.0_wp, mac_threshold = 0.9_wp
+    character(len=:), allocatable :: eigensolver   !< 'auto', 'lapack' or 'arpack'
+  end type reduction_rec_t
 
   type :: scene_t
     character(len=:), allocatable :: title
@@ -92,6 +108,7 @@ module model_scene
     type(static_rec_t) :: static
     type(modal_rec_t) :: modal
     type(dynamic_rec_t) :: dynamic
+    type(reduction_rec_t) :: reduction
     type(label_t), allocatable :: output_nodes(:)
   end type scene_t
 end module model_scene

@@ -1,10 +1,11 @@
 !> Modal analysis at a configuration with the prescribed modes locked:
-!>   K_T v = omega^2 M0 v   on the dynamic coordinates (LAPACK dsygvd).
+!>   K_T v = omega^2 M0 v   on the dynamic coordinates (reduction_eigen: dense LAPACK dsygvd
+!> or ARPACK shift-invert Lanczos for the lowest modes of large models).
 !> The eigenvectors come back M0-normalised; they are the basis of the reduced models.
 module reduction_modal
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_NUMERIC, ERR_INPUT
-  use core_linalg, only: sym_gen_eig
+  use core_error, only: error_t, ERR_INPUT
+  use reduction_eigen, only: lowest_modes
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: tangent_stiffness
   implicit none
@@ -19,40 +20,50 @@ module reduction_modal
     real(wp), allocatable :: shapes(:, :)     !< (n_dy, n_modes), M0-normalised
     real(wp), allocatable :: node_shapes(:, :, :)  !< (n_x, n_modes) nodal: DF_dy v
     real(wp), allocatable :: m0(:, :), k0(:, :)
+    character(len=8) :: solver = ''            !< eigensolver that ran: 'lapack' or 'arpack'
   end type modal_result_t
 
 contains
 
-  !> n_modes = 0 asks for all of them.
-  subroutine modal_analysis(dyn, t, q_dy, n_modes, res, err)
+  !> n_modes = 0 asks for all of them (always LAPACK). solver: 'auto' (default), 'lapack' or
+  !> 'arpack', as reduction_eigen's lowest_modes.
+  subroutine modal_analysis(dyn, t, q_dy, n_modes, res, err, solver)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     integer, intent(in) :: n_modes
     type(modal_result_t), intent(out) :: res
     type(error_t), intent(out) :: err
+    character(len=*), intent(in), optional :: solver
     real(wp), allocatable :: lambda(:), v(:, :)
-    integer :: n, nm, info
+    character(len=:), allocatable :: name
+    integer :: n, nm
     n = dyn%model%n_dy
     nm = n_modes
-    if (nm == 0) nm = n
+    name = 'auto'
+    if (present(solver)) name = trim(adjustl(solver))
+    ! All modes: a Lanczos method has nothing to gain and ARPACK cannot deliver all of them.
+    ! (An unknown name is left for lowest_modes to report.)
+    if (nm == 0) then
+      nm = n
+      if (any(name == [character(len=6) :: 'auto', 'arpack'])) name = 'lapack'
+    end if
     if (nm > n) then
       call err%set(ERR_INPUT, 'group &modal: n_modes is larger than the number of dynamic ' // &
         'coordinates')
       return
     end if
-    allocate(res%k0(n, n), lambda(n), v(n, n))
+    allocate(res%k0(n, n))
     call tangent_stiffness(dyn, t, q_dy, res%k0, err)
     if (.not. err%ok()) return
     res%m0 = dyn%mbar
-    call sym_gen_eig(res%k0, res%m0, lambda, v, info)
-    if (info /= 0) then
-      call err%set(ERR_NUMERIC, 'modal analysis: the eigensolver failed (mass matrix not ' // &
-        'positive definite?)')
+    call lowest_modes(res%k0, res%m0, nm, name, lambda, v, err, res%solver)
+    if (.not. err%ok()) then
+      call err%prefix('modal analysis: ')
       return
     end if
-    res%omega2 = lambda(1:nm)
+    res%omega2 = lambda
     res%frequency_hz = sign(sqrt(abs(res%omega2)), res%omega2) / TWO_PI
-    res%shapes = v(:, 1:nm)
+    res%shapes = v
     allocate(res%node_shapes(dyn%model%n_x, nm, 1))
     res%node_shapes(:, :, 1) = matmul(dyn%kin%df(:, dyn%model%n_rh + 1:), res%shapes)
   end subroutine modal_analysis

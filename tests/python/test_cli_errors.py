@@ -126,6 +126,57 @@ CASES = {
 }
 
 
+FOUR_BAR = """
+&node label = 'o1', x = 0, y = 0, fixed = .true. /
+&node label = 'a', x = 0.5, y = 0 /
+&node label = 'b', x = 1.0, y = 0.6 /
+&node label = 'o2', x = 1.0, y = 0, fixed = .true. /
+&link label = 'crank', from = 'o1', to = 'a', E = 7e10, A = 1e-4, I = 1e-9, rho = 2700 /
+&link label = 'coupler', from = 'a', to = 'b', E = 7e10, A = 1e-4, I = 1e-9, rho = 2700 /
+&link label = 'rocker', from = 'b', to = 'o2', E = 7e10, A = 1e-4, I = 1e-9, rho = 2700 /
+&hinge label = 'drive', node = 'o1', link = 'crank', mode = 'prescribed', motion = 'm' /
+&hinge label = 'ha', node = 'a', link = 'coupler', mode = 'released' /
+&hinge label = 'hb', node = 'b', link = 'rocker', mode = 'released' /
+&hinge label = 'ho2', node = 'o2', link = 'rocker', mode = 'released' /
+&motion label = 'm', law = 'cubic', end = 3.14159, duration = 1.0 /
+&dynamic t_end = 0.01, output_dt = 1e-3 /
+"""
+
+RED = GOOD + "&reduction {} /\n"
+CASES.update({
+    "reduction k too large": (RED.format("n_modes = 5"), ["&reduction", "n_modes = 5",
+                                                          "number of dynamic coordinates (4)"]),
+    "reduction k zero": (RED.format("n_modes = 0"), ["&reduction", "'n_modes'", "at least 1"]),
+    "reduction two selections": (RED.format("n_modes = 1, cutoff_hz = 100"),
+                                 ["&reduction", "exactly one"]),
+    "reduction no selection": (RED.format(""), ["&reduction", "exactly one"]),
+    "reduction without dynamic": (RED.format("n_modes = 1").replace(
+        "&dynamic t_end = 0.02, output_dt = 1e-3 /", ""), ["&reduction", "&dynamic"]),
+    "reduction basis does not solve": (FOUR_BAR + "&reduction n_modes = 1, basis_time = 1.0 /\n",
+                                       ["&reduction", "basis_time", "did not converge"]),
+    "reduction basis_prescribed count": (RED.format("n_modes = 1, basis_prescribed = 0.1, 0.2"),
+                                         ["'basis_prescribed'", "1 values", "got 2"]),
+    "reduction update without interval": (RED.format("n_modes = 1, update = 'mac'"),
+                                          ["&reduction", "'update_interval'"]),
+    "reduction unknown update": (RED.format("n_modes = 1, update = 'often'"),
+                                 ["'update'", "often"]),
+    "reduction unknown eigensolver": (RED.format("n_modes = 1, eigensolver = 'magma'"),
+                                      ["'eigensolver'", "magma"]),
+    "reduction cutoff below lowest mode": (RED.format("cutoff_hz = 1e-3"),
+                                           ["no mode below", "cutoff_hz"]),
+    "reduction bad mac threshold": (RED.format("n_modes = 1, mac_threshold = 1.5"),
+                                    ["'mac_threshold'"]),
+    "reduction auto without motion": (RED.format("auto_factor = 2").replace(
+        "law = 'cubic'", "law = 'constant'"), ["auto_factor", "constant"]),
+    "reduction static correction without stiffness": (
+        RED.format("n_modes = 1, static_correction = .true.").replace(
+            "mode = 'prescribed', motion = 'm1'", "mode = 'dynamic'"),
+        ["static_correction", "positive definite"]),
+    "erk order": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'erk', erk_order = 7"),
+                  ["'erk_order'"]),
+})
+
+
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_bad_input(tmp_path, name):
     text, fragments = CASES[name]

@@ -1,0 +1,186 @@
+!> The basis of a reduced model, dq_dy = V eta (formulation.md section 7): the M0-normalised
+!> lowest modes at a configuration, how many of them to keep, and how to follow them when the
+!> configuration changes (mode tracking by the modal assurance criterion, MAC).
+module reduction_basis
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
+  use core_strings, only: int_str, real_str
+  use core_linalg, only: chol_factor
+  use dynamics_system, only: dynamics_t
+  use reduction_modal, only: modal_result_t, modal_analysis
+  implicit none
+  private
+  public :: basis_spec_t, basis_t, compute_basis, track_modes, BANDWIDTH_FRACTION
+
+  !> Share of the prescribed acceleration's energy that defines the motion's bandwidth.
+  real(wp), parameter :: BANDWIDTH_FRACTION = 0.99_wp
+
+  !> How the basis is chosen (the &reduction group).
+  type :: basis_spec_t
+    character(len=8) :: selection = 'count'   !< 'count', 'cutoff' or 'auto'
+    integer :: n_modes = 0
+    real(wp) :: cutoff_hz = 0.0_wp
+    real(wp) :: auto_factor = 0.0_wp
+    character(len=8) :: eigensolver = 'auto'
+  end type basis_spec_t
+
+  type :: basis_t
+    real(wp), allocatable :: v(:, :)           !< (n_dy, k), M0-normalised
+    real(wp), allocatable :: frequency_hz(:)   !< (k) at the basis configuration
+    real(wp), allocatable :: q_ref(:)          !< q_dy = q_ref + V eta
+    !> Cholesky factor of the tangent stiffness K0, for the static correction; empty when K0
+    !> is not positive definite (a mechanism mode), which disables the correction.
+    real(wp), allocatable :: k_chol(:, :)
+    real(wp) :: time = 0.0_wp                  !< when the basis was made (trajectory time)
+    real(wp) :: cutoff_hz = 0.0_wp             !< cut-off used by 'cutoff' and 'auto'
+    real(wp) :: bandwidth_hz = 0.0_wp          !< motion bandwidth used by 'auto'
+    character(len=:), allocatable :: reason    !< why k modes, in words
+    character(len=8) :: solver = ''
+  contains
+    procedure :: k => basis_k
+  end type basis_t
+
+contains
+
+  integer function basis_k(this)
+    class(basis_t), intent(in) :: this
+    basis_k = 0
+    if (allocated(this%v)) basis_k = size(this%v, 2)
+  end function basis_k
+
+  !> The basis at (t, q_dy) of `dyn` with the prescribed modes held (at `held` when given,
+  !> else at their motion's value at t). k follows the spec. The kinematic state of dyn is
+  !> restored afterwards so that a run can go on from where it was.
+  subroutine compute_basis(dyn, spec, t, q_dy, held, basis, err)
+    type(dynamics_t), intent(inout) :: dyn
+    type(basis_spec_t), intent(in) :: spec
+    real(wp), intent(in) :: t, q_dy(:)
+    real(wp), intent(in), optional :: held(:)
+    type(basis_t), intent(out) :: basis
+    type(error_t), intent(out) :: err
+    type(modal_result_t) :: modes
+    real(wp), allocatable :: x_saved(:)
+    real(wp) :: cutoff
+    integer :: k, n_dy, nev, info
+
+    n_dy = dyn%model%n_dy
+    if (spec%selection == 'count' .and. (spec%n_modes < 1 .or. spec%n_modes > n_dy)) then
+      call err%set(ERR_INPUT, 'group &reduction: n_modes = ' // int_str(spec%n_modes) // &
+        ' must be between 1 and the number of dynamic coordinates (' // int_str(n_dy) // ')')
+      return
+    end if
+    x_saved = dyn%kin%x
+    if (present(held)) dyn%held_rh = held
+    call choose_cutoff(dyn, spec, basis, err)
+    if (.not. err%ok()) return
+    cutoff = basis%cutoff_hz
+    ! Ask for enough modes to decide k; with a cut-off, double until one lies above it.
+    nev = min(n_dy, 8)
+    if (spec%selection == 'count') nev = spec%n_modes
+    do
+      call modal_analysis(dyn, t, q_dy, nev, modes, err, solver=spec%eigensolver)
+      if (.not. err%ok()) exit
+      if (spec%selection == 'count' .or. nev == n_dy) exit
+      if (modes%frequency_hz(nev) > cutoff) exit
+      nev = min(n_dy, 2 * nev)
+    end do
+    if (allocated(dyn%held_rh)) deallocate(dyn%held_rh)
+    dyn%kin%x = x_saved
+    if (.not. err%ok()) return
+
+    select case (spec%selection)
+    case ('count')
+      k = spec%n_modes
+      basis%reason = 'n_modes = ' // int_str(k) // ' given'
+    case default
+      k = count(modes%frequency_hz <= cutoff)
+      basis%reason = int_str(k) // ' of ' // int_str(n_dy) // ' modes below ' // &
+        real_str(cutoff) // ' Hz'
+      if (spec%selection == 'auto') basis%reason = basis%reason // ' = auto_factor ' // &
+        real_str(spec%auto_factor) // ' x motion bandwidth ' // real_str(basis%bandwidth_hz) &
+        // ' Hz (' // real_str(100 * BANDWIDTH_FRACTION) // '% of the acceleration energy)'
+      if (k == 0 .and. spec%selection == 'cutoff') then
+        call err%set(ERR_INPUT, 'group &reduction: no mode below cutoff_hz = ' // &
+          real_str(cutoff) // ' Hz (the lowest is ' // real_str(modes%frequency_hz(1)) // &
+          ' Hz): raise cutoff_hz or give n_modes')
+        return
+      end if
+      if (k == 0) then
+        k = 1
+        basis%reason = basis%reason // '; none below it, so the lowest mode is kept'
+      end if
+    end select
+    basis%v = modes%shapes(:, 1:k)
+    basis%frequency_hz = modes%frequency_hz(1:k)
+    basis%q_ref = q_dy
+    basis%time = t
+    basis%solver = modes%solver
+    basis%k_chol = modes%k0
+    call chol_factor(basis%k_chol, info)
+    if (info /= 0) deallocate(basis%k_chol)
+  end subroutine compute_basis
+
+  !> The cut-off frequency of 'cutoff' and 'auto' selections.
+  subroutine choose_cutoff(dyn, spec, basis, err)
+    type(dynamics_t), intent(in) :: dyn
+    type(basis_spec_t), intent(in) :: spec
+    type(basis_t), intent(inout) :: basis
+    type(error_t), intent(inout) :: err
+    integer :: i
+    select case (spec%selection)
+    case ('cutoff')
+      basis%cutoff_hz = spec%cutoff_hz
+    case ('auto')
+      basis%bandwidth_hz = 0.0_wp
+      do i = 1, dyn%model%n_motions
+        basis%bandwidth_hz = max(basis%bandwidth_hz, &
+          dyn%model%motions(i)%bandwidth_hz(BANDWIDTH_FRACTION))
+      end do
+      if (.not. basis%bandwidth_hz > 0) then
+        call err%set(ERR_INPUT, 'group &reduction: auto_factor needs a prescribed motion ' // &
+          'that moves (all motions are constant): give n_modes or cutoff_hz')
+        return
+      end if
+      basis%cutoff_hz = spec%auto_factor * basis%bandwidth_hz
+    case ('count')
+    case default
+      call err%set(ERR_INPUT, 'group &reduction: unknown selection ''' // &
+        trim(spec%selection) // '''')
+    end select
+  end subroutine choose_cutoff
+
+  !> Order and signs of the candidate modes w (n_dy, nc) to follow the current basis v
+  !> (n_dy, k): column i of the result is the candidate with the largest MAC against v(:, i)
+  !> (each used once), with its sign flipped so that v(:, i)^T M w_i > 0. `mac(i)` is that MAC.
+  subroutine track_modes(v, w, m, tracked, mac, pick, err)
+    real(wp), intent(in) :: v(:, :), w(:, :), m(:, :)
+    real(wp), intent(out) :: tracked(:, :)
+    real(wp), intent(out) :: mac(:)
+    integer, intent(out) :: pick(:)
+    type(error_t), intent(inout) :: err
+    real(wp) :: cross(size(v, 2), size(w, 2)), nv(size(v, 2)), nw(size(w, 2))
+    real(wp) :: macs(size(v, 2), size(w, 2))
+    logical :: free(size(w, 2))
+    integer :: i, j
+    if (size(w, 2) < size(v, 2)) then
+      call err%set(ERR_NUMERIC, 'mode tracking: fewer candidate modes than basis vectors')
+      return
+    end if
+    cross = matmul(transpose(v), matmul(m, w))
+    do i = 1, size(v, 2)
+      nv(i) = dot_product(v(:, i), matmul(m, v(:, i)))
+    end do
+    do j = 1, size(w, 2)
+      nw(j) = dot_product(w(:, j), matmul(m, w(:, j)))
+    end do
+    macs = cross**2 / spread(nv, 2, size(w, 2)) / spread(nw, 1, size(v, 2))
+    free = .true.
+    do i = 1, size(v, 2)
+      j = maxloc(macs(i, :), dim=1, mask=free)
+      free(j) = .false.
+      pick(i) = j
+      mac(i) = macs(i, j)
+      tracked(:, i) = sign(1.0_wp, cross(i, j)) * w(:, j)
+    end do
+  end subroutine track_modes
+end module reduction_basis

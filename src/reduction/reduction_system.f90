@@ -1,0 +1,197 @@
+!> A reduced model (formulation.md section 7): q_dy = q_ref + V eta, the full non-linear
+!> equations of motion evaluated by the full model and projected with V^T:
+!>     (V^T Mbar V) eta'' = V^T gen_force.
+!> It is an `ode2_system_t` in eta, so every integrator of flexmor advances it.
+!>
+!> Along the reduced trajectory it also measures what the reduction leaves out: the residual of
+!> the full equations r = gen_force - Mbar V eta'' (zero when V spans all modes), reported as
+!> its energy norm sqrt(r^T Mbar^-1 r), and as a displacement estimate: K0^-1 r is the
+!> quasi-static response of the dropped modes (mode-acceleration method), whose largest nodal
+!> translation is the estimate, and which the static correction adds to the output.
+module reduction_system
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_MODEL
+  use core_linalg, only: chol_factor, chol_solve
+  use model_system, only: model_t
+  use dynamics_system, only: dynamics_t, check_finite
+  use integrators_system, only: ode2_system_t, system_fd_jacobian
+  use reduction_basis, only: basis_t
+  implicit none
+  private
+  public :: reduced_t
+
+  type, extends(ode2_system_t) :: reduced_t
+    type(dynamics_t) :: dyn                   !< the full model, evaluated at q_ref + V eta
+    type(basis_t) :: basis
+    logical :: static_correction = .false.
+    !> Output index of each record call of the current integration (0: not an output time,
+    !> e.g. a basis update that falls between outputs).
+    integer, allocatable :: out_index(:)
+    real(wp), allocatable :: eta_hist(:, :), eta_dot_hist(:, :)
+    real(wp), allocatable :: residual(:)      !< sqrt(r^T Mbar^-1 r) at the output times
+    real(wp), allocatable :: estimate(:)      !< largest nodal translation of K0^-1 r [m]
+    logical :: has_estimate = .true.          !< false once a basis has no definite K0
+    !> State at the last record call: where the next segment starts.
+    real(wp), allocatable :: last_eta(:), last_eta_dot(:)
+  contains
+    procedure :: accel => red_accel
+    procedure :: record => red_record
+    procedure :: jacobian => red_jacobian
+    procedure :: full_state => red_full_state
+    procedure :: allocate_history => red_allocate_history
+  end type reduced_t
+
+contains
+
+  !> The full model's coordinates and velocities of a reduced state.
+  subroutine red_full_state(this, eta, eta_dot, q_dy, v_dy)
+    class(reduced_t), intent(in) :: this
+    real(wp), intent(in) :: eta(:), eta_dot(:)
+    real(wp), intent(out) :: q_dy(:), v_dy(:)
+    q_dy = this%basis%q_ref + matmul(this%basis%v, eta)
+    v_dy = matmul(this%basis%v, eta_dot)
+  end subroutine red_full_state
+
+  subroutine red_allocate_history(this, nt)
+    class(reduced_t), intent(inout) :: this
+    integer, intent(in) :: nt
+    integer :: k
+    k = this%basis%k()
+    call this%dyn%allocate_history(nt)
+    if (allocated(this%eta_hist)) deallocate(this%eta_hist, this%eta_dot_hist, this%residual, &
+      this%estimate)
+    allocate(this%eta_hist(k, nt), this%eta_dot_hist(k, nt), this%residual(nt))
+    allocate(this%estimate(nt))
+    this%estimate = 0.0_wp
+  end subroutine red_allocate_history
+
+  !> Reduced accelerations; leaves the full model's mbar and gen_force of this state.
+  subroutine reduced_accel(this, t, eta, eta_dot, a, err)
+    class(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: t, eta(:), eta_dot(:)
+    real(wp), intent(out) :: a(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
+    real(wp) :: mr(size(eta), size(eta))
+    integer :: info
+    call this%full_state(eta, eta_dot, q_dy, v_dy)
+    call this%dyn%assemble(t, q_dy, v_dy, err)
+    if (.not. err%ok()) return
+    associate (v => this%basis%v)
+      mr = matmul(transpose(v), matmul(this%dyn%mbar, v))
+      a = matmul(this%dyn%gen_force, v)
+    end associate
+    call chol_factor(mr, info)
+    if (info /= 0) then
+      call err%set(ERR_MODEL, 'the reduced mass matrix V^T Mbar V is singular')
+      return
+    end if
+    call chol_solve(mr, a)
+    call check_finite(a, t, err)
+  end subroutine reduced_accel
+
+  subroutine red_accel(this, t, q, v, a, status)
+    class(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: a(:)
+    integer, intent(out) :: status
+    type(error_t) :: err
+    call reduced_accel(this, t, q, v, a, err)
+    call this%dyn%report(err, status)
+    if (status /= 0) a = 0.0_wp
+  end subroutine red_accel
+
+  !> V^T of the full model's linearised Jacobian: -(V^T Mbar V)^-1 V^T [K0, D0] V.
+  subroutine red_jacobian(this, t, q, v, dadq, dadv, status)
+    class(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
+    integer, intent(out) :: status
+    real(wp) :: a(size(q)), mr(size(q), size(q))
+    integer :: j, info
+    if (this%dyn%jacobian_kind == 'fd') then
+      call system_fd_jacobian(this, t, q, v, dadq, dadv, status)
+      return
+    end if
+    call this%accel(t, q, v, a, status)
+    if (status /= 0) return
+    associate (b => this%basis%v)
+      mr = matmul(transpose(b), matmul(this%dyn%mbar, b))
+      dadq = -matmul(transpose(b), matmul(this%dyn%k_dd, b))
+      dadv = -matmul(transpose(b), matmul(this%dyn%d_dd, b))
+    end associate
+    call chol_factor(mr, info)
+    do j = 1, size(q)
+      call chol_solve(mr, dadq(:, j))
+      call chol_solve(mr, dadv(:, j))
+    end do
+  end subroutine red_jacobian
+
+  !> Store the reduced state, the full state it stands for (statically corrected when asked)
+  !> and the error measures, at output k of the current integration.
+  subroutine red_record(this, k, t, q, v, status)
+    class(reduced_t), intent(inout) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t, q(:), v(:)
+    integer, intent(out) :: status
+    real(wp) :: a(size(q)), q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
+    real(wp) :: r(this%dyn%model%n_dy), dq(this%dyn%model%n_dy)
+    integer :: kg
+    type(error_t) :: err
+    this%last_eta = q
+    this%last_eta_dot = v
+    status = 0
+    kg = this%out_index(k)
+    if (kg == 0) return
+    call reduced_accel(this, t, q, v, a, err)
+    if (err%ok()) call full_residual(this, a, r, this%residual(kg), err)
+    call this%dyn%report(err, status)
+    if (status /= 0) return
+    call this%full_state(q, v, q_dy, v_dy)
+    if (allocated(this%basis%k_chol)) then
+      dq = r
+      call chol_solve(this%basis%k_chol, dq)
+      this%estimate(kg) = largest_translation(this%dyn%model, matmul(this%dyn%kin%df(:, &
+        this%dyn%model%n_rh + 1:), dq))
+      if (this%static_correction) q_dy = q_dy + dq
+    else
+      this%has_estimate = .false.
+    end if
+    this%eta_hist(:, kg) = q
+    this%eta_dot_hist(:, kg) = v
+    call this%dyn%record(kg, t, q_dy, v_dy, status)
+  end subroutine red_record
+
+  !> r = gen_force - Mbar V a_eta and its norm sqrt(r^T Mbar^-1 r), from the last assembly.
+  subroutine full_residual(this, a_eta, r, norm, err)
+    type(reduced_t), intent(in) :: this
+    real(wp), intent(in) :: a_eta(:)
+    real(wp), intent(out) :: r(:), norm
+    type(error_t), intent(inout) :: err
+    real(wp) :: chol(size(r), size(r)), s(size(r))
+    integer :: info
+    r = this%dyn%gen_force - matmul(this%dyn%mbar, matmul(this%basis%v, a_eta))
+    chol = this%dyn%mbar
+    call chol_factor(chol, info)
+    if (info /= 0) then
+      call err%set(ERR_MODEL, 'error indicator: the full mass matrix is singular')
+      return
+    end if
+    s = r
+    call chol_solve(chol, s)
+    norm = sqrt(max(0.0_wp, dot_product(r, s)))
+  end subroutine full_residual
+
+  !> Largest translation sqrt(dx^2 + dy^2) over the nodes of a nodal displacement dx.
+  pure real(wp) function largest_translation(model, dx) result(d)
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: dx(:)
+    integer :: i, ic(3)
+    d = 0.0_wp
+    do i = 1, size(model%node_coord, 2)
+      ic = model%node_coord(:, i)
+      if (ic(1) < 1 .or. ic(2) < 1) cycle
+      d = max(d, hypot(dx(ic(1)), dx(ic(2))))
+    end do
+  end function largest_translation
+end module reduction_system

@@ -1,0 +1,308 @@
+!> Test systems for the explicit Runge-Kutta method: the oscillator of test_oscillators with a
+!> force switched off at t_b (a jump of a(t) to be given as a breakpoint), and one whose accel
+!> fails once after t_fail with a chosen status.
+module erk_test_systems
+  use core_kinds, only: wp
+  use test_oscillators, only: oscillator_t
+  implicit none
+  private
+  public :: switched_oscillator_t, failing_oscillator_t
+
+  !> q'' = -omega^2 q + F(t), F = force before t_b and 0 after, from rest at q = 0.
+  type, extends(oscillator_t) :: switched_oscillator_t
+    real(wp) :: force = 20, t_b = 0.37_wp
+    integer :: n_evals_at_t_b = 0
+  contains
+    procedure :: accel => switched_accel
+    procedure :: record => switched_record
+  end type switched_oscillator_t
+
+  !> The oscillator whose accel returns `status_code` on its first `n_failures` calls after
+  !> t_fail.
+  type, extends(oscillator_t) :: failing_oscillator_t
+    real(wp) :: t_fail = 0.55_wp
+    integer :: status_code = 0, n_failures = 0
+  contains
+    procedure :: accel => failing_accel
+  end type failing_oscillator_t
+
+contains
+
+  subroutine switched_accel(this, t, q, v, a, status)
+    class(switched_oscillator_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: a(:)
+    integer, intent(out) :: status
+    if (.not. abs(t - this%t_b) > 0) this%n_evals_at_t_b = this%n_evals_at_t_b + 1
+    a = -this%omega**2 * q
+    if (t < this%t_b) a = a + this%force
+    status = 0
+  end subroutine switched_accel
+
+  !> Error against the exact solution: forced response, then free vibration from t_b.
+  subroutine switched_record(this, k, t, q, v, status)
+    class(switched_oscillator_t), intent(inout) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t, q(:), v(:)
+    integer, intent(out) :: status
+    real(wp) :: w, q_static, q_b, v_b, q_exact, v_exact, s
+    w = this%omega
+    q_static = this%force / w**2
+    ! State at min(t, t_b) of the forced response, then free vibration for s = t - t_b > 0.
+    q_b = q_static * (1 - cos(w * min(t, this%t_b)))
+    v_b = q_static * w * sin(w * min(t, this%t_b))
+    s = max(t - this%t_b, 0.0_wp)
+    q_exact = q_b * cos(w * s) + v_b / w * sin(w * s)
+    v_exact = -q_b * w * sin(w * s) + v_b * cos(w * s)
+    this%max_error = max(this%max_error, abs(q(1) - q_exact) + abs(v(1) - v_exact) / w)
+    this%n_records = this%n_records + 1
+    status = 0
+  end subroutine switched_record
+
+  subroutine failing_accel(this, t, q, v, a, status)
+    class(failing_oscillator_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: a(:)
+    integer, intent(out) :: status
+    a = -this%omega**2 * q
+    status = 0
+    if (t > this%t_fail .and. this%n_failures > 0) then
+      this%n_failures = this%n_failures - 1
+      status = this%status_code
+      a = 0
+    end if
+  end subroutine failing_accel
+end module erk_test_systems
+
+!> ARKODE's explicit Runge-Kutta method ('erk') through the driver: accuracy follows rtol,
+!> higher orders take fewer steps, breakpoints restart it, status codes and bad options are
+!> handled as for the other methods.
+program test_integrators_erk
+  use core_kinds, only: wp, i8
+  use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
+  use core_strings, only: int_str
+  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_driver, only: integrate
+  use test_oscillators, only: oscillator_t
+  use erk_test_systems, only: switched_oscillator_t, failing_oscillator_t
+  use testing, only: suite_t
+  implicit none
+  type(suite_t) :: suite
+  real(wp), allocatable :: t_out(:)
+  real(wp) :: no_breakpoints(0)
+  integer :: i
+
+  call suite%init('integrators: explicit Runge-Kutta (ARKODE ERKStep)')
+  t_out = [(0.125_wp * i, i = 0, 16)]
+  call check_accuracy()
+  call check_dense_output()
+  call check_orders()
+  call check_bad_options()
+  t_out = [(0.1_wp * i, i = 0, 10)]
+  call check_breakpoint()
+  call check_recoverable()
+  call check_repeated_recoverable()
+  call check_fatal()
+  call check_step_limit()
+  call suite%finish()
+
+contains
+
+  subroutine run(opts, times, sys, stats, err)
+    type(integrator_options_t), intent(in) :: opts
+    real(wp), intent(in) :: times(:)
+    type(oscillator_t), intent(out) :: sys
+    type(integrator_stats_t), intent(out) :: stats
+    type(error_t), intent(out) :: err
+    character(len=120) :: line
+    sys%t_expected = times
+    call integrate(sys, opts, times, [1.0_wp], [0.0_wp], no_breakpoints, stats, err)
+    write(line, '(a,i0,a,es8.1,a,i0,a,es9.2,a,i0,a,i0,a,i0)') 'erk order ', opts%erk_order, &
+      ' rtol', opts%rtol, ', ', size(times), ' outputs: error', sys%max_error, ', steps ', &
+      stats%n_steps, ', accel ', stats%n_rhs_evals, ', err test fails ', stats%n_err_test_fails
+    write(*, '(4x,a)') trim(line)
+  end subroutine run
+
+  subroutine check_accuracy()
+    type(integrator_options_t) :: opts
+    type(oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    real(wp) :: errors(3), rtols(3)
+    integer :: i
+
+    rtols = [1.0e-4_wp, 1.0e-6_wp, 1.0e-8_wp]
+    do i = 1, 3
+      opts = integrator_options_t(method='erk', rtol=rtols(i), atol=1.0e-2_wp * rtols(i))
+      call run(opts, t_out, sys, stats, err)
+      call suite%check(err%ok(), 'erk runs at rtol ' // es(rtols(i)))
+      errors(i) = sys%max_error
+      call suite%check(sys%n_records == size(t_out) .and. sys%times_exact, &
+        'erk records every output time exactly')
+      call suite%check(stats%n_steps > 0 .and. stats%n_rhs_evals > stats%n_steps .and. &
+        stats%n_restarts == 0 .and. stats%n_jac_evals == 0 .and. stats%n_nonlin_fails == 0, &
+        'erk counters are filled')
+      call suite%check(errors(i) < 200 * rtols(i), 'erk error is of the order of rtol')
+    end do
+    call suite%check(errors(2) < 0.1_wp * errors(1) .and. errors(3) < 0.1_wp * errors(2), &
+      'erk error shrinks with rtol')
+  end subroutine check_accuracy
+
+  !> Many outputs per step: all but the last come from ARKODE's interpolant, the last one
+  !> (the stop time) from the step itself.
+  subroutine check_dense_output()
+    type(integrator_options_t) :: opts
+    type(oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    opts = integrator_options_t(method='erk', rtol=1.0e-6_wp, atol=1.0e-8_wp)
+    call run(opts, [(1.0e-3_wp * i, i = 0, 2000)], sys, stats, err)
+    call suite%check(err%ok() .and. sys%n_records == 2001 .and. sys%times_exact, &
+      'erk records 2001 output times')
+    call suite%check(stats%n_steps < 200, 'erk steps over many outputs at once')
+    call suite%check(sys%max_error < 200 * opts%rtol, 'erk is as accurate between steps')
+  end subroutine check_dense_output
+
+  !> Each order's own accuracy, at the end time (a step end, no interpolation), and its cost.
+  subroutine check_orders()
+    integer, parameter :: orders(6) = [2, 3, 4, 5, 6, 8]
+    type(integrator_options_t) :: opts
+    type(oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    integer(i8) :: steps(size(orders))
+    integer :: i
+
+    do i = 1, size(orders)
+      opts = integrator_options_t(method='erk', rtol=1.0e-8_wp, atol=1.0e-10_wp, &
+        erk_order=orders(i))
+      call run(opts, [0.0_wp, 2.0_wp], sys, stats, err)
+      call suite%check(err%ok() .and. sys%max_error < 20 * opts%rtol, &
+        'erk order ' // int_str(orders(i)) // ' is accurate')
+      steps(i) = stats%n_steps
+    end do
+    call suite%check(steps(6) < steps(1), 'erk order 8 takes fewer steps than order 2')
+    call suite%check(steps(4) < steps(1), 'erk order 5 takes fewer steps than order 2')
+  end subroutine check_orders
+
+  subroutine check_breakpoint()
+    type(integrator_options_t) :: opts
+    type(switched_oscillator_t) :: sys, sys_blind
+    type(integrator_stats_t) :: stats, stats_blind
+    type(error_t) :: err
+    opts = integrator_options_t(method='erk', rtol=1.0e-7_wp, atol=1.0e-9_wp)
+    call integrate(sys, opts, t_out, [0.0_wp], [0.0_wp], [sys%t_b], stats, err)
+    write(*, '(4x,a,es9.2,a,i0,a,i0,a,i0)') 'erk with breakpoint: error', sys%max_error, &
+      ', steps ', stats%n_steps, ', err test fails ', stats%n_err_test_fails, ', restarts ', &
+      stats%n_restarts
+    call suite%check(err%ok() .and. stats%n_restarts == 1 .and. sys%n_records == size(t_out), &
+      'erk restarts once at t_b')
+    call suite%check(sys%max_error < 100 * opts%rtol, 'erk is accurate across the jump')
+    call suite%check(sys%n_evals_at_t_b == 0, 'erk never evaluates a at t_b itself')
+    call integrate(sys_blind, opts, t_out, [0.0_wp], [0.0_wp], no_breakpoints, stats_blind, err)
+    write(*, '(4x,a,es9.2,a,i0,a,i0)') 'erk told nothing: error', sys_blind%max_error, &
+      ', steps ', stats_blind%n_steps, ', err test fails ', stats_blind%n_err_test_fails
+    call suite%check(err%ok() .and. stats_blind%n_restarts == 0, &
+      'erk also runs without being told of the jump')
+    call suite%check(stats%n_err_test_fails < stats_blind%n_err_test_fails, &
+      'the restart saves the error test failures at the jump')
+    ! A breakpoint a rounding error after an output time: no step to take, only a restart.
+    sys%t_b = 0.4_wp
+    call integrate(sys, opts, t_out, [0.0_wp], [0.0_wp], [nearest(sys%t_b, 1.0_wp)], stats, err)
+    call suite%check(err%ok() .and. stats%n_restarts == 1 .and. sys%max_error < 100 * opts%rtol, &
+      'erk handles a breakpoint next to an output time')
+  end subroutine check_breakpoint
+
+  subroutine check_bad_options()
+    call expect_input_error(integrator_options_t(method='erk', erk_order=7), 'erk_order', &
+      'erk_order 7')
+    call expect_input_error(integrator_options_t(method='erk', erk_order=1), 'erk_order', &
+      'erk_order 1')
+    call expect_input_error(integrator_options_t(method='erk', rtol=0.0_wp), 'rtol', 'rtol = 0')
+    call expect_input_error(integrator_options_t(method='erk', atol=-1.0_wp), 'atol', 'atol < 0')
+    call expect_input_error(integrator_options_t(method='erk', max_step=-1.0_wp), 'max_step', &
+      'max_step < 0')
+    call expect_input_error(integrator_options_t(method='rk45'), "'erk'", &
+      'unknown method (the message lists erk)')
+  end subroutine check_bad_options
+
+  subroutine expect_input_error(opts, word, what)
+    type(integrator_options_t), intent(in) :: opts
+    character(len=*), intent(in) :: word, what
+    type(oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    call integrate(sys, opts, t_out, [1.0_wp], [0.0_wp], no_breakpoints, stats, err)
+    call suite%check(err%code == ERR_INPUT .and. sys%n_records == 0, &
+      'bad option gives ERR_INPUT: ' // what)
+    if (.not. err%ok()) write(*, '(4x,a)') 'message: ' // err%message
+    if (err%ok()) return
+    call suite%check(index(err%message, word) > 0, 'the message names ' // word)
+  end subroutine expect_input_error
+
+  subroutine check_recoverable()
+    type(failing_oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    sys%status_code = 1
+    sys%n_failures = 1
+    call integrate(sys, integrator_options_t(method='erk'), t_out, [1.0_wp], [0.0_wp], &
+      no_breakpoints, stats, err)
+    write(*, '(4x,a,i0,a,i0)') 'erk after one recoverable status: steps ', stats%n_steps, &
+      ', err test fails ', stats%n_err_test_fails
+    if (.not. err%ok()) write(*, '(4x,a)') 'message: ' // err%message
+    call suite%check(sys%n_failures == 0, 'erk: the failing call happened')
+    call suite%check(err%ok() .and. sys%n_records == size(t_out), &
+      'erk retries after a recoverable status')
+    call suite%check(sys%max_error < 1.0e-4_wp, 'erk is still accurate after the retry')
+  end subroutine check_recoverable
+
+  !> A status that stays recoverable however small the step: the retries are limited.
+  subroutine check_repeated_recoverable()
+    type(failing_oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    sys%status_code = 1
+    sys%n_failures = huge(1)
+    call integrate(sys, integrator_options_t(method='erk'), t_out, [1.0_wp], [0.0_wp], &
+      no_breakpoints, stats, err)
+    call suite%check(err%code == ERR_NUMERIC .and. index(err%message, 'retries') > 0, &
+      'erk gives up after repeated recoverable statuses')
+    if (.not. err%ok()) write(*, '(4x,a)') 'message: ' // err%message
+    call suite%check(sys%n_records == 6, 'erk: outputs stop at the failure')
+  end subroutine check_repeated_recoverable
+
+  subroutine check_fatal()
+    type(failing_oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    sys%status_code = -2
+    sys%n_failures = 1
+    call integrate(sys, integrator_options_t(method='erk'), t_out, [1.0_wp], [0.0_wp], &
+      no_breakpoints, stats, err)
+    call suite%check(err%code == ERR_NUMERIC, 'erk: a fatal status is an ERR_NUMERIC')
+    if (.not. err%ok()) write(*, '(4x,a)') 'message: ' // err%message
+    call suite%check(index(err%message, 't = 0.5') > 0 .or. index(err%message, 't = 0.6') > 0, &
+      'erk: the message gives the time')
+    call suite%check(index(err%message, 'status -2') > 0, 'erk: the message gives the status')
+    call suite%check(sys%n_records == 6, 'erk: outputs stop at the failure')
+  end subroutine check_fatal
+
+  subroutine check_step_limit()
+    type(integrator_options_t) :: opts
+    type(oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
+    opts = integrator_options_t(method='erk', max_steps=30_i8)
+    call integrate(sys, opts, t_out, [1.0_wp], [0.0_wp], no_breakpoints, stats, err)
+    call suite%check(err%code == ERR_NUMERIC .and. stats%n_steps <= opts%max_steps, &
+      'erk: max_steps limits the whole run')
+    if (.not. err%ok()) write(*, '(4x,a)') 'message: ' // err%message
+  end subroutine check_step_limit
+
+  function es(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=9) :: s
+    write(s, '(es9.2)') x
+  end function es
+end program test_integrators_erk

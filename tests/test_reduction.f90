@@ -1,0 +1,245 @@
+!> Reduced dynamic analysis on a small two-link arm (2 beams per link, 8 dynamic coordinates),
+!> run end to end through run_t: the full basis reproduces the full model, the basis is
+!> M0-orthonormal, the error indicator vanishes for the full basis and grows as k shrinks,
+!> basis updates keep the trajectory continuous, and the explicit integrator agrees.
+program test_reduction
+  use core_kinds, only: wp
+  use core_error, only: error_t
+  use analysis_run, only: run_t
+  use reduction_modal, only: modal_result_t, modal_analysis
+  use test_scenes, only: itxt
+  use testing, only: suite_t
+  implicit none
+  type(suite_t) :: suite
+  type(run_t) :: full
+  real(wp) :: freqs(8)          !< frequencies at the initial configuration [Hz]
+  integer, parameter :: N_DY = 8
+  character(len=*), parameter :: DYN_TIGHT = &
+    "&dynamic t_end = 0.5, output_dt = 2e-3, rtol = 1e-9, atol = 1e-11 /"
+  character(len=*), parameter :: DYN = "&dynamic t_end = 0.5, output_dt = 2e-3, rtol = 1e-7, " &
+    // "atol = 1e-9 /"
+
+  call suite%init('reduction: reduced two-link arm')
+  call run_scene('full', scene(DYN_TIGHT), full)
+  call check_full_basis()
+  call check_orthonormal_basis()
+  call check_indicator_and_static_correction()
+  call check_updates()
+  call check_explicit()
+  call check_selection()
+  call suite%finish()
+
+contains
+
+  function scene(tail) result(text)
+    character(len=*), intent(in) :: tail
+    character(len=:), allocatable :: text
+    text = "&node label = 'base', x = 0, y = 0, fixed = .true. /" // new_line('a') // &
+      "&node label = 'elbow', x = 0.545, y = 0 /" // new_line('a') // &
+      "&node label = 'tip', x = 1.22, y = 0 /" // new_line('a') // &
+      "&link label = 'l1', from = 'base', to = 'elbow', n_elements = 2, E = 7.3e10, " // &
+      "A = 9e-4, I = 1.69e-8, rho = 2700 /" // new_line('a') // &
+      "&link label = 'l2', from = 'elbow', to = 'tip', n_elements = 2, E = 7.3e10, " // &
+      "A = 4e-4, I = 3.33e-9, rho = 2700 /" // new_line('a') // &
+      "&hinge label = 'j1', node = 'base', link = 'l1', mode = 'prescribed', motion = 'p1' /" &
+      // new_line('a') // &
+      "&hinge label = 'j2', node = 'elbow', link = 'l2', mode = 'prescribed', motion = 'p2' /" &
+      // new_line('a') // &
+      "&motion label = 'p1', law = 'cubic', end = 1.5707963, duration = 0.4 /" // &
+      new_line('a') // &
+      "&motion label = 'p2', law = 'cubic', end = 1.5707963, duration = 0.4 /" // &
+      new_line('a') // "&mass node = 'elbow', m = 1 /" // new_line('a') // &
+      "&mass node = 'tip', m = 3 /" // new_line('a') // "&output nodes = 'tip' /" // &
+      new_line('a') // tail // new_line('a')
+  end function scene
+
+  subroutine run_scene(name, text, run)
+    character(len=*), intent(in) :: name, text
+    type(run_t), intent(out) :: run
+    type(error_t) :: err
+    integer :: u
+    open(newunit=u, file='test_reduction_' // name // '.nml', status='replace', action='write')
+    write(u, '(a)') text
+    close(u)
+    run%verbose = .false.
+    call run%load('test_reduction_' // name // '.nml', err)
+    if (err%ok()) call run%execute(err)
+    call suite%check(err%ok(), name // ' runs')
+    if (.not. err%ok()) then
+      write(*, '(a)') '    ' // err%message
+      call suite%finish()
+    end if
+  end subroutine run_scene
+
+  !> Largest tip distance between two runs [m].
+  real(wp) function tip_difference(a, b) result(d)
+    type(run_t), intent(in) :: a, b
+    integer :: ic(3)
+    ic = a%dyn%model%node_coord(:, a%dyn%model%find_node('tip'))
+    d = maxval(hypot(a%dyn%x_hist(ic(1), :) - b%dyn%x_hist(ic(1), :), &
+                     a%dyn%x_hist(ic(2), :) - b%dyn%x_hist(ic(2), :)))
+  end function tip_difference
+
+  subroutine check_full_basis()
+    type(run_t) :: red
+    character(len=80) :: line
+    real(wp) :: d
+    call run_scene('all_modes', scene(DYN_TIGHT // " &reduction n_modes = " // itxt(N_DY) // &
+      " /"), red)
+    d = tip_difference(red, full)
+    write(line, '(a,es9.2,a)') 'all modes reproduce the full run (tip difference ', d, ' m)'
+    call suite%check(d < 1.0e-7_wp, trim(line))
+    call suite%check(maxval(red%red%residual) < 1.0e-7_wp * maxval(abs(full%dyn%q_hist)) * &
+      1.0e6_wp, 'all modes: residual at round-off level')
+    call suite%check(maxval(red%red%estimate) < 1.0e-9_wp, &
+      'all modes: error estimate below 1 nm')
+  end subroutine check_full_basis
+
+  subroutine check_orthonormal_basis()
+    type(modal_result_t) :: modes
+    type(error_t) :: err
+    real(wp) :: g(N_DY, N_DY)
+    integer :: i
+    call modal_analysis(full%dyn, 0.0_wp, [(0.0_wp, i = 1, N_DY)], 0, modes, err)
+    call suite%check(err%ok(), 'modal analysis at the basis configuration')
+    freqs = modes%frequency_hz
+    g = matmul(transpose(modes%shapes), matmul(modes%m0, modes%shapes))
+    do i = 1, N_DY
+      g(i, i) = g(i, i) - 1.0_wp
+    end do
+    call suite%check(maxval(abs(g)) < 1.0e-10_wp, 'V^T M0 V = I to 1e-10')
+  end subroutine check_orthonormal_basis
+
+  subroutine check_indicator_and_static_correction()
+    type(run_t) :: red(4), corrected
+    real(wp) :: res(4), est(4), err_tip(4), err_corr
+    character(len=120) :: line
+    integer :: k
+    do k = 1, 4
+      call run_scene('k' // itxt(k), scene(DYN // " &reduction n_modes = " // itxt(k) // &
+        " /"), red(k))
+      res(k) = maxval(red(k)%red%residual)
+      est(k) = maxval(red(k)%red%estimate)
+      err_tip(k) = tip_difference(red(k), full)
+      write(line, '(a,i0,a,es9.2,a,es9.2,a,es9.2,a)') 'k = ', k, ': residual ', res(k), &
+        ', estimate ', est(k), ' m, tip error ', err_tip(k), ' m'
+      write(*, '(4x,a)') trim(line)
+    end do
+    call suite%check(all(est(2:) < est(:3)), 'the error estimate shrinks as k grows')
+    call suite%check(all(err_tip(2:) < err_tip(:3)), 'the tip error shrinks as k grows')
+    call suite%check(all(est > 0.1_wp * err_tip .and. est < 10 * err_tip), &
+      'the error estimate is within a factor 10 of the true tip error')
+    call run_scene('k1_corrected', scene(DYN // " &reduction n_modes = 1, " // &
+      "static_correction = .true. /"), corrected)
+    err_corr = tip_difference(corrected, full)
+    write(line, '(a,es9.2,a,es9.2,a)') 'statically corrected 1-mode tip error ', err_corr, &
+      ' m (uncorrected ', err_tip(1), ' m): the same order, the error is dynamic'
+    call suite%check(err_corr < 2 * err_tip(1), trim(line))
+    call check_static_limit()
+  end subroutine check_indicator_and_static_correction
+
+  !> A damped cantilever under a tip load comes to rest: with one mode it settles on the
+  !> projection of the static solution, with the static correction on the static solution
+  !> itself (mode-acceleration: V eta + K0^-1 (f - K0 V eta) = K0^-1 f).
+  subroutine check_static_limit()
+    type(run_t) :: ref, plain, corrected
+    character(len=*), parameter :: beam = &
+      "&node label = 'base', x = 0, y = 0, fixed = .true. / &node label = 'tip', x = 1, y = 0 /" &
+      // " &link label = 'arm', from = 'base', to = 'tip', n_elements = 4, E = 7e10, " // &
+      "A = 1e-4, I = 1e-9, rho = 2700, damping = 2e-3 / &force node = 'tip', fy = -0.5 /" // &
+      " &output nodes = 'tip' / &dynamic t_end = 2.0, output_dt = 0.01 /"
+    real(wp) :: e_plain, e_corr
+    character(len=120) :: line
+    integer :: ic(3), nt
+    call run_scene('beam_full', beam, ref)
+    call run_scene('beam_k1', beam // " &reduction n_modes = 1 /", plain)
+    call run_scene('beam_k1_corrected', beam // " &reduction n_modes = 1, " // &
+      "static_correction = .true. /", corrected)
+    ic = ref%dyn%model%node_coord(:, ref%dyn%model%find_node('tip'))
+    nt = size(ref%time)
+    e_plain = abs(plain%dyn%x_hist(ic(2), nt) - ref%dyn%x_hist(ic(2), nt))
+    e_corr = abs(corrected%dyn%x_hist(ic(2), nt) - ref%dyn%x_hist(ic(2), nt))
+    write(line, '(a,es9.2,a,es9.2,a,es9.2,a)') 'settled tip: 1 mode off by ', e_plain, &
+      ' m, corrected ', e_corr, ' m (deflection ', abs(ref%dyn%x_hist(ic(2), nt)), ' m)'
+    call suite%check(e_corr < 1.0e-3_wp * e_plain .and. e_plain > 1.0e-3_wp * &
+      abs(ref%dyn%x_hist(ic(2), nt)), trim(line))
+  end subroutine check_static_limit
+
+  !> Positions are continuous across basis updates: the second difference of q_dy at the
+  !> output right after each check is no larger than elsewhere on the trajectory.
+  subroutine check_updates()
+    type(run_t) :: upd, mac_low, mac_high, fixed
+    real(wp), allocatable :: d2(:)
+    real(wp) :: jump, smooth, d_fixed, d_upd
+    character(len=160) :: line
+    integer :: i, j, nt
+    logical, allocatable :: at_check(:)
+    call run_scene('fixed_k2', scene(DYN // " &reduction n_modes = 2 /"), fixed)
+    call run_scene('interval', scene(DYN // " &reduction n_modes = 2, update = 'interval', " &
+      // "update_interval = 0.025 /"), upd)
+    call suite%check(upd%updates%n_updates == 19 .and. size(upd%updates%time) == 19, &
+      'interval updates: one per check (' // itxt(upd%updates%n_updates) // ')')
+    nt = size(upd%time)
+    allocate(d2(2:nt - 1), at_check(2:nt - 1))
+    do i = 2, nt - 1
+      d2(i) = maxval(abs(upd%dyn%q_hist(:, i + 1) - 2 * upd%dyn%q_hist(:, i) + &
+        upd%dyn%q_hist(:, i - 1)))
+      at_check(i) = .false.
+      do j = 1, size(upd%updates%time)
+        at_check(i) = at_check(i) .or. (upd%time(i) < upd%updates%time(j) + 1.0e-12_wp .and. &
+          upd%time(i + 1) > upd%updates%time(j))
+      end do
+    end do
+    jump = maxval(d2, mask=at_check)
+    smooth = maxval(d2, mask=.not. at_check)
+    write(line, '(a,es9.2,a,es9.2,a)') 'trajectory continuous across updates (2nd difference ', &
+      jump, ' at updates, ', smooth, ' elsewhere)'
+    call suite%check(jump <= 1.5_wp * smooth, trim(line))
+    d_fixed = tip_difference(fixed, full)
+    d_upd = tip_difference(upd, full)
+    write(line, '(a,es9.2,a,es9.2,a)') 'updated basis tip error ', d_upd, ' m (fixed ', &
+      d_fixed, ' m) stays of the same order'
+    call suite%check(d_upd < 3 * d_fixed, trim(line))
+    call run_scene('mac_low', scene(DYN // " &reduction n_modes = 2, update = 'mac', " // &
+      "update_interval = 0.025, mac_threshold = 0.05 /"), mac_low)
+    call suite%check(mac_low%updates%n_updates == 0 .and. size(mac_low%updates%time) == 19 &
+      .and. tip_difference(mac_low, fixed) < 1.0e-6_wp, &
+      'mac threshold never reached: checks without updates, same path as the fixed basis')
+    call run_scene('mac_high', scene(DYN // " &reduction n_modes = 2, update = 'mac', " // &
+      "update_interval = 0.025, mac_threshold = 0.99999 /"), mac_high)
+    write(line, '(a,i0,a,f8.5)') 'mac threshold 0.99999: ', mac_high%updates%n_updates, &
+      ' updates, smallest MAC ', minval(mac_high%updates%min_mac)
+    call suite%check(mac_high%updates%n_updates > 0 .and. mac_high%updates%n_updates < 19 &
+      .and. all(mac_high%updates%updated .eqv. mac_high%updates%min_mac < 0.99999_wp), &
+      trim(line))
+  end subroutine check_updates
+
+  subroutine check_explicit()
+    type(run_t) :: bdf, erk
+    character(len=120) :: line
+    real(wp) :: d
+    call run_scene('bdf_k2', scene(DYN_TIGHT // " &reduction n_modes = 2 /"), bdf)
+    call run_scene('erk_k2', scene("&dynamic t_end = 0.5, output_dt = 2e-3, " // &
+      "integrator = 'erk', rtol = 1e-9, atol = 1e-11 / &reduction n_modes = 2 /"), erk)
+    d = tip_difference(bdf, erk)
+    write(line, '(a,es9.2,a,i0,a,i0,a)') 'explicit RK agrees with BDF on 2 modes (', d, &
+      ' m; steps ', erk%stats%n_steps, ' vs ', bdf%stats%n_steps, ')'
+    call suite%check(d < 1.0e-7_wp, trim(line))
+  end subroutine check_explicit
+
+  subroutine check_selection()
+    type(run_t) :: cut, auto
+    associate (f => freqs)
+    call run_scene('cutoff', scene(DYN // " &reduction cutoff_hz = " // &
+      "50.0 /"), cut)
+    call suite%check(cut%red%basis%k() == count(f <= 50.0_wp) .and. &
+      index(cut%red%basis%reason, 'below') > 0, 'cutoff_hz keeps the modes below it (' // &
+      itxt(cut%red%basis%k()) // '): ' // cut%red%basis%reason)
+    call run_scene('auto', scene(DYN // " &reduction auto_factor = 1.0 /"), auto)
+    call suite%check(auto%red%basis%k() >= 1 .and. auto%red%basis%bandwidth_hz > 0 .and. &
+      all(auto%red%basis%frequency_hz <= max(auto%red%basis%cutoff_hz, f(1))), &
+      'auto keeps the modes below auto_factor x bandwidth (' // itxt(auto%red%basis%k()) // &
+      '): ' // auto%red%basis%reason)
+    end associate
+  end subroutine check_selection
+end program test_reduction
