@@ -48,6 +48,7 @@ module dynamics_system
     procedure :: accel => dyn_accel
     procedure :: report => dyn_report
     procedure :: record => dyn_record
+    procedure :: store => dyn_store
     procedure :: jacobian => dyn_jacobian
     procedure :: energy => dyn_energy
     procedure :: stresses => dyn_stresses
@@ -300,12 +301,19 @@ contains
     integer, intent(out) :: status
     real(wp) :: a(size(q))
     call this%accel(t, q, v, a, status)
-    if (status /= 0) return
+    if (status == 0) call this%store(k, t, q, v)
+  end subroutine dyn_record
+
+  !> Output k from the last kinematic solution, which must belong to (t, q).
+  subroutine dyn_store(this, k, t, q, v)
+    class(dynamics_t), intent(inout) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t, q(:), v(:)
     this%x_hist(:, k) = this%kin%x
     this%q_hist(:, k) = q
     this%v_hist(:, k) = v
     this%energy_hist(:, k) = this%energy(t, q, v)
-  end subroutine dyn_record
+  end subroutine dyn_store
 
   !> Kinetic and potential energy (elastic, loads and gravity) at the last kinematic solution,
   !> which must belong to (t, q_dy).

@@ -1,8 +1,8 @@
 !> CVODE (BDF, Newton, dense direct solver) on the first-order form of q'' = a(t, q, v):
 !>     y = (q, v),   y' = (v, a(t, q, v)).
 !>
-!> This is the only module of flexmor that talks to SUNDIALS, so that the move to SUNDIALS 7
-!> (SUNComm, fsundials_core_mod) stays in one file. The system is reached from the C callbacks
+!> This module and integrators_arkode are the only ones that talk to SUNDIALS, so that the move
+!> to SUNDIALS 7 (SUNComm, fsundials_core_mod) stays in two files. The system is reached from the C callbacks
 !> through CVODE's user_data, which points to a heap-allocated bridge object: no module
 !> variables, so several models can run in one process.
 module integrators_cvode
@@ -195,7 +195,10 @@ contains
     class(cvode_solver_t), intent(inout) :: this
     real(wp), intent(in) :: t, q(:), v(:), t_stop, t_lo, t_hi
     type(error_t), intent(inout) :: err
-    call this%get_stats(this%done)
+    type(integrator_stats_t) :: so_far
+    ! Through a local: this%done is part of `this`, which get_stats also reads.
+    call this%get_stats(so_far)
+    this%done = so_far
     this%done%n_restarts = this%done%n_restarts + 1
     this%bridge%t_lo = t_lo
     this%bridge%t_hi = t_hi

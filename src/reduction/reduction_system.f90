@@ -159,7 +159,11 @@ contains
     end if
     this%eta_hist(:, kg) = q
     this%eta_dot_hist(:, kg) = v
-    call this%dyn%record(kg, t, q_dy, v_dy, status)
+    if (this%static_correction) then
+      call this%dyn%record(kg, t, q_dy, v_dy, status)
+    else
+      call this%dyn%store(kg, t, q_dy, v_dy)
+    end if
   end subroutine red_record
 
   !> r = gen_force - Mbar V a_eta and its norm sqrt(r^T Mbar^-1 r), from the last assembly.
