@@ -241,5 +241,19 @@ contains
       'auto keeps the modes below auto_factor x bandwidth (' // itxt(auto%red%basis%k()) // &
       '): ' // auto%red%basis%reason)
     end associate
+    call check_basis_configuration()
   end subroutine check_selection
+
+  !> The basis at the end of the motion, named by time or by the joint angles themselves.
+  subroutine check_basis_configuration()
+    type(run_t) :: by_time, by_angles
+    call run_scene('basis_time', scene(DYN // " &reduction n_modes = 3, basis_time = 0.45 /"), &
+      by_time)
+    call run_scene('basis_angles', scene(DYN // " &reduction n_modes = 3, " // &
+      "basis_prescribed = 1.5707963, 1.5707963 /"), by_angles)
+    call suite%close_array(by_angles%red%basis%frequency_hz, by_time%red%basis%frequency_hz, &
+      1.0e-12_wp, 0.0_wp, 'basis_prescribed = the angles at basis_time gives the same modes')
+    call suite%check(abs(by_time%red%basis%frequency_hz(2) / freqs(2) - 1) > 1.0e-3_wp, &
+      'the basis at the end configuration differs from the initial one')
+  end subroutine check_basis_configuration
 end program test_reduction

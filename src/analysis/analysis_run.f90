@@ -220,12 +220,10 @@ contains
             prescribed_names(this%dyn%model) // '), got ' // int_str(size(r%basis_prescribed)))
           return
         end if
-        call compute_basis(this%red%dyn, spec, r%basis_time, this%q_static, &
-          r%basis_prescribed, basis=this%red%basis, err=err)
-      else
-        call compute_basis(this%red%dyn, spec, r%basis_time, this%q_static, &
-          basis=this%red%basis, err=err)
       end if
+      ! An unallocated basis_prescribed counts as absent: the motions at basis_time apply.
+      call compute_basis(this%red%dyn, spec, r%basis_time, this%q_static, r%basis_prescribed, &
+        this%red%basis, err)
       if (.not. err%ok()) then
         call err%prefix('group &reduction: basis configuration (basis_time = ' // &
           real_str(r%basis_time) // '): ')
