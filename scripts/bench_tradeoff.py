@@ -554,6 +554,13 @@ def series_key(row: dict[str, Any]) -> tuple[str, str, str, str]:
     return row["group"], row["integrator"], row["static_correction"], tol
 
 
+def refinement(row: dict[str, Any]) -> float:
+    """Order of the points along a series line: k up, or rtol/dt down."""
+    if row["n_modes"] != "":
+        return float(row["n_modes"])
+    return -float(row["dt"] if row["integrator"] == "galpha" else row["rtol"])
+
+
 def plot(rows: list[dict[str, Any]], labels: dict[str, str], path: Path, title: str) -> None:
     """Tip error against solve time, log-log; colour = family, marker = integrator, filled
     marker = static correction on (reduced)."""
@@ -570,7 +577,7 @@ def plot(rows: list[dict[str, Any]], labels: dict[str, str], path: Path, title: 
     for row in points:
         series.setdefault(series_key(row), []).append(row)
     for (group, integ, static, _), members in series.items():
-        members.sort(key=lambda r: float(r["time_median_s"]))
+        members.sort(key=refinement)
         color = FAMILY_COLORS[group]
         filled = not group.startswith("reduced") or static == "yes"
         x = [float(r["time_median_s"]) for r in members]
@@ -684,8 +691,8 @@ def header_block(command: str, args: argparse.Namespace, outcomes: list[Outcome]
         "Command": f"`{command}` (in `{os.getcwd()}`)",
         "Date": datetime.now().astimezone().isoformat(timespec="seconds"),
         "Machine": f"{cpu_model()}, {core_count()} cores, {platform.system()} "
-                   f"{platform.release()}; load average at the end "
-                   f"{os.getloadavg()[0]:.2f}",
+                   f"{platform.release()}; 1-min load average {args.load_start:.2f} at the "
+                   f"start, {os.getloadavg()[0]:.2f} at the end (other processes skew times)",
         "flexmor": f"version {version or 'unknown'}, binary `{args.bin}`, git commit "
                    f"{git_commit()}",
         "Repeats": f"{args.repeats} per case (cases run one at a time)",
@@ -712,6 +719,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     start = time.perf_counter()
+    args.load_start = os.getloadavg()[0]
     base = BASE_SCENE.read_text()
     base_t_end = float(parse_group(base, "dynamic")["t_end"].lower().replace("d", "e"))
     t_end = 0.2 if args.quick else None

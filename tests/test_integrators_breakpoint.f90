@@ -1,68 +1,12 @@
-!> Oscillator with a force that switches off at t_b: q'' = -omega^2 q + F(t), F = F0 before
-!> t_b and 0 after. Given t_b as a breakpoint, both methods land on it, restart there and keep
-!> their accuracy (galpha its second order); the jump is never evaluated at t_b itself.
-module breakpoint_test_system
-  use core_kinds, only: wp
-  use test_oscillators, only: oscillator_t
-  implicit none
-  private
-  public :: switched_oscillator_t
-
-  !> The linear oscillator of test_oscillators (its Jacobian) with the switched force.
-  type, extends(oscillator_t) :: switched_oscillator_t
-    real(wp) :: force = 20, t_b = 0.37_wp
-    !> Which side of the jump F(t_b) belongs to: the integrators must not care.
-    logical :: force_at_t_b = .false.
-    integer :: n_evals_at_t_b = 0
-  contains
-    procedure :: accel => switched_accel
-    procedure :: record => switched_record
-  end type switched_oscillator_t
-
-contains
-
-  subroutine switched_accel(this, t, q, v, a, status)
-    class(switched_oscillator_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q(:), v(:)
-    real(wp), intent(out) :: a(:)
-    integer, intent(out) :: status
-    logical :: on
-    if (.not. abs(t - this%t_b) > 0) this%n_evals_at_t_b = this%n_evals_at_t_b + 1
-    on = t < this%t_b .or. (this%force_at_t_b .and. .not. t > this%t_b)
-    a = -this%omega**2 * q
-    if (on) a = a + this%force
-    status = 0
-  end subroutine switched_accel
-
-  !> Exact solution from rest at q = 0: forced response, then free vibration from t_b.
-  subroutine switched_record(this, k, t, q, v, status)
-    class(switched_oscillator_t), intent(inout) :: this
-    integer, intent(in) :: k
-    real(wp), intent(in) :: t, q(:), v(:)
-    integer, intent(out) :: status
-    real(wp) :: w, q_static, q_b, v_b, q_exact, v_exact
-    w = this%omega
-    q_static = this%force / w**2
-    if (t <= this%t_b) then
-      q_exact = q_static * (1 - cos(w * t))
-      v_exact = q_static * w * sin(w * t)
-    else
-      q_b = q_static * (1 - cos(w * this%t_b))
-      v_b = q_static * w * sin(w * this%t_b)
-      q_exact = q_b * cos(w * (t - this%t_b)) + v_b / w * sin(w * (t - this%t_b))
-      v_exact = -q_b * w * sin(w * (t - this%t_b)) + v_b * cos(w * (t - this%t_b))
-    end if
-    this%max_error = max(this%max_error, abs(q(1) - q_exact) + abs(v(1) - v_exact) / w)
-    status = 0
-  end subroutine switched_record
-end module breakpoint_test_system
-
+!> Oscillator with a force that switches off at t_b (switched_oscillator_t of test_oscillators).
+!> Given t_b as a breakpoint, both methods land on it, restart there and keep their accuracy
+!> (galpha its second order); the jump is never evaluated at t_b itself.
 program test_integrators_breakpoint
   use core_kinds, only: wp
   use core_error, only: error_t
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use integrators_driver, only: integrate
-  use breakpoint_test_system, only: switched_oscillator_t
+  use test_oscillators, only: switched_oscillator_t
   use testing, only: suite_t
   implicit none
   type(suite_t) :: suite

@@ -1,21 +1,22 @@
 !> Undamped linear oscillator q'' = -omega^2 q (test_oscillators) against its exact solution,
-!> for both methods: BDF's error follows rtol, generalized-alpha's shrinks fourfold when dt halves.
+!> for all methods: the error of the adaptive ones (BDF, ERK) follows rtol, generalized-alpha's
+!> shrinks fourfold when dt halves.
 program test_integrators_oscillator
   use core_kinds, only: wp
   use core_error, only: error_t
   use integrators_system, only: integrator_options_t, integrator_stats_t
-  use integrators_driver, only: integrate
-  use test_oscillators, only: oscillator_t
+  use test_oscillators, only: oscillator_t, run_oscillator
   use testing, only: suite_t
   implicit none
   type(suite_t) :: suite
   real(wp), allocatable :: t_out(:)
-  real(wp) :: no_breakpoints(0)
   integer :: i
 
   call suite%init('integrators: linear oscillator')
   t_out = [(0.125_wp * i, i = 0, 16)]
-  call check_bdf()
+  call check_adaptive('bdf')
+  call check_adaptive('erk')
+  call check_bdf_internal_jacobian()
   call check_galpha(0.8_wp)
   call check_galpha(1.0_wp)
   call check_galpha(0.0_wp)
@@ -24,48 +25,52 @@ program test_integrators_oscillator
 
 contains
 
-  subroutine run(opts, sys, stats, err)
-    type(integrator_options_t), intent(in) :: opts
-    type(oscillator_t), intent(out) :: sys
-    type(integrator_stats_t), intent(out) :: stats
-    type(error_t), intent(out) :: err
-    sys%t_expected = t_out
-    call integrate(sys, opts, t_out, [1.0_wp], [0.0_wp], no_breakpoints, stats, err)
-  end subroutine run
-
-  subroutine check_bdf()
+  !> 'bdf' or 'erk' at three tolerances.
+  subroutine check_adaptive(method)
+    character(len=*), intent(in) :: method
     type(integrator_options_t) :: opts
     type(oscillator_t) :: sys
     type(integrator_stats_t) :: stats
     type(error_t) :: err
     real(wp) :: errors(3), rtols(3)
     integer :: i
-    character(len=80) :: line
+    logical :: implicit_method, counters_ok
+    character(len=120) :: line
 
+    ! Only BDF evaluates Jacobians and solves nonlinear systems.
+    implicit_method = method == 'bdf'
     rtols = [1.0e-4_wp, 1.0e-6_wp, 1.0e-8_wp]
     do i = 1, 3
-      opts = integrator_options_t(method='bdf', rtol=rtols(i), atol=1.0e-2_wp * rtols(i))
-      call run(opts, sys, stats, err)
-      call suite%check(err%ok(), 'bdf runs at rtol ' // es(rtols(i)))
+      opts = integrator_options_t(method=method, rtol=rtols(i), atol=1.0e-2_wp * rtols(i))
+      call run_oscillator(sys, opts, t_out, stats, err)
+      call suite%check(err%ok(), method // ' runs at rtol ' // es(rtols(i)))
       errors(i) = sys%max_error
-      write(line, '(a,es8.1,a,es9.2,a,i0,a,i0,a,i0)') 'bdf rtol', rtols(i), ': error', &
-        errors(i), ', steps ', stats%n_steps, ', accel ', stats%n_rhs_evals, ', jac ', &
-        stats%n_jac_evals
+      write(line, '(a,a,es8.1,a,es9.2,a,i0,a,i0,a,i0,a,i0)') method, ' rtol', rtols(i), &
+        ': error', errors(i), ', steps ', stats%n_steps, ', accel ', stats%n_rhs_evals, &
+        ', jac ', stats%n_jac_evals, ', err test fails ', stats%n_err_test_fails
       write(*, '(4x,a)') trim(line)
       call suite%check(sys%n_records == size(t_out) .and. sys%times_exact, &
-        'bdf records every output time exactly')
-      call suite%check(stats%n_steps > 0 .and. stats%n_rhs_evals > stats%n_steps .and. &
-        stats%n_jac_evals > 0 .and. stats%n_restarts == 0, 'bdf counters are filled')
-      call suite%check(errors(i) < 200 * rtols(i), 'bdf error is of the order of rtol')
+        method // ' records every output time exactly')
+      counters_ok = stats%n_steps > 0 .and. stats%n_rhs_evals > stats%n_steps .and. &
+        stats%n_restarts == 0 .and. (stats%n_jac_evals > 0 .eqv. implicit_method) .and. &
+        (stats%n_nonlin_fails == 0 .or. implicit_method)
+      call suite%check(counters_ok, method // ' counters are filled')
+      call suite%check(errors(i) < 200 * rtols(i), method // ' error is of the order of rtol')
     end do
     call suite%check(errors(2) < 0.1_wp * errors(1) .and. errors(3) < 0.1_wp * errors(2), &
-      'bdf error shrinks with rtol')
+      method // ' error shrinks with rtol')
+  end subroutine check_adaptive
 
+  subroutine check_bdf_internal_jacobian()
+    type(integrator_options_t) :: opts
+    type(oscillator_t) :: sys
+    type(integrator_stats_t) :: stats
+    type(error_t) :: err
     opts = integrator_options_t(method='bdf', rtol=1.0e-6_wp, atol=1.0e-8_wp, jacobian='internal')
-    call run(opts, sys, stats, err)
+    call run_oscillator(sys, opts, t_out, stats, err)
     call suite%check(err%ok() .and. sys%max_error < 200 * opts%rtol, &
       'bdf with the internal Jacobian is as accurate')
-  end subroutine check_bdf
+  end subroutine check_bdf_internal_jacobian
 
   subroutine check_galpha(rho_inf)
     real(wp), intent(in) :: rho_inf
@@ -80,7 +85,7 @@ contains
     dts = [1.0_wp / 64, 1.0_wp / 128, 1.0_wp / 256]
     do i = 1, 3
       opts = integrator_options_t(method='galpha', dt=dts(i), rho_inf=rho_inf)
-      call run(opts, sys, stats, err)
+      call run_oscillator(sys, opts, t_out, stats, err)
       call suite%check(err%ok() .and. sys%n_records == size(t_out) .and. sys%times_exact, &
         'galpha runs, rho_inf ' // fx(rho_inf) // ' dt ' // es(dts(i)))
       errors(i) = sys%max_error
@@ -104,12 +109,12 @@ contains
     type(integrator_stats_t) :: stats
     type(error_t) :: err
     opts = integrator_options_t(method='galpha', dt=0.0113_wp, rho_inf=0.8_wp)
-    call run(opts, sys, stats, err)
+    call run_oscillator(sys, opts, t_out, stats, err)
     call suite%check(err%ok() .and. sys%times_exact, 'galpha lands on outputs with uneven dt')
     call suite%check(stats%n_steps == 16 * ceiling(0.125_wp / opts%dt), &
       'galpha shortens steps evenly within each output interval')
     opts%dt = opts%dt / 2
-    call run(opts, sys_fine, stats, err)
+    call run_oscillator(sys_fine, opts, t_out, stats, err)
     call suite%close(sys%max_error / sys_fine%max_error, 4.0_wp, 0.0_wp, 0.6_wp, &
       'galpha stays second order with shortened steps')
   end subroutine check_galpha_uneven_steps

@@ -1,64 +1,12 @@
 !> Failure paths: a recoverable status from accel makes the methods retry and still succeed, a
 !> fatal one ends with ERR_NUMERIC naming the time, so does a failing record or the step limit,
 !> and bad options give ERR_INPUT.
-module status_test_system
-  use core_kinds, only: wp
-  use integrators_system, only: ode2_system_t
-  use test_oscillators, only: oscillator_error
-  implicit none
-  private
-  public :: failing_oscillator_t
-
-  real(wp), parameter :: pi = acos(-1.0_wp)
-
-  type, extends(ode2_system_t) :: failing_oscillator_t
-    real(wp) :: omega = 2 * pi
-    !> accel returns `status_code` on its first `n_failures` calls after `t_fail`.
-    real(wp) :: t_fail = 0.55_wp
-    integer :: status_code = 0, n_failures = 0
-    !> record returns this status at output `k_record_fail`.
-    integer :: record_status = 0, k_record_fail = -1
-    real(wp) :: max_error = 0
-    integer :: n_records = 0
-  contains
-    procedure :: accel => failing_accel
-    procedure :: record => failing_record
-  end type failing_oscillator_t
-
-contains
-
-  subroutine failing_accel(this, t, q, v, a, status)
-    class(failing_oscillator_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q(:), v(:)
-    real(wp), intent(out) :: a(:)
-    integer, intent(out) :: status
-    a = -this%omega**2 * q
-    status = 0
-    if (t > this%t_fail .and. this%n_failures > 0) then
-      this%n_failures = this%n_failures - 1
-      status = this%status_code
-      a = 0
-    end if
-  end subroutine failing_accel
-
-  subroutine failing_record(this, k, t, q, v, status)
-    class(failing_oscillator_t), intent(inout) :: this
-    integer, intent(in) :: k
-    real(wp), intent(in) :: t, q(:), v(:)
-    integer, intent(out) :: status
-    this%max_error = max(this%max_error, oscillator_error(this%omega, t, q(1), v(1)))
-    this%n_records = this%n_records + 1
-    status = 0
-    if (k == this%k_record_fail) status = this%record_status
-  end subroutine failing_record
-end module status_test_system
-
 program test_integrators_status
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use integrators_driver, only: integrate
-  use status_test_system, only: failing_oscillator_t
+  use test_oscillators, only: failing_oscillator_t
   use testing, only: suite_t
   implicit none
   type(suite_t) :: suite

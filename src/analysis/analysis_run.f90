@@ -23,7 +23,7 @@ module analysis_run
   private
   public :: run_t, FLEXMOR_VERSION
 
-  character(len=*), parameter :: FLEXMOR_VERSION = '0.1.0'
+  character(len=*), parameter :: FLEXMOR_VERSION = '0.2.0'
 
   !> Everything one run computes, kept so that callers (the sweep) can take metrics from it.
   type :: run_t
@@ -395,7 +395,7 @@ contains
       if (err%ok()) call h5%write_real_attr(g, 'cutoff_hz', b%cutoff_hz, err)
       if (err%ok()) call h5%write_real_attr(g, 'motion_bandwidth_hz', b%bandwidth_hz, err)
       if (err%ok()) call h5%write_real_attr(g, 'basis_time', r%basis_time, err)
-      if (err%ok()) call h5%write_string_attr(g, 'eigensolver', b%solver, err)
+      if (err%ok()) call h5%write_string_attr(g, 'eigensolver', trim(b%solver), err)
       if (err%ok()) call h5%write_string_attr(g, 'static_correction', &
         merge('yes', 'no ', r%static_correction), err)
       if (err%ok()) call h5%write_real_attr(g, 'residual_max', maxval(red%residual), err)

@@ -1,11 +1,11 @@
 !> ARKODE ERKStep (explicit embedded Runge-Kutta, adaptive step) on the first-order form of
 !> q'' = a(t, q, v):   y = (q, v),   y' = (v, a(t, q, v)).
 !>
-!> Meant for reduced models, which are not stiff: no Jacobian, no linear solver. Together with
-!> integrators_cvode this is the only module of flexmor that talks to SUNDIALS (SUNDIALS 7
-!> changes ARKODE's API too). The system is reached from the C callbacks through ARKODE's
-!> user_data, a heap-allocated bridge object: no module variables, so several models can run in
-!> one process.
+!> Meant for reduced models, which are not stiff: no Jacobian, no linear solver. This module,
+!> integrators_cvode and integrators_sundials (what the two share: the bridge object behind
+!> ARKODE's user_data, the right-hand side and error-handler callbacks, the packing of y) are
+!> the only ones of flexmor that talk to SUNDIALS, so that the move to SUNDIALS 7 (which changes
+!> ARKODE's API too) stays in three files.
 !>
 !> Two things of ARKODE 6.4 are worked around here:
 !> - ERKStep gives up on a recoverable (> 0) status of the right-hand side instead of retrying
@@ -17,15 +17,16 @@
 !>   2, 6 and 8 are such methods (order 6 drops to third order); they get one more stage that
 !>   evaluates f at the new solution, which makes them FSAL for real at no extra cost.
 module integrators_arkode
-  use, intrinsic :: iso_c_binding, only: c_ptr, c_null_ptr, c_int, c_long, c_double, c_int64_t, &
-    c_char, c_size_t, c_loc, c_funloc, c_f_pointer, c_associated
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_null_ptr, c_int, c_long, c_double, c_loc, &
+    c_funloc, c_f_pointer, c_associated
   use core_kinds, only: wp, i8
   use core_strings, only: int_str, real_str
   use core_error, only: error_t, ERR_NUMERIC, ERR_INTERNAL
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
-  use fsundials_context_mod, only: FSUNContext_Create, FSUNContext_Free
-  use fsundials_nvector_mod, only: N_Vector, FN_VDestroy, FN_VGetArrayPointer
-  use fnvector_serial_mod, only: FN_VNew_Serial
+  use integrators_sundials, only: sundials_bridge_t, new_bridge, open_sundials, close_sundials, &
+    sundials_rhs, sundials_error_handler, put_state, get_state, check, set_failure, &
+    erk_return_flag_name
+  use fsundials_nvector_mod, only: N_Vector
   use farkode_mod, only: ARK_ONE_STEP, ARK_RHSFUNC_FAIL, ARK_REPTD_RHSFUNC_ERR, &
     ARK_UNREC_RHSFUNC_ERR, FARKodeButcherTable_LoadERK, FARKodeButcherTable_Create, &
     FARKodeButcherTable_Free
@@ -43,20 +44,8 @@ module integrators_arkode
   !> giving up (CVODE allows as many).
   integer, parameter :: max_retries = 10
 
-  !> What the C callbacks need; lives on the heap so its address (ARKODE's user_data) is fixed.
-  type :: erk_bridge_t
-    class(ode2_system_t), pointer :: sys => null()
-    integer :: n = 0
-    !> accel is evaluated at times clamped into [t_lo, t_hi], strictly inside the segment
-    !> between breakpoints, so that a(t) jumping at a breakpoint is seen from the right side.
-    real(wp) :: t_lo = -huge(1.0_wp), t_hi = huge(1.0_wp)
-    integer(i8) :: n_accel = 0
-    !> The last non-zero status of accel, for the retry decision and the error message.
-    integer :: bad_status = 0
-    real(wp) :: bad_time = 0
-    !> ARKODE's own message of its last error (from the error handler).
-    character(len=:), allocatable :: arkode_message
-  end type erk_bridge_t
+  !> The name of this solver in the error messages.
+  character(len=*), parameter :: solver = 'ARKODE'
 
   !> One ERKStep integration of one system. Call `finish` when done (gfortran 12 does not
   !> finalize local variables reliably, so there is no final procedure to rely on).
@@ -65,11 +54,11 @@ module integrators_arkode
     type(c_ptr) :: ctx = c_null_ptr
     type(c_ptr) :: mem = c_null_ptr
     type(N_Vector), pointer :: y => null()
-    type(erk_bridge_t), pointer :: bridge => null()
+    type(sundials_bridge_t), pointer :: bridge => null()
     integer(i8) :: max_steps = 0
     !> The last accepted step: where a recoverable failure is retried from.
     real(wp) :: t = 0
-    real(wp), allocatable :: y_accepted(:)
+    real(wp), allocatable :: q_accepted(:), v_accepted(:)
     real(wp) :: t_stop = 0
     !> Retries since the solution last got past t_trouble, the latest recoverable status.
     integer :: n_retries = 0
@@ -90,27 +79,6 @@ module integrators_arkode
     type(c_ptr) :: a, c, b, d
   end type butcher_table_c_t
 
-  interface
-    function c_strlen(s) bind(C, name='strlen') result(n)
-      import :: c_ptr, c_size_t
-      type(c_ptr), value :: s
-      integer(c_size_t) :: n
-    end function c_strlen
-
-    subroutine c_free(p) bind(C, name='free')
-      import :: c_ptr
-      type(c_ptr), value :: p
-    end subroutine c_free
-
-    !> Called directly: the string is malloc'ed, and the Fortran wrapper of SUNDIALS 6.4
-    !> (FERKStepGetReturnFlagName) never frees it.
-    function erk_return_flag_name(flag) bind(C, name='ERKStepGetReturnFlagName') result(name)
-      import :: c_ptr, c_long
-      integer(c_long), value :: flag
-      type(c_ptr) :: name
-    end function erk_return_flag_name
-  end interface
-
 contains
 
   !> Set up ERKStep at (t0, q, v); it will not step past t_stop.
@@ -125,37 +93,28 @@ contains
     this%max_steps = opts%max_steps
     this%done = integrator_stats_t()
     this%t = t0
-    this%y_accepted = [q, v]
+    this%q_accepted = q
+    this%v_accepted = v
     this%t_stop = t_stop
     this%n_retries = 0
-    allocate(this%bridge)
-    this%bridge%sys => sys
-    this%bridge%n = size(q)
-    this%bridge%t_lo = t_lo
-    this%bridge%t_hi = t_hi
-
-    call check(FSUNContext_Create(c_null_ptr, this%ctx), 'SUNContext_Create', err)
+    this%bridge => new_bridge(sys, size(q), t_lo, t_hi)
+    call open_sundials(solver, q, v, this%ctx, this%y, err)
     if (.not. err%ok()) return
-    this%y => FN_VNew_Serial(int(2 * size(q), c_int64_t), this%ctx)
-    if (.not. associated(this%y)) then
-      call err%set(ERR_INTERNAL, 'ARKODE: could not create the state vector')
-      return
-    end if
-    call put_state(this%y, this%y_accepted)
-    this%mem = FERKStepCreate(c_funloc(erk_rhs), t0, this%y, this%ctx)
+    this%mem = FERKStepCreate(c_funloc(sundials_rhs), t0, this%y, this%ctx)
     if (.not. c_associated(this%mem)) then
       call err%set(ERR_INTERNAL, 'ARKODE: ERKStepCreate failed')
       return
     end if
-    call check(FERKStepSetUserData(this%mem, c_loc(this%bridge)), 'ERKStepSetUserData', err)
-    call check(FERKStepSetErrHandlerFn(this%mem, c_funloc(erk_error_handler), &
+    call check(solver, FERKStepSetUserData(this%mem, c_loc(this%bridge)), 'ERKStepSetUserData', err)
+    call check(solver, FERKStepSetErrHandlerFn(this%mem, c_funloc(sundials_error_handler), &
       c_loc(this%bridge)), 'ERKStepSetErrHandlerFn', err)
-    call check(FERKStepSStolerances(this%mem, opts%rtol, opts%atol), 'ERKStepSStolerances', err)
+    call check(solver, FERKStepSStolerances(this%mem, opts%rtol, opts%atol), &
+      'ERKStepSStolerances', err)
     call set_method(this%mem, opts%erk_order, err)
     if (opts%max_step > 0) then
-      call check(FERKStepSetMaxStep(this%mem, opts%max_step), 'ERKStepSetMaxStep', err)
+      call check(solver, FERKStepSetMaxStep(this%mem, opts%max_step), 'ERKStepSetMaxStep', err)
     end if
-    call check(FERKStepSetStopTime(this%mem, t_stop), 'ERKStepSetStopTime', err)
+    call check(solver, FERKStepSetStopTime(this%mem, t_stop), 'ERKStepSetStopTime', err)
   end subroutine erk_start
 
   !> Integrate to t_target (at most the stop time) and return the state there.
@@ -170,12 +129,12 @@ contains
       if (.not. err%ok()) return
     end do
     if (this%t == t_target) then
-      q = this%y_accepted(:size(q))
-      v = this%y_accepted(size(q) + 1:)
+      q = this%q_accepted
+      v = this%v_accepted
       return
     end if
     ! The last step went past t_target: ARKODE's interpolant gives the state there.
-    call check(FERKStepGetDky(this%mem, t_target, 0_c_int, this%y), 'ERKStepGetDky', err)
+    call check(solver, FERKStepGetDky(this%mem, t_target, 0_c_int, this%y), 'ERKStepGetDky', err)
     if (.not. err%ok()) return
     call get_state(this%y, q, v)
   end subroutine erk_advance
@@ -203,7 +162,7 @@ contains
         real_str(this%t))
     else if (flag >= 0) then
       this%t = t_reached(1)
-      call copy_state(this%y, this%y_accepted)
+      call get_state(this%y, this%q_accepted, this%v_accepted)
       ! Counted until past the trouble, or steps creeping up to it would never give up.
       if (this%t > this%t_trouble) this%n_retries = 0
     else if (recoverable(this, flag) .and. this%n_retries < max_retries) then
@@ -227,7 +186,7 @@ contains
     type(erk_solver_t), intent(inout) :: this
     type(error_t), intent(inout) :: err
     real(c_double) :: h(1)
-    call check(FERKStepGetCurrentStep(this%mem, h), 'ERKStepGetCurrentStep', err)
+    call check(solver, FERKStepGetCurrentStep(this%mem, h), 'ERKStepGetCurrentStep', err)
     call reinit(this, 0.25_wp * h(1), err)
   end subroutine retry_smaller
 
@@ -240,7 +199,8 @@ contains
     this%bridge%t_lo = t_lo
     this%bridge%t_hi = t_hi
     this%t = t
-    this%y_accepted = [q, v]
+    this%q_accepted = q
+    this%v_accepted = v
     this%t_stop = t_stop
     this%n_retries = 0
     call reinit(this, 0.0_wp, err)
@@ -256,12 +216,12 @@ contains
     ! Through a copy: this%done as the intent(out) argument would alias `this`.
     call this%get_stats(so_far)
     this%done = so_far
-    call put_state(this%y, this%y_accepted)
-    call check(FERKStepReInit(this%mem, c_funloc(erk_rhs), this%t, this%y), 'ERKStepReInit', &
-      err)
-    call check(FERKStepSetInitStep(this%mem, h0), 'ERKStepSetInitStep', err)
+    call put_state(this%y, this%q_accepted, this%v_accepted)
+    call check(solver, FERKStepReInit(this%mem, c_funloc(sundials_rhs), this%t, this%y), &
+      'ERKStepReInit', err)
+    call check(solver, FERKStepSetInitStep(this%mem, h0), 'ERKStepSetInitStep', err)
     ! ReInit clears the stop time (SUNDIALS >= 6.3).
-    call check(FERKStepSetStopTime(this%mem, this%t_stop), 'ERKStepSetStopTime', err)
+    call check(solver, FERKStepSetStopTime(this%mem, this%t_stop), 'ERKStepSetStopTime', err)
   end subroutine reinit
 
   subroutine erk_get_stats(this, stats)
@@ -283,14 +243,9 @@ contains
   !> Free all SUNDIALS memory; safe to call more than once.
   subroutine erk_finish(this)
     class(erk_solver_t), intent(inout) :: this
-    integer(c_int) :: flag
     if (c_associated(this%mem)) call FERKStepFree(this%mem)
     this%mem = c_null_ptr
-    if (associated(this%y)) call FN_VDestroy(this%y)
-    this%y => null()
-    if (c_associated(this%ctx)) flag = FSUNContext_Free(this%ctx)
-    this%ctx = c_null_ptr
-    if (associated(this%bridge)) deallocate(this%bridge)
+    call close_sundials(this%ctx, this%y, this%bridge)
   end subroutine erk_finish
 
   subroutine report_failure(this, flag, t_target, err)
@@ -298,20 +253,13 @@ contains
     integer(c_int), intent(in) :: flag
     real(wp), intent(in) :: t_target
     type(error_t), intent(inout) :: err
-    character(len=:), allocatable :: msg
-    type(c_ptr) :: flag_name
+    character(len=:), allocatable :: note
 
-    msg = 'ARKODE (ERKStep) failed at t = ' // real_str(this%t) // ' (integrating to ' // &
-      real_str(t_target) // '): flag ' // int_str(int(flag))
-    flag_name = erk_return_flag_name(int(flag, c_long))
-    msg = msg // ' ' // c_string(flag_name)
-    call c_free(flag_name)
-    if (this%bridge%bad_status /= 0) msg = msg // '; accel returned status ' // &
-      int_str(this%bridge%bad_status) // ' at t = ' // real_str(this%bridge%bad_time)
-    if (this%n_retries >= max_retries) msg = msg // ', still after ' // int_str(max_retries) // &
+    note = ''
+    if (this%n_retries >= max_retries) note = ', still after ' // int_str(max_retries) // &
       ' retries with smaller steps'
-    if (allocated(this%bridge%arkode_message)) msg = msg // '; ' // this%bridge%arkode_message
-    call err%set(ERR_NUMERIC, msg)
+    call set_failure('ARKODE (ERKStep)', this%t, t_target, flag, &
+      erk_return_flag_name(int(flag, c_long)), this%bridge, note, err)
   end subroutine report_failure
 
   ! ---- method tables ------------------------------------------------------------------------
@@ -332,10 +280,10 @@ contains
     fsal_table = with_fsal_stage(table)
     ! ERKStepSetTable keeps a copy.
     if (c_associated(fsal_table)) then
-      call check(FERKStepSetTable(mem, fsal_table), 'ERKStepSetTable', err)
+      call check(solver, FERKStepSetTable(mem, fsal_table), 'ERKStepSetTable', err)
       call FARKodeButcherTable_Free(fsal_table)
     else
-      call check(FERKStepSetTable(mem, table), 'ERKStepSetTable', err)
+      call check(solver, FERKStepSetTable(mem, table), 'ERKStepSetTable', err)
     end if
     call FARKodeButcherTable_Free(table)
   end subroutine set_method
@@ -365,24 +313,27 @@ contains
     type(c_ptr), intent(in) :: table
     type(c_ptr) :: fsal_table
     type(butcher_table_c_t), pointer :: tab
-    real(c_double), allocatable :: a(:, :)
-    real(c_double), pointer :: c(:), b(:), d(:)
+    type(c_ptr), pointer :: rows(:)
+    real(c_double), pointer :: row(:), c(:), b(:), d(:)
     real(c_double), allocatable :: a_rows(:), c_new(:), b_new(:), d_new(:)
     integer :: s, i
 
     fsal_table = c_null_ptr
     call c_f_pointer(table, tab)
     s = int(tab%stages)
+    ! A is stored as s pointers to rows.
+    call c_f_pointer(tab%a, rows, [s])
+    call c_f_pointer(rows(s), row, [s])
     call c_f_pointer(tab%c, c, [s])
     call c_f_pointer(tab%b, b, [s])
     call c_f_pointer(tab%d, d, [s])
-    a = table_matrix(tab%a, s)
     if (abs(c(s) - 1) > 10 * epsilon(1.0_c_double) .or. &
-      all(abs(a(s, :) - b) <= 10 * epsilon(1.0_c_double))) return
+      all(abs(row - b) <= 10 * epsilon(1.0_c_double))) return
     ! Row-major, as ARKodeButcherTable_Create wants A: the old rows padded with 0, then b.
     allocate(a_rows((s + 1)**2), source=0.0_c_double)
     do i = 1, s
-      a_rows((i - 1) * (s + 1) + 1:(i - 1) * (s + 1) + s) = a(i, :)
+      call c_f_pointer(rows(i), row, [s])
+      a_rows((i - 1) * (s + 1) + 1:(i - 1) * (s + 1) + s) = row
     end do
     a_rows(s * (s + 1) + 1:s * (s + 1) + s) = b
     ! Variables, not expressions: the SWIG wrapper declares them intent(inout).
@@ -392,109 +343,4 @@ contains
     fsal_table = FARKodeButcherTable_Create(int(s + 1, c_int), tab%q, tab%p, c_new, a_rows, &
       b_new, d_new)
   end function with_fsal_stage
-
-  !> A of a loaded table (stored as s pointers to rows) as an s x s array.
-  function table_matrix(rows_ptr, s) result(a)
-    type(c_ptr), intent(in) :: rows_ptr
-    integer, intent(in) :: s
-    real(c_double) :: a(s, s)
-    type(c_ptr), pointer :: rows(:)
-    real(c_double), pointer :: row(:)
-    integer :: i
-    call c_f_pointer(rows_ptr, rows, [s])
-    do i = 1, s
-      call c_f_pointer(rows(i), row, [s])
-      a(i, :) = row
-    end do
-  end function table_matrix
-
-  ! ---- C callbacks --------------------------------------------------------------------------
-
-  !> f(t, y) = (v, a(t, q, v))
-  integer(c_int) function erk_rhs(t, y_nv, ydot_nv, user_data) result(ierr) bind(C)
-    real(c_double), value :: t
-    type(N_Vector) :: y_nv, ydot_nv
-    type(c_ptr), value :: user_data
-    type(erk_bridge_t), pointer :: b
-    real(c_double), pointer :: y(:), ydot(:)
-    integer :: n, status
-
-    call c_f_pointer(user_data, b)
-    n = b%n
-    y => FN_VGetArrayPointer(y_nv)
-    ydot => FN_VGetArrayPointer(ydot_nv)
-    ydot(1:n) = y(n + 1:2 * n)
-    call b%sys%accel(min(max(real(t, wp), b%t_lo), b%t_hi), y(1:n), y(n + 1:2 * n), &
-      ydot(n + 1:2 * n), status)
-    b%n_accel = b%n_accel + 1
-    if (status /= 0) then
-      b%bad_status = status
-      b%bad_time = t
-    end if
-    ! Our convention (> 0 recoverable, < 0 fatal) is SUNDIALS'; only the size differs.
-    ierr = int(sign(1, status), c_int)
-    if (status == 0) ierr = 0
-  end function erk_rhs
-
-  !> Keep ARKODE's message for our error instead of letting it print to stderr.
-  subroutine erk_error_handler(error_code, module_name, function_name, msg, user_data) bind(C)
-    integer(c_int), value :: error_code
-    type(c_ptr), value :: module_name, function_name, msg, user_data
-    type(erk_bridge_t), pointer :: b
-    if (error_code >= 0) return
-    call c_f_pointer(user_data, b)
-    b%arkode_message = c_string(function_name) // ': ' // c_string(msg)
-  end subroutine erk_error_handler
-
-  ! ---- helpers ------------------------------------------------------------------------------
-
-  subroutine put_state(y_nv, y_in)
-    type(N_Vector), intent(inout) :: y_nv
-    real(wp), intent(in) :: y_in(:)
-    real(c_double), pointer :: y(:)
-    y => FN_VGetArrayPointer(y_nv)
-    y = y_in
-  end subroutine put_state
-
-  subroutine copy_state(y_nv, y_out)
-    type(N_Vector), intent(inout) :: y_nv
-    real(wp), intent(out) :: y_out(:)
-    real(c_double), pointer :: y(:)
-    y => FN_VGetArrayPointer(y_nv)
-    y_out = y
-  end subroutine copy_state
-
-  subroutine get_state(y_nv, q, v)
-    type(N_Vector), intent(inout) :: y_nv
-    real(wp), intent(out) :: q(:), v(:)
-    real(c_double), pointer :: y(:)
-    y => FN_VGetArrayPointer(y_nv)
-    q = y(1:size(q))
-    v = y(size(q) + 1:)
-  end subroutine get_state
-
-  subroutine check(flag, what, err)
-    integer(c_int), intent(in) :: flag
-    character(len=*), intent(in) :: what
-    type(error_t), intent(inout) :: err
-    if (flag /= 0) call err%set(ERR_INTERNAL, 'ARKODE: ' // what // ' returned ' // &
-      int_str(int(flag)))
-  end subroutine check
-
-  function c_string(p) result(s)
-    type(c_ptr), intent(in) :: p
-    character(len=:), allocatable :: s
-    character(kind=c_char), pointer :: chars(:)
-    integer :: i, n
-    if (.not. c_associated(p)) then
-      s = ''
-      return
-    end if
-    n = int(c_strlen(p))
-    call c_f_pointer(p, chars, [n])
-    allocate(character(len=n) :: s)
-    do i = 1, n
-      s(i:i) = chars(i)
-    end do
-  end function c_string
 end module integrators_arkode

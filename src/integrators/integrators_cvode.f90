@@ -1,22 +1,23 @@
 !> CVODE (BDF, Newton, dense direct solver) on the first-order form of q'' = a(t, q, v):
 !>     y = (q, v),   y' = (v, a(t, q, v)).
 !>
-!> This module and integrators_arkode are the only ones that talk to SUNDIALS, so that the move
-!> to SUNDIALS 7 (SUNComm, fsundials_core_mod) stays in two files. The system is reached from the C callbacks
-!> through CVODE's user_data, which points to a heap-allocated bridge object: no module
-!> variables, so several models can run in one process.
+!> This module, integrators_arkode and integrators_sundials (what the two share: the bridge
+!> object behind CVODE's user_data, the right-hand side and error-handler callbacks, the packing
+!> of y) are the only ones that talk to SUNDIALS, so that the move to SUNDIALS 7 (SUNComm,
+!> fsundials_core_mod) stays in three files.
 module integrators_cvode
   use, intrinsic :: iso_c_binding, only: c_ptr, c_null_ptr, c_int, c_long, c_double, c_int64_t, &
-    c_char, c_size_t, c_loc, c_funloc, c_f_pointer, c_associated
+    c_loc, c_funloc, c_f_pointer, c_associated
   use core_kinds, only: wp, i8
-  use core_strings, only: int_str, real_str
+  use core_strings, only: real_str
   use core_error, only: error_t, ERR_NUMERIC, ERR_INTERNAL
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
-  use fsundials_context_mod, only: FSUNContext_Create, FSUNContext_Free
-  use fsundials_nvector_mod, only: N_Vector, FN_VDestroy, FN_VGetArrayPointer
+  use integrators_sundials, only: sundials_bridge_t, new_bridge, open_sundials, close_sundials, &
+    sundials_rhs, sundials_error_handler, clamped, note_status, sundials_status, put_state, &
+    get_state, check, set_failure, cvode_return_flag_name
+  use fsundials_nvector_mod, only: N_Vector, FN_VGetArrayPointer
   use fsundials_matrix_mod, only: SUNMatrix, FSUNMatDestroy
   use fsundials_linearsolver_mod, only: SUNLinearSolver, FSUNLinSolFree
-  use fnvector_serial_mod, only: FN_VNew_Serial
   use fsunmatrix_dense_mod, only: FSUNDenseMatrix, FSUNDenseMatrix_Data
   use fsunlinsol_dense_mod, only: FSUNLinSol_Dense
   use fcvode_mod, only: CV_BDF, CV_NORMAL, FCVodeCreate, FCVodeInit, FCVodeReInit, FCVodeFree, &
@@ -28,22 +29,8 @@ module integrators_cvode
   private
   public :: cvode_solver_t
 
-  !> What the C callbacks need; lives on the heap so its address (CVODE's user_data) is fixed.
-  type :: cvode_bridge_t
-    class(ode2_system_t), pointer :: sys => null()
-    integer :: n = 0
-    !> accel is evaluated at times clamped into [t_lo, t_hi], strictly inside the segment
-    !> between breakpoints, so that a(t) jumping at a breakpoint is seen from the right side.
-    real(wp) :: t_lo = -huge(1.0_wp), t_hi = huge(1.0_wp)
-    integer(i8) :: n_accel = 0
-    !> The last non-zero status of a callback, for the error message.
-    integer :: bad_status = 0
-    real(wp) :: bad_time = 0
-    character(len=8) :: bad_where = ''
-    !> CVODE's own message of its last error (from the error handler).
-    character(len=:), allocatable :: cvode_message
-    real(wp), allocatable :: dadq(:, :), dadv(:, :)
-  end type cvode_bridge_t
+  !> The name of this solver in the error messages.
+  character(len=*), parameter :: solver = 'CVODE'
 
   !> One CVODE integration of one system. Call `finish` when done (gfortran 12 does not
   !> finalize local variables reliably, so there is no final procedure to rely on).
@@ -54,7 +41,7 @@ module integrators_cvode
     type(N_Vector), pointer :: y => null()
     type(SUNMatrix), pointer :: jmat => null()
     type(SUNLinearSolver), pointer :: ls => null()
-    type(cvode_bridge_t), pointer :: bridge => null()
+    type(sundials_bridge_t), pointer :: bridge => null()
     integer :: n = 0
     integer(i8) :: max_steps = 0
     !> Counters of the segments before the last CVodeReInit, which resets CVODE's own.
@@ -66,27 +53,6 @@ module integrators_cvode
     procedure :: get_stats => cvode_get_stats
     procedure :: finish => cvode_finish
   end type cvode_solver_t
-
-  interface
-    function c_strlen(s) bind(C, name='strlen') result(n)
-      import :: c_ptr, c_size_t
-      type(c_ptr), value :: s
-      integer(c_size_t) :: n
-    end function c_strlen
-
-    subroutine c_free(p) bind(C, name='free')
-      import :: c_ptr
-      type(c_ptr), value :: p
-    end subroutine c_free
-
-    !> Called directly: the string is malloc'ed, and the Fortran wrapper of SUNDIALS 6.4
-    !> (FCVodeGetReturnFlagName) never frees it.
-    function cvode_return_flag_name(flag) bind(C, name='CVodeGetReturnFlagName') result(name)
-      import :: c_ptr, c_long
-      integer(c_long), value :: flag
-      type(c_ptr) :: name
-    end function cvode_return_flag_name
-  end interface
 
 contains
 
@@ -102,35 +68,24 @@ contains
     this%n = size(q)
     this%max_steps = opts%max_steps
     this%done = integrator_stats_t()
-    allocate(this%bridge)
-    this%bridge%sys => sys
-    this%bridge%n = this%n
-    this%bridge%t_lo = t_lo
-    this%bridge%t_hi = t_hi
-
-    call check(FSUNContext_Create(c_null_ptr, this%ctx), 'SUNContext_Create', err)
+    this%bridge => new_bridge(sys, this%n, t_lo, t_hi)
+    call open_sundials(solver, q, v, this%ctx, this%y, err)
     if (.not. err%ok()) return
-    this%y => FN_VNew_Serial(int(2 * this%n, c_int64_t), this%ctx)
-    if (.not. associated(this%y)) then
-      call err%set(ERR_INTERNAL, 'CVODE: could not create the state vector')
-      return
-    end if
-    call put_state(this%y, q, v)
     this%mem = FCVodeCreate(CV_BDF, this%ctx)
     if (.not. c_associated(this%mem)) then
       call err%set(ERR_INTERNAL, 'CVODE: CVodeCreate failed')
       return
     end if
-    call check(FCVodeInit(this%mem, c_funloc(cvode_rhs), t0, this%y), 'CVodeInit', err)
-    call check(FCVodeSetUserData(this%mem, c_loc(this%bridge)), 'CVodeSetUserData', err)
-    call check(FCVodeSetErrHandlerFn(this%mem, c_funloc(cvode_error_handler), &
+    call check(solver, FCVodeInit(this%mem, c_funloc(sundials_rhs), t0, this%y), 'CVodeInit', err)
+    call check(solver, FCVodeSetUserData(this%mem, c_loc(this%bridge)), 'CVodeSetUserData', err)
+    call check(solver, FCVodeSetErrHandlerFn(this%mem, c_funloc(sundials_error_handler), &
       c_loc(this%bridge)), 'CVodeSetErrHandlerFn', err)
-    call check(FCVodeSStolerances(this%mem, opts%rtol, opts%atol), 'CVodeSStolerances', err)
-    call check(FCVodeSetMaxOrd(this%mem, int(opts%max_order, c_int)), 'CVodeSetMaxOrd', err)
+    call check(solver, FCVodeSStolerances(this%mem, opts%rtol, opts%atol), 'CVodeSStolerances', err)
+    call check(solver, FCVodeSetMaxOrd(this%mem, int(opts%max_order, c_int)), 'CVodeSetMaxOrd', err)
     if (opts%max_step > 0) then
-      call check(FCVodeSetMaxStep(this%mem, opts%max_step), 'CVodeSetMaxStep', err)
+      call check(solver, FCVodeSetMaxStep(this%mem, opts%max_step), 'CVodeSetMaxStep', err)
     end if
-    call check(FCVodeSetStopTime(this%mem, t_stop), 'CVodeSetStopTime', err)
+    call check(solver, FCVodeSetStopTime(this%mem, t_stop), 'CVodeSetStopTime', err)
     if (.not. err%ok()) return
     call attach_dense_solver(this, opts%jacobian == 'system', err)
   end subroutine cvode_start
@@ -151,10 +106,11 @@ contains
       call err%set(ERR_INTERNAL, 'CVODE: could not create the dense linear solver')
       return
     end if
-    call check(FCVodeSetLinearSolver(this%mem, this%ls, this%jmat), 'CVodeSetLinearSolver', err)
+    call check(solver, FCVodeSetLinearSolver(this%mem, this%ls, this%jmat), &
+      'CVodeSetLinearSolver', err)
     if (system_jacobian) then
       allocate(this%bridge%dadq(this%n, this%n), this%bridge%dadv(this%n, this%n))
-      call check(FCVodeSetJacFn(this%mem, c_funloc(cvode_jac)), 'CVodeSetJacFn', err)
+      call check(solver, FCVodeSetJacFn(this%mem, c_funloc(cvode_jac)), 'CVodeSetJacFn', err)
     end if
   end subroutine attach_dense_solver
 
@@ -170,15 +126,15 @@ contains
     integer(i8) :: steps_left
 
     ! CVODE's step limit applies to one CVode call; ours to the whole run.
-    call check(FCVodeGetNumSteps(this%mem, n_steps_now), 'CVodeGetNumSteps', err)
+    call check(solver, FCVodeGetNumSteps(this%mem, n_steps_now), 'CVodeGetNumSteps', err)
     if (.not. err%ok()) return
     steps_left = this%max_steps - this%done%n_steps - int(n_steps_now(1), i8)
     if (steps_left < 1) then
       call err%set(ERR_NUMERIC, 'CVODE: max_steps reached before t = ' // real_str(t_target))
       return
     end if
-    call check(FCVodeSetMaxNumSteps(this%mem, int(steps_left, c_long)), 'CVodeSetMaxNumSteps', &
-      err)
+    call check(solver, FCVodeSetMaxNumSteps(this%mem, int(steps_left, c_long)), &
+      'CVodeSetMaxNumSteps', err)
     if (.not. err%ok()) return
 
     this%bridge%bad_status = 0
@@ -203,8 +159,8 @@ contains
     this%bridge%t_lo = t_lo
     this%bridge%t_hi = t_hi
     call put_state(this%y, q, v)
-    call check(FCVodeReInit(this%mem, t, this%y), 'CVodeReInit', err)
-    call check(FCVodeSetStopTime(this%mem, t_stop), 'CVodeSetStopTime', err)
+    call check(solver, FCVodeReInit(this%mem, t, this%y), 'CVodeReInit', err)
+    call check(solver, FCVodeSetStopTime(this%mem, t_stop), 'CVodeSetStopTime', err)
   end subroutine cvode_restart
 
   subroutine cvode_get_stats(this, stats)
@@ -237,11 +193,7 @@ contains
     this%ls => null()
     if (associated(this%jmat)) call FSUNMatDestroy(this%jmat)
     this%jmat => null()
-    if (associated(this%y)) call FN_VDestroy(this%y)
-    this%y => null()
-    if (c_associated(this%ctx)) flag = FSUNContext_Free(this%ctx)
-    this%ctx = c_null_ptr
-    if (associated(this%bridge)) deallocate(this%bridge)
+    call close_sundials(this%ctx, this%y, this%bridge)
   end subroutine cvode_finish
 
   subroutine report_failure(this, flag, t_target, err)
@@ -250,44 +202,14 @@ contains
     real(wp), intent(in) :: t_target
     type(error_t), intent(inout) :: err
     real(c_double) :: t_now(1)
-    character(len=:), allocatable :: msg
-    type(c_ptr) :: flag_name
 
     t_now(1) = t_target
     if (FCVodeGetCurrentTime(this%mem, t_now) /= 0) t_now(1) = t_target
-    msg = 'CVODE failed at t = ' // real_str(t_now(1)) // ' (integrating to ' // &
-      real_str(t_target) // '): flag ' // int_str(int(flag))
-    flag_name = cvode_return_flag_name(int(flag, c_long))
-    msg = msg // ' ' // c_string(flag_name)
-    call c_free(flag_name)
-    if (this%bridge%bad_status /= 0) msg = msg // '; ' // trim(this%bridge%bad_where) // &
-      ' returned status ' // int_str(this%bridge%bad_status) // ' at t = ' // &
-      real_str(this%bridge%bad_time)
-    if (allocated(this%bridge%cvode_message)) msg = msg // '; ' // this%bridge%cvode_message
-    call err%set(ERR_NUMERIC, msg)
+    call set_failure(solver, t_now(1), t_target, flag, &
+      cvode_return_flag_name(int(flag, c_long)), this%bridge, '', err)
   end subroutine report_failure
 
   ! ---- C callbacks --------------------------------------------------------------------------
-
-  !> f(t, y) = (v, a(t, q, v))
-  integer(c_int) function cvode_rhs(t, y_nv, ydot_nv, user_data) result(ierr) bind(C)
-    real(c_double), value :: t
-    type(N_Vector) :: y_nv, ydot_nv
-    type(c_ptr), value :: user_data
-    type(cvode_bridge_t), pointer :: b
-    real(c_double), pointer :: y(:), ydot(:)
-    integer :: n, status
-
-    call c_f_pointer(user_data, b)
-    n = b%n
-    y => FN_VGetArrayPointer(y_nv)
-    ydot => FN_VGetArrayPointer(ydot_nv)
-    ydot(1:n) = y(n + 1:2 * n)
-    call b%sys%accel(clamped(b, t), y(1:n), y(n + 1:2 * n), ydot(n + 1:2 * n), status)
-    b%n_accel = b%n_accel + 1
-    call note_status(b, status, t, 'accel')
-    ierr = sundials_status(status)
-  end function cvode_rhs
 
   !> J = df/dy = [[0, I], [da/dq, da/dv]], column-major in CVODE's dense matrix.
   integer(c_int) function cvode_jac(t, y_nv, fy_nv, jac_sm, user_data, tmp1, tmp2, tmp3) &
@@ -296,7 +218,7 @@ contains
     type(N_Vector) :: y_nv, fy_nv, tmp1, tmp2, tmp3
     type(SUNMatrix) :: jac_sm
     type(c_ptr), value :: user_data
-    type(cvode_bridge_t), pointer :: b
+    type(sundials_bridge_t), pointer :: b
     real(c_double), pointer :: y(:), jac(:, :)
     integer :: n, i, status
 
@@ -316,16 +238,6 @@ contains
     jac(n + 1:2 * n, n + 1:2 * n) = b%dadv
   end function cvode_jac
 
-  !> Keep CVODE's message for our error instead of letting it print to stderr.
-  subroutine cvode_error_handler(error_code, module_name, function_name, msg, user_data) bind(C)
-    integer(c_int), value :: error_code
-    type(c_ptr), value :: module_name, function_name, msg, user_data
-    type(cvode_bridge_t), pointer :: b
-    if (error_code >= 0) return
-    call c_f_pointer(user_data, b)
-    b%cvode_message = c_string(function_name) // ': ' // c_string(msg)
-  end subroutine cvode_error_handler
-
   ! ---- helpers ------------------------------------------------------------------------------
 
   !> FSUNDenseMatrix_Data of SUNDIALS 6.4 returns a pointer of size 1: rebuild it with the
@@ -338,73 +250,4 @@ contains
     first => FSUNDenseMatrix_Data(mat)
     call c_f_pointer(c_loc(first(1)), a, [m, m])
   end function dense_matrix_data
-
-  pure real(wp) function clamped(b, t)
-    type(cvode_bridge_t), intent(in) :: b
-    real(c_double), intent(in) :: t
-    clamped = min(max(real(t, wp), b%t_lo), b%t_hi)
-  end function clamped
-
-  subroutine note_status(b, status, t, where)
-    type(cvode_bridge_t), intent(inout) :: b
-    integer, intent(in) :: status
-    real(c_double), intent(in) :: t
-    character(len=*), intent(in) :: where
-    if (status == 0) return
-    b%bad_status = status
-    b%bad_time = t
-    b%bad_where = where
-  end subroutine note_status
-
-  !> Our callbacks' convention (> 0 recoverable, < 0 fatal) is SUNDIALS'; only the size differs.
-  pure integer(c_int) function sundials_status(status)
-    integer, intent(in) :: status
-    sundials_status = int(sign(1, status), c_int)
-    if (status == 0) sundials_status = 0
-  end function sundials_status
-
-  subroutine put_state(y_nv, q, v)
-    type(N_Vector), intent(inout) :: y_nv
-    real(wp), intent(in) :: q(:), v(:)
-    real(c_double), pointer :: y(:)
-    y => FN_VGetArrayPointer(y_nv)
-    y(1:size(q)) = q
-    y(size(q) + 1:) = v
-  end subroutine put_state
-
-  subroutine get_state(y_nv, q, v)
-    type(N_Vector), intent(inout) :: y_nv
-    real(wp), intent(out) :: q(:), v(:)
-    real(c_double), pointer :: y(:)
-    y => FN_VGetArrayPointer(y_nv)
-    q = y(1:size(q))
-    v = y(size(q) + 1:)
-  end subroutine get_state
-
-  subroutine check(flag, what, err)
-    integer(c_int), intent(in) :: flag
-    character(len=*), intent(in) :: what
-    type(error_t), intent(inout) :: err
-    if (flag /= 0) call err%set(ERR_INTERNAL, 'CVODE: ' // what // ' returned ' // &
-      int_str(int(flag)))
-  end subroutine check
-
-  function c_string(p) result(s)
-    type(c_ptr), intent(in) :: p
-    character(len=:), allocatable :: s
-    character(kind=c_char), pointer :: chars(:)
-    integer :: i, n
-    if (.not. c_associated(p)) then
-      s = ''
-      return
-    end if
-    n = int(c_strlen(p))
-    call c_f_pointer(p, chars, [n])
-    allocate(character(len=n) :: s)
-    do i = 1, n
-      s(i:i) = chars(i)
-    end do
-  end function c_string
-
-
 end module integrators_cvode
