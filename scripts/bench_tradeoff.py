@@ -654,6 +654,8 @@ def check_args(args: argparse.Namespace) -> None:
         raise UserError(f"{args.bin}: no flexmor executable there; build it first "
                         "(bash scripts/example.sh, or cmake -S . -B build && cmake --build "
                         "build) or give --bin")
+    # The runs start in a scratch folder: a relative --bin must not depend on it.
+    args.bin = args.bin.resolve()
     if not BASE_SCENE.is_file():
         raise UserError(f"{BASE_SCENE}: base scene missing")
     if args.out_dir.exists() and not args.out_dir.is_dir():
