@@ -89,8 +89,10 @@ contains
     d = tip_difference(red, full)
     write(line, '(a,es9.2,a)') 'all modes reproduce the full run (tip difference ', d, ' m)'
     call suite%check(d < 1.0e-7_wp, trim(line))
-    call suite%check(maxval(red%red%residual) < 1.0e-7_wp * maxval(abs(full%dyn%q_hist)) * &
-      1.0e6_wp, 'all modes: residual at round-off level')
+    ! With k = 1 the residual reaches about 5e2 on this scene.
+    write(line, '(a,es9.2,a)') 'all modes: residual at round-off level (', &
+      maxval(red%red%residual), ')'
+    call suite%check(maxval(red%red%residual) < 1.0e-6_wp, trim(line))
     call suite%check(maxval(red%red%estimate) < 1.0e-9_wp, &
       'all modes: error estimate below 1 nm')
   end subroutine check_full_basis
