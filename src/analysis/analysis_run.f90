@@ -5,7 +5,7 @@ module analysis_run
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_INPUT
   use io_namelist, only: nml_file_t
-  use io_scene, only: load_scene
+  use io_scene, only: read_scene
   use io_hdf5, only: h5_writer_t
   use model_scene, only: scene_t, dynamic_rec_t
   use model_system, only: model_t
@@ -42,6 +42,7 @@ module analysis_run
     logical :: verbose = .true.
   contains
     procedure :: load => run_load
+    procedure :: load_parsed => run_load_parsed
     procedure :: execute => run_execute
     procedure :: write => run_write
   end type run_t
@@ -53,8 +54,19 @@ contains
     class(run_t), intent(inout) :: this
     character(len=*), intent(in) :: path
     type(error_t), intent(out) :: err
+    type(nml_file_t) :: file
+    call file%load(path, err)
+    if (err%ok()) call this%load_parsed(file, err)
+  end subroutine run_load
+
+  !> Build the model of an already parsed (and possibly edited, e.g. by a sweep) scene file.
+  subroutine run_load_parsed(this, file, err)
+    class(run_t), intent(inout) :: this
+    type(nml_file_t), intent(in) :: file
+    type(error_t), intent(out) :: err
     type(model_t) :: model
-    call load_scene(path, this%file, this%scene, err)
+    this%file = file
+    call read_scene(this%file, this%scene, err)
     if (.not. err%ok()) return
     call build_model(this%scene, model, err)
     if (err%ok()) call check_output_nodes(this%scene, model, err)
@@ -63,8 +75,8 @@ contains
       this%q_static = 0.0_wp
       call this%dyn%init(model, 0.0_wp, this%q_static, err)
     end if
-    if (.not. err%ok()) call err%prefix(path // ': ')
-  end subroutine run_load
+    if (.not. err%ok()) call err%prefix(this%file%path // ': ')
+  end subroutine run_load_parsed
 
   subroutine check_output_nodes(scene, model, err)
     type(scene_t), intent(in) :: scene

@@ -1,0 +1,79 @@
+!> Scalar results of one sweep case, taken from a finished run (docs/sweep.md, "Metrics").
+!> A metric that does not apply (no output after the motion, a full run's error estimate) is
+!> NaN, written explicitly: the file documents NaN as "not applicable or not run".
+module sweep_metrics
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_INPUT
+  use analysis_run, only: run_t
+  implicit none
+  private
+  public :: METRIC_NAMES, METRIC_UNITS, case_metrics, not_available, check_metric_node
+
+  character(len=18), parameter :: METRIC_NAMES(6) = [character(len=18) :: &
+    'max_tip_deflection', 'residual_vibration', 'n_steps', 'n_model_evals', 'error_estimate', &
+    'n_modes']
+  character(len=1), parameter :: METRIC_UNITS(6) = [character(len=1) :: 'm', 'm', '', '', &
+    'm', '']
+
+contains
+
+  !> NaN for every metric.
+  function not_available() result(m)
+    real(wp) :: m(size(METRIC_NAMES))
+    m = ieee_value(1.0_wp, ieee_quiet_nan)
+  end function not_available
+
+  !> The sweep's node must exist and the scene must run a dynamic analysis.
+  subroutine check_metric_node(run, node, err)
+    type(run_t), intent(in) :: run
+    character(len=*), intent(in) :: node
+    type(error_t), intent(inout) :: err
+    if (.not. run%scene%dynamic%active) then
+      call err%set(ERR_INPUT, 'the base scene has no &dynamic group: the sweep metrics ' // &
+        'need a dynamic analysis')
+    else if (run%dyn%model%find_node(node) == 0) then
+      call err%set(ERR_INPUT, 'group &sweep: variable ''node'': the base scene has no node ''' &
+        // node // '''')
+    end if
+  end subroutine check_metric_node
+
+  !> Metrics of a finished dynamic run. The rigid-link reference is the kinematics with every
+  !> dynamic coordinate zero, solved at each output time (after the run, so it costs nothing
+  !> during the integration).
+  subroutine case_metrics(run, node, metrics, err)
+    type(run_t), intent(inout) :: run
+    character(len=*), intent(in) :: node
+    real(wp), intent(out) :: metrics(:)
+    type(error_t), intent(out) :: err
+    real(wp), allocatable :: deflection(:), zero(:)
+    real(wp) :: motion_end
+    integer :: k, ic(3), nt
+    metrics = not_available()
+    associate (dyn => run%dyn, model => run%dyn%model)
+      ic = model%node_coord(:, model%find_node(node))
+      nt = size(run%time)
+      allocate(deflection(nt), zero(model%n_dy))
+      zero = 0.0_wp
+      do k = 1, nt
+        call dyn%kin%solve(model, dyn%full_q(run%time(k), zero), err)
+        if (.not. err%ok()) return
+        deflection(k) = hypot(dyn%x_hist(ic(1), k) - dyn%kin%x(ic(1)), &
+                              dyn%x_hist(ic(2), k) - dyn%kin%x(ic(2)))
+      end do
+      metrics(1) = maxval(deflection)
+      motion_end = 0.0_wp
+      do k = 1, model%n_motions
+        motion_end = max(motion_end, model%motions(k)%t0 + model%motions(k)%duration)
+      end do
+      if (any(run%time > motion_end)) metrics(2) = maxval(deflection, mask=run%time > motion_end)
+      metrics(3) = real(run%stats%n_steps, wp)
+      metrics(4) = real(dyn%n_evals, wp)
+      metrics(6) = 0.0_wp
+      if (allocated(run%red)) then
+        metrics(6) = real(run%red%basis%k(), wp)
+        if (run%red%has_estimate) metrics(5) = maxval(run%red%estimate)
+      end if
+    end associate
+  end subroutine case_metrics
+end module sweep_metrics

@@ -1,0 +1,221 @@
+"""flexmor-sweep end to end: serial and under mpirun with 2 and 3 ranks (uneven split), resume
+after an interruption (also kill -9 of mpirun), failed cases recorded, bad sweep input."""
+import os
+import shutil
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+BIN = Path(os.environ.get("FLEXMOR_SWEEP_BIN", ROOT / "build-debug" / "bin" / "flexmor-sweep"))
+MPIEXEC = os.environ.get("MPIEXEC") or shutil.which("mpiexec") or "mpiexec"
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1")
+pytestmark = pytest.mark.skipif(not BIN.is_file(), reason="flexmor-sweep not built")
+
+BASE = """
+&node label = 'base', x = 0, y = 0, fixed = .true. /
+&node label = 'tip', x = 1, y = 0 /
+&link label = 'arm', from = 'base', to = 'tip', n_elements = 2,
+      E = 7.0e10, A = 1.0e-4, I = 1.0e-9, rho = 2700 /
+&hinge label = 'j1', node = 'base', link = 'arm', mode = 'prescribed', motion = 'm1' /
+&motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.02 /
+&mass node = 'tip', m = 0.1 /
+&dynamic t_end = 0.03, output_dt = 1e-3 /
+"""
+
+SWEEP = """
+&sweep base = 'base.nml', mode = 'product' /
+&parameter name = 'motion.m1.end', values = 0.3, 0.6, 0.9 /
+&parameter name = 'link.arm.E', values = 7.0e10, -1.0 /
+"""
+
+
+def write_inputs(folder, sweep=SWEEP, base=BASE):
+    (folder / "base.nml").write_text(base)
+    (folder / "sweep.nml").write_text(sweep)
+    return folder / "sweep.nml"
+
+
+def run_sweep(folder, ranks=None, out="out.h5", timeout=240):
+    cmd = [str(BIN), "sweep.nml", "-o", out]
+    if ranks is not None:
+        cmd = [MPIEXEC, "-n", str(ranks)] + cmd
+    return subprocess.run(cmd, cwd=folder, env=ENV, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def read(path):
+    with h5py.File(path, "r") as f:
+        cases = f["cases"]
+        return {
+            "status": cases["status"][:],
+            "message": [m.decode().rstrip("\x00 ") for m in cases["message"][:]],
+            "wall": cases["wall_time_s"][:],
+            "rank": cases["rank"][:],
+            "metrics": {k: v[:] for k, v in cases["metrics"].items()},
+            "parameters": {k: v[:] for k, v in cases["parameters"].items()},
+        }
+
+
+@pytest.fixture(scope="module")
+def serial(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("serial")
+    write_inputs(folder)
+    proc = run_sweep(folder)
+    assert proc.returncode == 0, proc.stderr
+    return folder, read(folder / "out.h5"), proc
+
+
+def test_serial_sweep_records_every_case(serial):
+    _, res, proc = serial
+    assert list(res["status"][::2]) == [0, 0, 0]          # E = 7e10
+    assert all(s == 1 for s in res["status"][1::2])       # E = -1: input error, recorded
+    assert all("'E'" in m and "positive" in m for m in res["message"][1::2])
+    assert all(m == "" for m in res["message"][::2])
+    ok = res["status"] == 0
+    for name in ("max_tip_deflection", "residual_vibration", "n_steps", "n_model_evals"):
+        assert np.all(np.isfinite(res["metrics"][name][ok])), name
+        assert np.all(np.isnan(res["metrics"][name][~ok])), name
+    assert np.all(res["metrics"]["n_modes"][ok] == 0)
+    # A larger swing deflects the arm more.
+    d = res["metrics"]["max_tip_deflection"][ok]
+    assert d[0] < d[1] < d[2] and d[0] > 0
+    assert list(res["parameters"]["motion.m1.end"]) == [0.3, 0.3, 0.6, 0.6, 0.9, 0.9]
+    assert "6/6 done, 3 failed" in proc.stdout
+
+
+@pytest.mark.parametrize("ranks", [2, 3])
+def test_mpi_matches_serial(serial, tmp_path, ranks):
+    _, ref, _ = serial
+    write_inputs(tmp_path)
+    proc = run_sweep(tmp_path, ranks)
+    assert proc.returncode == 0, proc.stderr
+    res = read(tmp_path / "out.h5")
+    assert list(res["status"]) == list(ref["status"])
+    assert res["message"] == ref["message"]
+    for name, values in ref["metrics"].items():
+        np.testing.assert_allclose(res["metrics"][name], values, rtol=1e-12, atol=0,
+                                   equal_nan=True, err_msg=name)
+    assert set(res["rank"]) <= set(range(1, ranks)) and -1 not in res["rank"]
+
+
+def test_rerun_on_finished_file_does_nothing(serial, tmp_path):
+    folder, _, _ = serial
+    shutil.copy(folder / "out.h5", tmp_path / "done.h5")
+    write_inputs(tmp_path)
+    before = read(tmp_path / "done.h5")
+    proc = run_sweep(tmp_path, out="done.h5")
+    assert proc.returncode == 0, proc.stderr
+    assert "6 already in" in proc.stdout
+    after = read(tmp_path / "done.h5")
+    np.testing.assert_array_equal(after["wall"], before["wall"])
+
+
+def test_resume_runs_only_missing_cases(serial, tmp_path):
+    folder, ref, _ = serial
+    shutil.copy(folder / "out.h5", tmp_path / "part.h5")
+    with h5py.File(tmp_path / "part.h5", "r+") as f:   # as if cases 2 and 5 never ran
+        for i in (2, 5):
+            f["cases/status"][i - 1] = -1
+            f["cases/wall_time_s"][i - 1] = np.nan
+    write_inputs(tmp_path)
+    proc = run_sweep(tmp_path, 2, out="part.h5")
+    assert proc.returncode == 0, proc.stderr
+    assert "4 already in" in proc.stdout
+    res = read(tmp_path / "part.h5")
+    assert list(res["status"]) == list(ref["status"])
+    assert [r for r in res["rank"]] == [0, 1, 0, 0, 1, 0]
+
+
+def test_killed_sweep_stays_readable_and_resumes(tmp_path):
+    """kill -9 of mpirun mid-way: the file opens, finished cases are kept, a rerun completes."""
+    sweep = ("&sweep base = 'base.nml', mode = 'product' /\n"
+             "&parameter name = 'motion.m1.end', start = 0.1, stop = 1.0, n = 16 /\n"
+             "&parameter name = 'dynamic.rtol', values = 1e-8 /\n"
+             "&parameter name = 'dynamic.t_end', values = 2.0 /\n")
+    write_inputs(tmp_path, sweep=sweep)
+    proc = subprocess.Popen([MPIEXEC, "-n", "2", str(BIN), "sweep.nml", "-o", "k.h5"],
+                            cwd=tmp_path, env=ENV, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.time() + 120
+    done = 0
+
+    while time.time() < deadline and proc.poll() is None and done < 3:
+        time.sleep(0.2)
+        try:
+            # The writer holds HDF5's file lock; reading alongside it needs the lock off.
+            with h5py.File(tmp_path / "k.h5", "r", locking=False) as f:
+                done = int(np.sum(f["cases/status"][:] >= 0))
+        except (OSError, KeyError):
+            pass
+
+    assert proc.poll() is None, "the sweep ended before it could be interrupted"
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=30)
+    wait_for_orphans(tmp_path / "k.h5")
+    partial = read(tmp_path / "k.h5")
+    assert 1 <= np.sum(partial["status"] == 0) <= 16
+    rerun = run_sweep(tmp_path, 2, out="k.h5")
+    assert rerun.returncode == 0, rerun.stderr
+    final = read(tmp_path / "k.h5")
+    assert np.all(final["status"] == 0)
+    kept = partial["status"] == 0
+    np.testing.assert_array_equal(final["wall"][kept], partial["wall"][kept])
+
+
+def wait_for_orphans(path, timeout=60.0):
+    """Ranks of a killed mpirun notice it and abort; until then they hold the file's lock."""
+    deadline = time.time() + timeout
+    pattern = f"flexmor-sweep sweep.nml -o {path.name}"
+    while time.time() < deadline:
+        found = subprocess.run(["pgrep", "-f", pattern], capture_output=True, text=True)
+        if not found.stdout.strip():
+            return
+        time.sleep(0.5)
+    subprocess.run(["pkill", "-9", "-f", pattern])
+    pytest.fail("ranks of the killed mpirun were still running after 60 s")
+
+
+BAD = {
+    "unknown parameter": ("&parameter name = 'dynamic.rtoll', values = 1e-6 /",
+                          ["rtoll"]),
+    "unknown group": ("&parameter name = 'solver.tol', values = 1 /", ["solver"]),
+    "unknown label": ("&parameter name = 'motion.m9.end', values = 1 /", ["m9"]),
+    "empty range": ("&parameter name = 'motion.m1.end', start = 0, stop = 1, n = 0 /",
+                    ["motion.m1.end"]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD))
+def test_bad_sweep_input(tmp_path, name):
+    extra, fragments = BAD[name]
+    write_inputs(tmp_path, sweep="&sweep base = 'base.nml' /\n" + extra + "\n")
+    proc = run_sweep(tmp_path, 2)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    # One line from flexmor-sweep (rank 0); mpiexec adds its own banner after it.
+    err = proc.stderr.strip().splitlines()[0]
+    assert err.startswith("flexmor-sweep: error: "), proc.stderr
+    assert proc.stderr.count("flexmor-sweep:") == 1, proc.stderr
+    for fragment in fragments:
+        assert fragment in err
+    assert not (tmp_path / "out.h5").exists()
+
+
+def test_zero_samples(tmp_path):
+    write_inputs(tmp_path, sweep="&sweep base = 'base.nml', mode = 'random', n_samples = 0 /\n"
+                 "&parameter name = 'motion.m1.end', min = 0, max = 1 /\n")
+    proc = run_sweep(tmp_path)
+    assert proc.returncode == 1 and "n_samples" in proc.stderr
+
+
+def test_missing_base_scene(tmp_path):
+    (tmp_path / "sweep.nml").write_text("&sweep base = 'nope.nml' /\n"
+                                        "&parameter name = 'motion.m1.end', values = 1 /\n")
+    proc = run_sweep(tmp_path)
+    assert proc.returncode != 0 and "nope.nml" in proc.stderr
