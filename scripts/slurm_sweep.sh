@@ -36,7 +36,7 @@ set -euo pipefail
 
 # Site modules: load the same compiler, MPI and HDF5 that built flexmor (names vary by site).
 # module purge
-# module load gcc/13 openmpi/4.1 hdf5/1.14 sundials/7
+# module load gcc/12 openmpi/4.1 hdf5/1.10-openmpi sundials/6.4
 
 # One thread per rank (flexmor-sweep also sets this for BLAS itself).
 export OMP_NUM_THREADS=1

@@ -1,4 +1,4 @@
-!> flexmor-sweep SWEEP.nml [-o OUT.h5] [-q]: run a parameter sweep (docs/sweep.md) on all
+!> flexmor-sweep SWEEP.nml [-o OUT.h5] [-q] [--check]: run a parameter sweep (docs/sweep.md) on all
 !> ranks of MPI_COMM_WORLD (mpirun -n N, or alone as one rank) into one HDF5 file. Rerunning on
 !> an existing file resumes it. Exit status as flexmor: 0 ok (failed cases are results, not
 !> errors), 1 input, 4 file system, 5 internal; rank 0 prints the message.
@@ -9,22 +9,30 @@ program flexmor_sweep_main
   use core_linalg, only: single_thread_blas
   use analysis_run, only: FLEXMOR_VERSION
   use sweep_spec, only: sweep_spec_t
-  use sweep_run, only: run_sweep
+  use sweep_run, only: run_sweep, check_sweep
   implicit none
   type(sweep_spec_t) :: spec
   type(error_t) :: err
   character(len=:), allocatable :: input, output
-  logical :: verbose
+  logical :: verbose, check_only
   integer :: rank, code
 
   call MPI_Init()
   call MPI_Comm_rank(MPI_COMM_WORLD, rank)
   call single_thread_blas()
   verbose = rank == 0
-  call parse_arguments(input, output, verbose, err)
+  check_only = .false.
+  call parse_arguments(input, output, verbose, check_only, err)
   ! --help and --version leave no input: nothing to run.
   if (err%ok() .and. len(input) > 0) call spec%load(input, err)
-  if (err%ok() .and. len(input) > 0) call run_sweep(spec, output, MPI_COMM_WORLD, verbose, err)
+  if (err%ok() .and. len(input) > 0) then
+    if (check_only) then
+      call check_sweep(spec, err)
+      if (err%ok() .and. rank == 0) call list_cases(spec)
+    else
+      call run_sweep(spec, output, MPI_COMM_WORLD, verbose, err)
+    end if
+  end if
   code = 0
   if (.not. err%ok()) then
     if (rank == 0) write(error_unit, '(a)') 'flexmor-sweep: error: ' // err%message
@@ -40,11 +48,24 @@ program flexmor_sweep_main
 
 contains
 
-  subroutine parse_arguments(input, output, verbose, err)
+  !> --check: what the sweep would run, one line per case.
+  subroutine list_cases(spec)
+    type(sweep_spec_t), intent(in) :: spec
+    integer :: i, j
+    write(*, '(a,i0,a)') 'sweep: ', spec%n_cases(), ' cases of ' // spec%base_path // &
+      ' (mode ' // spec%mode // '); the input is valid'
+    write(*, '(a6,*(2x,a))') 'case', (spec%names(j)%s, j = 1, spec%n_parameters())
+    do i = 1, spec%n_cases()
+      write(*, '(i6,*(2x,g0.8))') i, spec%values(i, :)
+    end do
+  end subroutine list_cases
+
+  subroutine parse_arguments(input, output, verbose, check_only, err)
     character(len=:), allocatable, intent(out) :: input, output
-    logical, intent(inout) :: verbose
+    logical, intent(inout) :: verbose, check_only
     type(error_t), intent(out) :: err
-    character(len=*), parameter :: usage = 'usage: flexmor-sweep SWEEP.nml [-o OUT.h5] [-q]'
+    character(len=*), parameter :: usage = &
+      'usage: flexmor-sweep SWEEP.nml [-o OUT.h5] [-q] [--check]'
     character(len=4096) :: arg
     integer :: i, n, dot
     n = command_argument_count()
@@ -56,7 +77,8 @@ contains
       case ('-h', '--help')
         if (verbose) write(*, '(a)') usage, &
           '  runs every case of SWEEP.nml (under mpirun: on all ranks) and writes one HDF5', &
-          '  file (default: SWEEP.h5 in the current directory); rerun to resume. See docs/sweep.md.'
+          '  file (default: SWEEP.h5 in the current directory); rerun to resume.', &
+          '  --check: validate the sweep and list its cases without running. See docs/sweep.md.'
         output = ''
         input = ''
         return
@@ -67,6 +89,8 @@ contains
         return
       case ('-q', '--quiet')
         verbose = .false.
+      case ('--check')
+        check_only = .true.
       case ('-o')
         if (i == n) then
           call err%set(ERR_INPUT, 'option -o needs a file name')

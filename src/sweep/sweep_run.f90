@@ -24,7 +24,7 @@ module sweep_run
     check_metric_node
   implicit none
   private
-  public :: run_sweep, MESSAGE_LEN
+  public :: run_sweep, check_sweep, MESSAGE_LEN
 
   integer, parameter :: MESSAGE_LEN = 256
   integer, parameter :: TAG_WORK = 1, TAG_STOP = 2, TAG_RESULT = 3, TAG_MESSAGE = 4
@@ -110,6 +110,15 @@ contains
     call MPI_Bcast(flag, 1, MPI_INTEGER, 0, comm)
     if (flag(1) /= 0 .and. rank /= 0) call err%set(ERR_INPUT, 'the sweep failed on rank 0')
   end subroutine run_sweep
+
+  !> The sweep's own input errors, without running anything (flexmor-sweep --check).
+  subroutine check_sweep(spec, err)
+    type(sweep_spec_t), intent(in) :: spec
+    type(error_t), intent(out) :: err
+    type(nml_file_t) :: base
+    call base%load(spec%base_path, err)
+    if (err%ok()) call validate(spec, base, err)
+  end subroutine check_sweep
 
   !> Input errors of the sweep itself, found before any work: every parameter must name a
   !> variable the scene reader knows (an unknown one is reported by the reader as unknown).

@@ -219,3 +219,18 @@ def test_missing_base_scene(tmp_path):
                                         "&parameter name = 'motion.m1.end', values = 1 /\n")
     proc = run_sweep(tmp_path)
     assert proc.returncode != 0 and "nope.nml" in proc.stderr
+
+
+def test_example_sweep_checks_and_lists_its_cases():
+    proc = subprocess.run([str(BIN), str(ROOT / "input" / "sweep_two_link.nml"), "--check"],
+                          env=ENV, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert "12 cases" in lines[0] and "valid" in lines[0]
+    assert len(lines) == 14 and lines[-1].split()[0] == "12"
+
+
+def test_no_arguments_is_a_usage_error(tmp_path):
+    proc = subprocess.run([str(BIN)], cwd=tmp_path, env=ENV, capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 1 and "usage" in proc.stderr
