@@ -11,20 +11,19 @@ program test_sweep_file
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_int, c_null_char
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5fopen_f, h5fclose_f, H5F_ACC_RDONLY_F, &
-    h5dopen_f, h5dread_f, h5dclose_f, h5dget_space_f, h5dget_type_f, h5dget_create_plist_f, &
-    h5sget_simple_extent_dims_f, h5sclose_f, h5pget_layout_f, h5pclose_f, H5D_CONTIGUOUS_F, &
-    h5tget_size_f, h5tget_strpad_f, h5tclose_f, H5T_STR_NULLPAD_F, h5kind_to_type, &
-    H5_REAL_KIND, H5_INTEGER_KIND, h5aopen_by_name_f, h5aread_f, h5aclose_f, h5aget_type_f, &
-    h5aget_space_f, h5dvlen_reclaim_f, H5P_DEFAULT_F, h5fget_obj_count_f, H5F_OBJ_ALL_F, &
-    H5F_OBJ_FILE_F, H5F_OBJ_GROUP_F, H5F_OBJ_DATASET_F, &
+    h5dopen_f, h5dread_f, h5dclose_f, h5dget_type_f, h5dget_create_plist_f, h5pget_layout_f, &
+    h5pclose_f, H5D_CONTIGUOUS_F, h5tget_size_f, h5tget_strpad_f, h5tclose_f, H5T_STR_NULLPAD_F, &
     h5gget_info_by_name_f, h5lget_name_by_idx_f, H5_INDEX_CRT_ORDER_F, H5_ITER_INC_F
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT, ERR_IO, ERR_INTERNAL
+  use core_strings, only: int_str
   use io_fs, only: delete_file
   use io_hdf5, only: h5_writer_t
   use io_namelist, only: string_t
   use io_sweep_file, only: sweep_file_t, sweep_attrs_t
   use testing, only: suite_t
+  use h5_read, only: open_objects, dataset_dims, read_real, read_int, read_string_attr, &
+    read_i8_attr, scratch_dir, random_tag, exists, msg
   implicit none
 
   interface
@@ -206,8 +205,9 @@ contains
     call t%check(read_string_attr(fid, '/', 'sweep_file') == 'arm_sweep.nml', &
                  'attribute sweep_file')
     call t%check(read_string_attr(fid, '/', 'base_scene') == 'arm.nml', 'attribute base_scene')
-    call t%check(read_int_attr(fid, 'n_cases') == NC .and. read_int_attr(fid, 'n_parameters') &
-                 == NP .and. read_int_attr(fid, 'seed') == 42, 'integer attributes')
+    call t%check(read_i8_attr(fid, '/', 'n_cases') == NC .and. &
+                 read_i8_attr(fid, '/', 'n_parameters') == NP .and. &
+                 read_i8_attr(fid, '/', 'seed') == 42, 'integer attributes')
     call t%check(read_string_attr(fid, '/cases/wall_time_s', 'units') == 's', &
                  'units of wall_time_s')
     call t%check(read_string_attr(fid, '/cases/metrics/max_tip_deflection', 'units') == 'm', &
@@ -372,7 +372,6 @@ contains
     type(string_t) :: names(NP)
     character(len=:), allocatable :: p
     integer(hid_t) :: fid
-    real(wp), allocatable :: r(:)
     p = dir // '/flexmor_test_sweep_file_' // tag // '_s.h5'
     names(1)%s = 'hinge.joint1.stiffness'
     names(2)%s = 'link.link1.n_elements'
@@ -380,13 +379,11 @@ contains
     call t%check(err%ok(), 'create with string_t parameter names: ' // msg(err))
     call f%close()
     call h5fopen_f(p, H5F_ACC_RDONLY_F, fid, hdferr)
-    if (hdferr == 0) then
-      r = read_real(fid, '/cases/parameters/link.link1.n_elements')
-      call t%close_array(r, pvals(:, 2), 0.0_wp, 0.0_wp, 'string_t names: values read back')
-      call h5fclose_f(fid, hdferr)
-    else
-      call t%check(.false., 'the file with string_t names opens')
-    end if
+    call t%check(hdferr == 0, 'the file with string_t names opens')
+    ! (read_real gives an empty array, a size mismatch here, if the file did not open.)
+    call t%close_array(read_real(fid, '/cases/parameters/link.link1.n_elements'), pvals(:, 2), &
+                       0.0_wp, 0.0_wp, 'string_t names: values read back')
+    if (hdferr == 0) call h5fclose_f(fid, hdferr)
     call delete_file(p)
   end subroutine test_string_names
 
@@ -399,13 +396,11 @@ contains
     character(len=:), allocatable :: p, exe
     character(len=4096) :: buf
     integer :: stat, cstat, k, n
-    integer(hid_t) :: fid
-    real(wp), allocatable :: r(:)
-    integer, allocatable :: rk(:)
-    character(len=256), allocatable :: m(:)
+    integer, allocatable :: st(:)
+    logical, allocatable :: bad(:)
     real(wp) :: wall, metrics(NM)
     character(len=:), allocatable :: message
-    logical :: rows_ok
+    logical :: opened
 
     p = dir // '/flexmor_test_sweep_file_' // tag // '_kill.h5'
     call get_command_argument(0, buf, n)
@@ -416,7 +411,7 @@ contains
     call execute_command_line("exec 2>/dev/null; '" // exe // "' --writer '" // p // "' 7 3", &
                               exitstat=stat, cmdstat=cstat)
     call t%check(cstat == 0 .and. stat /= 0, 'the child writer was killed (exit status ' // &
-                 int_text(stat) // ')')
+                 int_str(stat) // ')')
     call f%open_existing(p, 'writer', err)
     call t%check(err%ok(), 'a file whose writer was killed reopens: ' // msg(err))
     call t%check(all(f%status() == [1, 0, 1, -1, -1, -1, -1]), &
@@ -428,22 +423,10 @@ contains
     call t%check(err%ok(), 'the killed sweep is finished after resuming: ' // msg(err))
     call f%close()
 
-    call h5fopen_f(p, H5F_ACC_RDONLY_F, fid, hdferr)
-    if (hdferr == 0) then
-      r = read_real(fid, '/cases/metrics/n_steps')
-      rk = read_int(fid, '/cases/rank')
-      m = read_messages(fid)
-      rows_ok = .true.
-      do k = 1, 7
-        call expected_row(k, wall, metrics, message)
-        rows_ok = rows_ok .and. r(k) == metrics(2) .and. rk(k) == k .and. &
-                  m(k)(1:len(message)) == message
-      end do
-      call t%check(rows_ok, 'every row of the resumed file is complete and right')
-      call h5fclose_f(fid, hdferr)
-    else
-      call t%check(.false., 'the resumed file opens read-only')
-    end if
+    call check_rows(p, st, bad, opened)
+    call t%check(opened, 'the resumed file opens read-only')
+    call t%check(size(st) == 7 .and. all(st /= -1) .and. .not. any(bad), &
+                 'every row of the resumed file is complete and right')
     call delete_file(p)
   end subroutine test_kill
 
@@ -502,35 +485,21 @@ contains
     character(len=*), intent(in) :: path_
     type(sweep_file_t) :: f
     type(error_t) :: err
-    integer(hid_t) :: fid
-    integer, allocatable :: st(:), rk(:)
-    real(wp), allocatable :: r(:), w(:)
-    character(len=256), allocatable :: m(:)
+    integer, allocatable :: st(:)
+    logical, allocatable :: bad(:)
     real(wp) :: wall, metrics(NM)
     character(len=:), allocatable :: message
-    integer :: k, bad
+    integer :: k
+    logical :: opened
     call h5open_f(hdferr)
-    call h5fopen_f(path_, H5F_ACC_RDONLY_F, fid, hdferr)
-    if (hdferr /= 0) then
+    call check_rows(path_, st, bad, opened)
+    if (.not. opened) then
       call f%open_existing(path_, 'writer', err)
       write(*, '(a)') 'check: unreadable; open_existing says: ' // msg(err)
       error stop 1
     end if
-    st = read_int(fid, '/cases/status')
-    rk = read_int(fid, '/cases/rank')
-    r = read_real(fid, '/cases/metrics/residual_vibration')
-    w = read_real(fid, '/cases/wall_time_s')
-    m = read_messages(fid)
-    call h5fclose_f(fid, hdferr)
-    bad = 0
     do k = 1, size(st)
-      if (st(k) == -1) cycle
-      call expected_row(k, wall, metrics, message)
-      if (st(k) /= mod(k, 2) .or. rk(k) /= k .or. r(k) /= metrics(3) .or. w(k) /= wall .or. &
-          m(k)(1:len(message)) /= message .or. .not. all_nul(m(k)(len(message) + 1:))) then
-        bad = bad + 1
-        write(*, '(a,i0,a)') 'check: case ', k, ' is incomplete or wrong'
-      end if
+      if (bad(k)) write(*, '(a,i0,a)') 'check: case ', k, ' is incomplete or wrong'
     end do
     write(*, '(a,i0,a,i0,a,i0,a)') 'check: done ', count(st /= -1), ' of ', size(st), &
       ' (first not run: ', findloc(st, -1, dim=1), ')'
@@ -546,9 +515,45 @@ contains
       if (.not. err%ok()) error stop 'check: write_case failed'
     end do
     call f%close(err)
-    if (.not. err%ok() .or. bad > 0) error stop 1
+    if (.not. err%ok() .or. any(bad)) error stop 1
     write(*, '(a)') 'check: resumed and finished'
   end subroutine check_child
+
+  !> Read the file at `path_` (written by writer_child, perhaps killed, perhaps resumed) with the
+  !> HDF5 API: /cases/status in `st`, and bad(k) where case k is marked done (status /= -1) but
+  !> its row is not the one expected_row gives. `opened` is false if the file does not open.
+  subroutine check_rows(path_, st, bad, opened)
+    character(len=*), intent(in) :: path_
+    integer, allocatable, intent(out) :: st(:)
+    logical, allocatable, intent(out) :: bad(:)
+    logical, intent(out) :: opened
+    integer(hid_t) :: fid
+    integer, allocatable :: rk(:)
+    real(wp), allocatable :: r(:), w(:)
+    character(len=256), allocatable :: m(:)
+    real(wp) :: wall, metrics(NM)
+    character(len=:), allocatable :: message
+    integer :: k
+    call h5fopen_f(path_, H5F_ACC_RDONLY_F, fid, hdferr)
+    opened = hdferr == 0
+    if (.not. opened) then
+      allocate(st(0), bad(0))
+      return
+    end if
+    st = read_int(fid, '/cases/status')
+    rk = read_int(fid, '/cases/rank')
+    r = read_real(fid, '/cases/metrics/residual_vibration')
+    w = read_real(fid, '/cases/wall_time_s')
+    m = read_messages(fid)
+    call h5fclose_f(fid, hdferr)
+    allocate(bad(size(st)), source=.false.)
+    do k = 1, size(st)
+      if (st(k) == -1) cycle
+      call expected_row(k, wall, metrics, message)
+      bad(k) = st(k) /= mod(k, 2) .or. rk(k) /= k .or. r(k) /= metrics(3) .or. w(k) /= wall &
+               .or. m(k)(1:len(message)) /= message .or. .not. all_nul(m(k)(len(message) + 1:))
+    end do
+  end subroutine check_rows
 
   !> The row the writer writes for case k (status mod(k, 2), rank k).
   subroutine expected_row(k, wall, metrics, message)
@@ -557,7 +562,7 @@ contains
     character(len=:), allocatable, intent(out) :: message
     wall = 0.5_wp * k
     metrics = [real(k, wp), 10.0_wp * k, 100.0_wp * k]
-    message = 'case ' // int_text(k) // ' ' // repeat('m', mod(k * 37, 200))
+    message = 'case ' // int_str(k) // ' ' // repeat('m', mod(k * 37, 200))
   end subroutine expected_row
 
   ! --- helpers --------------------------------------------------------------------------------
@@ -574,41 +579,10 @@ contains
     a%node = 'tip'
   end function attrs
 
-  function msg(err) result(m)
-    type(error_t), intent(in) :: err
-    character(len=:), allocatable :: m
-    m = '(none)'
-    if (allocated(err%message)) m = err%message
-  end function msg
-
-  pure function int_text(i) result(s)
-    integer, intent(in) :: i
-    character(len=:), allocatable :: s
-    character(len=12) :: b
-    write(b, '(i0)') i
-    s = trim(b)
-  end function int_text
-
   pure logical function all_nul(s)
     character(len=*), intent(in) :: s
     all_nul = verify(s, c_null_char) == 0
   end function all_nul
-
-  integer(size_t) function open_objects() result(n)
-    integer(size_t) :: k
-    integer :: kinds(3), j
-    kinds = [H5F_OBJ_FILE_F, H5F_OBJ_GROUP_F, H5F_OBJ_DATASET_F]
-    n = 0
-    do j = 1, size(kinds)
-      call h5fget_obj_count_f(int(H5F_OBJ_ALL_F, hid_t), kinds(j), k, hdferr)
-      n = n + k
-    end do
-  end function open_objects
-
-  logical function exists(p)
-    character(len=*), intent(in) :: p
-    inquire(file=p, exist=exists)
-  end function exists
 
   integer function file_size(p)
     character(len=*), intent(in) :: p
@@ -636,83 +610,19 @@ contains
     call write_bytes(to, bytes)
   end subroutine copy_prefix
 
-  function scratch_dir() result(d)
-    character(len=:), allocatable :: d
-    character(len=4096) :: b
-    integer :: n, stat
-    call get_environment_variable('TMPDIR', b, n, stat)
-    if (stat == 0 .and. n > 0) then
-      d = trim(b)
-    else
-      d = '/tmp'
-    end if
-  end function scratch_dir
-
-  function random_tag() result(s)
-    character(len=:), allocatable :: s
-    real :: x
-    call random_init(.false., .true.)
-    call random_number(x)
-    s = int_text(int(x * 999999999.0))
-  end function random_tag
-
-  integer(hsize_t) function dataset_len(fid, name) result(n)
-    integer(hid_t), intent(in) :: fid
-    character(len=*), intent(in) :: name
-    integer(hid_t) :: did, sid
-    integer(hsize_t) :: d(1), maxd(1)
-    n = 0
-    call h5dopen_f(fid, name, did, hdferr)
-    if (hdferr /= 0) return
-    call h5dget_space_f(did, sid, hdferr)
-    call h5sget_simple_extent_dims_f(sid, d, maxd, hdferr)
-    if (hdferr == 1) n = d(1)
-    call h5sclose_f(sid, hdferr)
-    call h5dclose_f(did, hdferr)
-  end function dataset_len
-
-  subroutine read_into(fid, name, mem_type, buf)
-    integer(hid_t), intent(in) :: fid, mem_type
-    character(len=*), intent(in) :: name
-    type(c_ptr), intent(in) :: buf
-    integer(hid_t) :: did
-    type(c_ptr) :: p
-    p = buf
-    call h5dopen_f(fid, name, did, hdferr)
-    if (hdferr /= 0) then
-      call t%check(.false., 'h5dopen ' // name)
-      return
-    end if
-    call h5dread_f(did, mem_type, p, hdferr)
-    call t%check(hdferr == 0, 'h5dread ' // name)
-    call h5dclose_f(did, hdferr)
-  end subroutine read_into
-
-  function read_real(fid, name) result(r)
-    integer(hid_t), intent(in) :: fid
-    character(len=*), intent(in) :: name
-    real(wp), allocatable, target :: r(:)
-    allocate(r(dataset_len(fid, name)))
-    r = -999.0_wp
-    if (size(r) > 0) call read_into(fid, name, h5kind_to_type(wp, H5_REAL_KIND), c_loc(r))
-  end function read_real
-
-  function read_int(fid, name) result(v)
-    integer(hid_t), intent(in) :: fid
-    character(len=*), intent(in) :: name
-    integer, allocatable, target :: v(:)
-    allocate(v(dataset_len(fid, name)))
-    v = -999
-    if (size(v) > 0) call read_into(fid, name, h5kind_to_type(kind(v), H5_INTEGER_KIND), c_loc(v))
-  end function read_int
-
   !> /cases/message with its own file type as the memory type (256-byte NUL-padded fields).
   function read_messages(fid) result(m)
     integer(hid_t), intent(in) :: fid
     character(len=256), allocatable, target :: m(:)
     integer(hid_t) :: did, tid
+    integer(hsize_t), allocatable :: dims(:)
     type(c_ptr) :: p
-    allocate(m(dataset_len(fid, '/cases/message')))
+    dims = dataset_dims(fid, '/cases/message')
+    if (size(dims) /= 1) then
+      allocate(m(0))
+      return
+    end if
+    allocate(m(dims(1)))
     m = ''
     if (size(m) == 0) return
     call h5dopen_f(fid, '/cases/message', did, hdferr)
@@ -770,53 +680,4 @@ contains
     end do
   end function crt_order_names
 
-  function read_string_attr(fid, object, name) result(s)
-    use, intrinsic :: iso_c_binding, only: c_char, c_null_ptr, c_associated, c_f_pointer
-    integer(hid_t), intent(in) :: fid
-    character(len=*), intent(in) :: object, name
-    character(len=:), allocatable :: s
-    integer(hid_t) :: aid, sid, tid
-    type(c_ptr), target :: ptr(1)
-    type(c_ptr) :: p
-    character(kind=c_char), pointer :: chars(:)
-    integer :: n
-    s = '(unreadable)'
-    ptr(1) = c_null_ptr
-    p = c_loc(ptr)
-    call h5aopen_by_name_f(fid, object, name, aid, hdferr)
-    if (hdferr /= 0) return
-    call h5aget_type_f(aid, tid, hdferr)
-    call h5aread_f(aid, tid, p, hdferr)
-    if (hdferr == 0 .and. c_associated(ptr(1))) then
-      call c_f_pointer(ptr(1), chars, [huge(0)])
-      n = 0
-      do while (chars(n + 1) /= c_null_char)
-        n = n + 1
-      end do
-      deallocate(s)
-      allocate(character(len=n) :: s)
-      s = transfer(chars(1:n), s)
-      call h5aget_space_f(aid, sid, hdferr)
-      call h5dvlen_reclaim_f(tid, sid, H5P_DEFAULT_F, p, hdferr)
-      call h5sclose_f(sid, hdferr)
-    end if
-    call h5tclose_f(tid, hdferr)
-    call h5aclose_f(aid, hdferr)
-  end function read_string_attr
-
-  integer function read_int_attr(fid, name) result(v)
-    integer(hid_t), intent(in) :: fid
-    character(len=*), intent(in) :: name
-    integer, target :: b
-    integer(hid_t) :: aid
-    type(c_ptr) :: p
-    b = -999
-    p = c_loc(b)
-    call h5aopen_by_name_f(fid, '/', name, aid, hdferr)
-    if (hdferr == 0) then
-      call h5aread_f(aid, h5kind_to_type(kind(b), H5_INTEGER_KIND), p, hdferr)
-      call h5aclose_f(aid, hdferr)
-    end if
-    v = b
-  end function read_int_attr
 end program test_sweep_file

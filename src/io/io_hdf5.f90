@@ -27,21 +27,20 @@
 !> and MPI_Init need not have been called. `open` initialises the HDF5 library if that is not done
 !> yet and switches off HDF5's automatic error-stack printing (for the whole process): failures
 !> come back in `err` (code ERR_IO) with a message naming the file and the dataset or attribute.
+!> The HDF5 calls themselves (types, attributes, dataset creation) are io_h5base's, shared with
+!> the sweep result file (io_sweep_file).
 !> The writer holds all its state; the module has none. A writer is not thread-safe.
 module io_hdf5
-  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_null_ptr, c_char, c_null_char
-  use hdf5, only: hid_t, hsize_t, h5open_f, h5iis_valid_f, h5eset_auto_f, H5T_NATIVE_DOUBLE, &
-    h5fcreate_f, h5fflush_f, h5fclose_f, H5F_ACC_TRUNC_F, H5F_SCOPE_GLOBAL_F, &
-    h5screate_f, h5screate_simple_f, h5sclose_f, H5S_SCALAR_F, &
-    h5pcreate_f, h5pset_create_inter_group_f, h5pclose_f, H5P_LINK_CREATE_F, &
-    h5dcreate_f, h5dwrite_f, h5dclose_f, h5lexists_f, h5oopen_f, h5oclose_f, &
-    h5acreate_f, h5awrite_f, h5aclose_f, h5aexists_f, h5adelete_f, &
-    h5tcopy_f, h5tset_cset_f, h5tset_strpad_f, h5tclose_f, h5kind_to_type, &
-    H5T_STRING, H5T_CSET_UTF8_F, H5T_STR_NULLTERM_F, H5T_IEEE_F64LE, H5T_STD_I32LE, &
-    H5T_STD_I64LE, H5_REAL_KIND, H5_INTEGER_KIND
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_null_ptr
+  use hdf5, only: hid_t, hsize_t, h5fcreate_f, h5fflush_f, h5fclose_f, H5F_ACC_TRUNC_F, &
+    H5F_SCOPE_GLOBAL_F, h5pcreate_f, h5pset_create_inter_group_f, H5P_LINK_CREATE_F, &
+    h5lexists_f, h5oopen_f, h5oclose_f, h5kind_to_type, H5T_IEEE_F64LE, &
+    H5_REAL_KIND, H5_INTEGER_KIND
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_IO
   use io_fs, only: rename_file, delete_file, sync_file
+  use io_h5base, only: h5_init, h5_close, h5_int_file_type, h5_put_string_attr, &
+    h5_put_real_attr, h5_put_int_attr, h5_create_dataset
   implicit none
   private
   public :: h5_writer_t
@@ -101,13 +100,8 @@ contains
     this%tmp_left = .false.
     this%file_id = -1
 
-    call ensure_hdf5(hdferr)
-    if (hdferr < 0) then
-      call err%set(ERR_IO, path // ': cannot initialise the HDF5 library')
-      return
-    end if
-    call h5eset_auto_f(0, hdferr)
-
+    call h5_init(path, err)
+    if (.not. err%ok()) return
     call h5fcreate_f(this%tmp, H5F_ACC_TRUNC_F, this%file_id, hdferr)
     if (hdferr < 0) then
       this%file_id = -1
@@ -170,8 +164,8 @@ contains
     p = c_null_ptr
     if (size(buf) > 0) p = c_loc(buf)
     call write_dataset(this, name, shape(data, kind=hsize_t), &
-                       h5kind_to_type(kind(data), H5_INTEGER_KIND), int_file_type(kind(data)), &
-                       p, err, units)
+                       h5kind_to_type(kind(data), H5_INTEGER_KIND), &
+                       h5_int_file_type(kind(data)), p, err, units)
   end subroutine h5w_write_int_1d
 
   !> Write a rank-1 integer(i8) dataset (stored as 64-bit integers).
@@ -187,7 +181,7 @@ contains
     p = c_null_ptr
     if (size(buf) > 0) p = c_loc(buf)
     call write_dataset(this, name, shape(data, kind=hsize_t), &
-                       h5kind_to_type(i8, H5_INTEGER_KIND), int_file_type(i8), p, err, units)
+                       h5kind_to_type(i8, H5_INTEGER_KIND), h5_int_file_type(i8), p, err, units)
   end subroutine h5w_write_int_1d_i8
 
   !> Attach a string attribute (variable-length UTF-8, read by h5py as str) to `object`
@@ -197,16 +191,9 @@ contains
     character(len=*), intent(in) :: object, name, value
     type(error_t), intent(out) :: err
     integer(hid_t) :: obj_id
-    integer :: hdferr
-    if (.not. check_open(this, "attribute '" // name // "' of '" // object // "'", err)) return
-    call h5oopen_f(this%file_id, abs_name(object), obj_id, hdferr)
-    if (hdferr < 0) then
-      call err%set(ERR_IO, this%path // ": cannot write attribute '" // name // "': no object '" &
-                   // abs_name(object) // "' in the file")
-      return
-    end if
-    call put_string_attr(this, obj_id, abs_name(object), name, value, err)
-    call h5oclose_f(obj_id, hdferr)
+    call open_object(this, object, name, obj_id, err)
+    call h5_put_string_attr(this%path, obj_id, abs_name(object), name, value, err)
+    call close_object(obj_id)
   end subroutine h5w_write_string_attr
 
   !> Attach a real(wp) scalar attribute (IEEE 64-bit) to `object`.
@@ -215,10 +202,10 @@ contains
     character(len=*), intent(in) :: object, name
     real(wp), intent(in) :: value
     type(error_t), intent(out) :: err
-    real(wp), target :: buf
-    buf = value
-    call put_scalar_attr(this, object, name, h5kind_to_type(wp, H5_REAL_KIND), H5T_IEEE_F64LE, &
-                         c_loc(buf), err)
+    integer(hid_t) :: obj_id
+    call open_object(this, object, name, obj_id, err)
+    call h5_put_real_attr(this%path, obj_id, abs_name(object), name, value, err)
+    call close_object(obj_id)
   end subroutine h5w_write_real_attr
 
   !> Attach a default-integer scalar attribute (32-bit) to `object`.
@@ -227,10 +214,10 @@ contains
     character(len=*), intent(in) :: object, name
     integer, intent(in) :: value
     type(error_t), intent(out) :: err
-    integer, target :: buf
-    buf = value
-    call put_scalar_attr(this, object, name, h5kind_to_type(kind(value), H5_INTEGER_KIND), &
-                         int_file_type(kind(value)), c_loc(buf), err)
+    integer(hid_t) :: obj_id
+    call open_object(this, object, name, obj_id, err)
+    call h5_put_int_attr(this%path, obj_id, abs_name(object), name, value, err)
+    call close_object(obj_id)
   end subroutine h5w_write_int_attr
 
   !> Attach an integer(i8) scalar attribute (64-bit) to `object`.
@@ -239,10 +226,10 @@ contains
     character(len=*), intent(in) :: object, name
     integer(i8), intent(in) :: value
     type(error_t), intent(out) :: err
-    integer(i8), target :: buf
-    buf = value
-    call put_scalar_attr(this, object, name, h5kind_to_type(i8, H5_INTEGER_KIND), &
-                         int_file_type(i8), c_loc(buf), err)
+    integer(hid_t) :: obj_id
+    call open_object(this, object, name, obj_id, err)
+    call h5_put_int_attr(this%path, obj_id, abs_name(object), name, value, err)
+    call close_object(obj_id)
   end subroutine h5w_write_int_attr_i8
 
   !> Flush and close the file, fsync it and rename it to the final name (atomic: readers see the
@@ -313,19 +300,6 @@ contains
   ! ---------------------------------------------------------------------------------------------
   ! Internals
 
-  !> Initialise the HDF5 library and its Fortran interface unless that is done already. h5open_f
-  !> is idempotent for the C library, but HDF5 1.10's Fortran wrapper copies its ~55 predefined
-  !> types again on every call (over 20000 calls: 600 MB and minutes), so look first whether a
-  !> predefined type id is valid (it is 0, never valid, before the first h5open_f and invalid
-  !> again after h5close_f).
-  subroutine ensure_hdf5(hdferr)
-    integer, intent(out) :: hdferr
-    logical :: ready
-    call h5iis_valid_f(H5T_NATIVE_DOUBLE, ready, hdferr)
-    if (hdferr == 0 .and. ready) return
-    call h5open_f(hdferr)
-  end subroutine ensure_hdf5
-
   !> True if the file is open; otherwise sets `err` naming `what`.
   logical function check_open(this, what, err)
     class(h5_writer_t), intent(in) :: this
@@ -340,6 +314,31 @@ contains
     end if
   end function check_open
 
+  !> Open `object` to attach attribute `name` to it; obj_id = -1 and `err` set on failure.
+  subroutine open_object(this, object, name, obj_id, err)
+    class(h5_writer_t), intent(in) :: this
+    character(len=*), intent(in) :: object, name
+    integer(hid_t), intent(out) :: obj_id
+    type(error_t), intent(inout) :: err
+    integer :: hdferr
+    obj_id = -1
+    if (.not. check_open(this, "attribute '" // name // "' of '" // object // "'", err)) return
+    call h5oopen_f(this%file_id, abs_name(object), obj_id, hdferr)
+    if (hdferr < 0) then
+      obj_id = -1
+      call err%set(ERR_IO, this%path // ": cannot write attribute '" // name // "': no object '" &
+                   // abs_name(object) // "' in the file")
+    end if
+  end subroutine open_object
+
+  !> Close what open_object opened (a group or a dataset, so h5oclose).
+  subroutine close_object(obj_id)
+    integer(hid_t), intent(inout) :: obj_id
+    integer :: hdferr
+    if (obj_id >= 0) call h5oclose_f(obj_id, hdferr)
+    obj_id = -1
+  end subroutine close_object
+
   !> Name from the root: 'time' -> '/time'.
   pure function abs_name(name) result(full)
     character(len=*), intent(in) :: name
@@ -353,17 +352,6 @@ contains
     full = '/' // name
   end function abs_name
 
-  !> File type of an integer kind: little-endian 32 or 64 bit.
-  function int_file_type(kind_) result(type_id)
-    integer, intent(in) :: kind_
-    integer(hid_t) :: type_id
-    if (kind_ == i8 .or. (kind_ == kind(0) .and. storage_size(0) > 32)) then
-      type_id = H5T_STD_I64LE
-    else
-      type_id = H5T_STD_I32LE
-    end if
-  end function int_file_type
-
   !> Create dataset `name` (with missing parent groups) of shape `dims` (Fortran order) and write
   !> the contiguous buffer `buf` (c_null_ptr for an empty dataset).
   subroutine write_dataset(this, name, dims, mem_type, file_type, buf, err, units)
@@ -375,7 +363,7 @@ contains
     type(error_t), intent(inout) :: err
     character(len=*), intent(in), optional :: units
     character(len=:), allocatable :: full
-    integer(hid_t) :: space_id, lcpl_id, dset_id
+    integer(hid_t) :: lcpl_id, dset_id
     integer :: hdferr
     logical :: exists
 
@@ -393,144 +381,20 @@ contains
       return
     end if
 
-    space_id = -1
-    lcpl_id = -1
     dset_id = -1
-    work: block
-      call h5screate_simple_f(size(dims), dims, space_id, hdferr)
-      if (hdferr < 0) then
-        call err%set(ERR_IO, this%path // ": cannot create the dataspace of dataset '" // &
-                     full // "'")
-        exit work
-      end if
-      call h5pcreate_f(H5P_LINK_CREATE_F, lcpl_id, hdferr)
-      if (hdferr == 0) call h5pset_create_inter_group_f(lcpl_id, 1, hdferr)
-      if (hdferr < 0) then
-        call err%set(ERR_IO, this%path // ": cannot set up creating dataset '" // full // "'")
-        exit work
-      end if
-      call h5dcreate_f(this%file_id, full, file_type, space_id, dset_id, hdferr, lcpl_id=lcpl_id)
-      if (hdferr < 0) then
-        dset_id = -1
-        call err%set(ERR_IO, this%path // ": cannot create dataset '" // full // &
-                     "' (is a parent a dataset rather than a group?)")
-        exit work
-      end if
-      if (product(dims) > 0) then
-        call h5dwrite_f(dset_id, mem_type, buf, hdferr)
-        if (hdferr < 0) then
-          call err%set(ERR_IO, this%path // ": cannot write the data of dataset '" // full // "'")
-          exit work
-        end if
-      end if
-      if (present(units)) call put_string_attr(this, dset_id, full, 'units', units, err)
-    end block work
-    if (dset_id >= 0) call h5dclose_f(dset_id, hdferr)
-    if (lcpl_id >= 0) call h5pclose_f(lcpl_id, hdferr)
-    if (space_id >= 0) call h5sclose_f(space_id, hdferr)
-  end subroutine write_dataset
-
-  !> Open `object`, replace attribute `name` by a scalar of the given types, close `object`.
-  subroutine put_scalar_attr(this, object, name, mem_type, file_type, buf, err)
-    class(h5_writer_t), intent(inout) :: this
-    character(len=*), intent(in) :: object, name
-    integer(hid_t), intent(in) :: mem_type, file_type
-    type(c_ptr), intent(in) :: buf
-    type(error_t), intent(inout) :: err
-    integer(hid_t) :: obj_id
-    integer :: hdferr
-    if (.not. check_open(this, "attribute '" // name // "' of '" // object // "'", err)) return
-    call h5oopen_f(this%file_id, abs_name(object), obj_id, hdferr)
+    ! Link creation that makes the missing parent groups.
+    call h5pcreate_f(H5P_LINK_CREATE_F, lcpl_id, hdferr)
+    if (hdferr < 0) lcpl_id = -1
+    if (hdferr == 0) call h5pset_create_inter_group_f(lcpl_id, 1, hdferr)
     if (hdferr < 0) then
-      call err%set(ERR_IO, this%path // ": cannot write attribute '" // name // "': no object '" &
-                   // abs_name(object) // "' in the file")
-      return
-    end if
-    call put_attr(this, obj_id, abs_name(object), name, mem_type, file_type, buf, err)
-    call h5oclose_f(obj_id, hdferr)
-  end subroutine put_scalar_attr
-
-  !> Write `value` as a scalar variable-length UTF-8 string attribute of the open object `obj_id`.
-  subroutine put_string_attr(this, obj_id, object, name, value, err)
-    class(h5_writer_t), intent(inout) :: this
-    integer(hid_t), intent(in) :: obj_id
-    character(len=*), intent(in) :: object, name, value
-    type(error_t), intent(inout) :: err
-    character(kind=c_char), allocatable, target :: chars(:)
-    type(c_ptr), target :: ptr(1)
-    integer(hid_t) :: type_id
-    integer :: hdferr, i
-
-    allocate(chars(len(value) + 1))
-    do i = 1, len(value)
-      chars(i) = value(i:i)
-    end do
-    chars(len(value) + 1) = c_null_char
-    ptr(1) = c_loc(chars)
-
-    type_id = -1
-    call h5tcopy_f(H5T_STRING, type_id, hdferr)
-    if (hdferr < 0) type_id = -1
-    if (hdferr == 0) call h5tset_cset_f(type_id, H5T_CSET_UTF8_F, hdferr)
-    if (hdferr == 0) call h5tset_strpad_f(type_id, H5T_STR_NULLTERM_F, hdferr)
-    if (hdferr < 0) then
-      call err%set(ERR_IO, this%path // ": cannot make the string type of attribute '" // name // &
-                   "' of '" // object // "'")
+      call err%set(ERR_IO, this%path // ": cannot set up creating dataset '" // full // "'")
     else
-      call put_attr(this, obj_id, object, name, type_id, type_id, c_loc(ptr), err)
+      call h5_create_dataset(this%path, this%file_id, full, dims, file_type, dset_id, err, &
+                             lcpl=lcpl_id, hint=' (is a parent a dataset rather than a group?)', &
+                             mem_type=mem_type, data=buf)
     end if
-    if (type_id >= 0) call h5tclose_f(type_id, hdferr)
-  end subroutine put_string_attr
-
-  !> Replace attribute `name` of the open object `obj_id` by a scalar and write `buf` into it.
-  subroutine put_attr(this, obj_id, object, name, mem_type, file_type, buf, err)
-    class(h5_writer_t), intent(inout) :: this
-    integer(hid_t), intent(in) :: obj_id
-    character(len=*), intent(in) :: object, name
-    integer(hid_t), intent(in) :: mem_type, file_type
-    type(c_ptr), intent(in) :: buf
-    type(error_t), intent(inout) :: err
-    integer(hid_t) :: space_id, attr_id
-    integer :: hdferr
-    logical :: exists
-
-    if (len(name) == 0) then
-      call err%set(ERR_IO, this%path // ": cannot write an attribute with an empty name on '" // &
-                   object // "'")
-      return
-    end if
-    call h5aexists_f(obj_id, name, exists, hdferr)
-    if (hdferr == 0 .and. exists) call h5adelete_f(obj_id, name, hdferr)
-    if (hdferr < 0) then
-      call err%set(ERR_IO, this%path // ": cannot replace attribute '" // name // "' of '" // &
-                   object // "'")
-      return
-    end if
-
-    space_id = -1
-    attr_id = -1
-    work: block
-      call h5screate_f(H5S_SCALAR_F, space_id, hdferr)
-      if (hdferr < 0) then
-        call err%set(ERR_IO, this%path // ": cannot create the dataspace of attribute '" // name &
-                     // "' of '" // object // "'")
-        exit work
-      end if
-      call h5acreate_f(obj_id, name, file_type, space_id, attr_id, hdferr)
-      if (hdferr < 0) then
-        attr_id = -1
-        call err%set(ERR_IO, this%path // ": cannot create attribute '" // name // "' of '" // &
-                     object // "'")
-        exit work
-      end if
-      call h5awrite_f(attr_id, mem_type, buf, hdferr)
-      if (hdferr < 0) then
-        call err%set(ERR_IO, this%path // ": cannot write attribute '" // name // "' of '" // &
-                     object // "'")
-        exit work
-      end if
-    end block work
-    if (attr_id >= 0) call h5aclose_f(attr_id, hdferr)
-    if (space_id >= 0) call h5sclose_f(space_id, hdferr)
-  end subroutine put_attr
+    if (present(units)) call h5_put_string_attr(this%path, dset_id, full, 'units', units, err)
+    call h5_close(dset_id)
+    call h5_close(lcpl_id)
+  end subroutine write_dataset
 end module io_hdf5
