@@ -274,11 +274,16 @@ contains
     real(wp) :: buf(HEAD + size(METRIC_NAMES))
     logical :: arrived
     integer(c_int) :: rc
-    do
-      call MPI_Iprobe(MPI_ANY_SOURCE, TAG_RESULT, comm, arrived, st)
-      if (arrived) exit
-      rc = c_usleep(2000_c_int)
-    end do
+    integer :: k
+    outer: do
+      ! Open MPI reports a message that has arrived only after a few probes (its progress
+      ! engine runs inside them): probing once per sleep cost a worker about 4.5 ms per case.
+      do k = 1, 5
+        call MPI_Iprobe(MPI_ANY_SOURCE, TAG_RESULT, comm, arrived, st)
+        if (arrived) exit outer
+      end do
+      rc = c_usleep(500_c_int)
+    end do outer
     call MPI_Recv(buf, size(buf), MPI_DOUBLE_PRECISION, st%MPI_SOURCE, TAG_RESULT, comm, st)
     call MPI_Recv(out%message, MESSAGE_LEN, MPI_CHARACTER, st%MPI_SOURCE, TAG_MESSAGE, comm, st2)
     out%icase = nint(buf(1))
