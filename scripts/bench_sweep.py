@@ -812,7 +812,7 @@ def notes(results: dict[str, list[Point]], probe: Probe, cores: int) -> list[str
     pick, lat = probe.dispatch_latency()
     if math.isfinite(lat) and lat > PROBE_SLEEP_S:
         out.append(f"Hand-out latency L = {1e3 * lat:.1f} ms per case and worker (probe, N = "
-                   f"{pick}): more than rank 0's {1e3 * PROBE_SLEEP_S:.0f} ms probe sleep, i.e. "
+                   f"{pick}): more than rank 0's {1e3 * PROBE_SLEEP_S:.1f} ms probe sleep, i.e. "
                    f"about {lat / PROBE_SLEEP_S:.1f} sleep periods per case.")
     return out
 
