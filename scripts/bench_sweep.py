@@ -56,12 +56,10 @@ one-line message and exit status 2.
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import os
 import platform
 import resource
-import shlex
 import shutil
 import statistics
 import subprocess
@@ -77,6 +75,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from flexmor_sweep import SweepFileError, fmt_value, load_sweep  # noqa: E402
+from bench_common import (command_line, cpu_model, git_commit, last_line,  # noqa: E402
+                          usable_cores, write_csv)
 
 PROG = "bench_sweep.py"
 ROOT = Path(__file__).resolve().parents[1]
@@ -86,8 +86,8 @@ FULL_SWEEP = ROOT / "input" / "sweep_two_link.nml"
 RUN_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
            "OMPI_MCA_rmaps_base_oversubscribe": "1", "OPENBLAS_NUM_THREADS": "1",
            "OMP_NUM_THREADS": "1"}
-#: Rank 0's sleep between two probes for results (src/sweep/sweep_run.f90).
-PROBE_SLEEP_S = 0.0005  # rank 0 sleeps this long between bursts of 5 probes (sweep_run.f90)
+#: Rank 0's sleep between two bursts of probes for results (src/sweep/sweep_run.f90).
+PROBE_SLEEP_S = 0.0005
 #: A case of the probe fails in the scene reader: flexmor exit code 1 (input).
 PROBE_STATUS = 1
 
@@ -229,11 +229,6 @@ class Run:
     case_rank: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     parameters: dict[str, np.ndarray] = field(default_factory=dict)
     version: str = ""
-
-
-def last_line(text: str) -> str:
-    lines = [line.strip() for line in text.strip().splitlines() if line.strip()]
-    return lines[-1] if lines else ""
 
 
 def machine_busy_s() -> float:
@@ -614,39 +609,6 @@ def cost_levels(run: Run, group: str | None) -> list[CostStats]:
 # --- machine ----------------------------------------------------------------------------------
 
 
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.lower().startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def usable_cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:
-        return os.cpu_count() or 1
-
-
-def git_commit() -> str:
-    """Short commit, with '+ uncommitted changes' when tracked files differ (read only)."""
-    try:
-        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                              capture_output=True, text=True, timeout=30)
-        if head.returncode != 0:
-            return "unknown"
-        status = subprocess.run(["git", "--no-optional-locks", "status", "--porcelain",
-                                 "--untracked-files=no"], cwd=ROOT, capture_output=True,
-                                text=True, timeout=30)
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-    dirty = status.returncode == 0 and status.stdout.strip()
-    return head.stdout.strip() + (" + uncommitted changes" if dirty else "")
-
-
 def mpi_version(mpirun: str | None) -> str:
     if mpirun is None:
         return "not used"
@@ -717,13 +679,6 @@ def projection_row(proj: Projection, cores: int) -> dict[str, Any]:
         "per_case_s": proj.write_cost, "latency_s": proj.latency, "status": "model",
         "message": f"limited by {proj.limited_by}; speed-up etc. from the high wall estimate",
     }.items()}
-
-
-def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
-    with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
 
 
 def balance_text(p: Point) -> str:
@@ -1040,12 +995,6 @@ def check_args(args: argparse.Namespace) -> None:
         raise UserError(f"{args.out_dir}: exists and is not a folder")
 
 
-def command_line(argv: Sequence[str] | None) -> str:
-    if argv is None:
-        return shlex.join(getattr(sys, "orig_argv", sys.argv))
-    return shlex.join([PROG, *argv])
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     args = parse_args(argv)
     try:
@@ -1085,7 +1034,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     version = next((r.version for r in runs if r.version), "unknown")
     header = {
-        "Command": f"`{command_line(argv)}` (in `{os.getcwd()}`)",
+        "Command": f"`{command_line(PROG, argv)}` (in `{os.getcwd()}`)",
         "Date": datetime.now().astimezone().isoformat(timespec="seconds"),
         "Machine": f"{cpu_model()}, {cores} cores ({os.cpu_count()} CPUs), {platform.system()} "
                    f"{platform.release()}; 1-min load average {load_start:.2f} at the start, "
@@ -1106,7 +1055,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows += [projection_row(proj, cores) for proj in projections]
     try:
         args.out_dir.mkdir(parents=True, exist_ok=True)
-        write_csv(rows, args.out_dir / "sweep_scaling.csv")
+        write_csv(rows, CSV_COLUMNS, args.out_dir / "sweep_scaling.csv")
         write_markdown(args.out_dir / "sweep_scaling.md", header, measured, results, probe,
                        probe_points, projections, checks, cores)
     except OSError as exc:

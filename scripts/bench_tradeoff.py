@@ -38,12 +38,10 @@ message and exit status 2.
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import os
 import platform
 import re
-import shlex
 import statistics
 import subprocess
 import sys
@@ -59,6 +57,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from flexmor_results import ResultFileError, load_node_path, run_attributes  # noqa: E402
+from bench_common import (command_line, cpu_model, git_commit, last_line,  # noqa: E402
+                          write_csv)
 
 PROG = "bench_tradeoff.py"
 ROOT = Path(__file__).resolve().parents[1]
@@ -326,11 +326,6 @@ def build_cases(quick: bool, repeats: int, interval: float, threshold: float) ->
 # --- running ----------------------------------------------------------------------------------
 
 
-def last_line(text: str) -> str:
-    lines = [line.strip() for line in text.strip().splitlines() if line.strip()]
-    return lines[-1] if lines else ""
-
-
 def run_once(binary: Path, scene: Path, out: Path, timeout: float) -> str:
     """Run flexmor once; '' on success, else a one-line reason."""
     out.unlink(missing_ok=True)
@@ -428,13 +423,6 @@ def csv_row(outcome: Outcome, t_end: float) -> dict[str, Any]:
     return row
 
 
-def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
-    with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
-
-
 def sort_key(row: dict[str, Any]) -> tuple[int, int, float]:
     group = GROUPS.index(row["group"]) if row["group"] in GROUPS else len(GROUPS)
     ok = row["status"] == "ok" and row["time_median_s"] != ""
@@ -476,16 +464,6 @@ def table_line(row: dict[str, Any], baseline: float | None) -> str:
     return "| " + " | ".join(cells) + " |"
 
 
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.lower().startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
 def core_count() -> str:
     total = os.cpu_count() or 0
     try:
@@ -493,23 +471,6 @@ def core_count() -> str:
     except AttributeError:
         usable = total
     return f"{total}" if usable == total else f"{total} ({usable} usable by this process)"
-
-
-def git_commit() -> str:
-    """Short commit of the repository, with '+ uncommitted changes' when the tracked files
-    differ from it (read only: no index refresh); 'unknown' without git."""
-    try:
-        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                              capture_output=True, text=True, timeout=30)
-        if head.returncode != 0:
-            return "unknown"
-        status = subprocess.run(["git", "--no-optional-locks", "status", "--porcelain",
-                                 "--untracked-files=no"], cwd=ROOT, capture_output=True,
-                                text=True, timeout=30)
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-    dirty = status.returncode == 0 and status.stdout.strip()
-    return head.stdout.strip() + (" + uncommitted changes" if dirty else "")
 
 
 def baseline_time(rows: list[dict[str, Any]]) -> tuple[str, float] | None:
@@ -707,12 +668,6 @@ def header_block(command: str, args: argparse.Namespace, outcomes: list[Outcome]
     }
 
 
-def command_line(argv: Sequence[str] | None) -> str:
-    if argv is None:
-        return shlex.join(getattr(sys, "orig_argv", sys.argv))
-    return shlex.join([PROG, *argv])
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     args = parse_args(argv)
     try:
@@ -738,9 +693,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     labels = {o.case.name: o.case.label for o in outcomes}
     try:
         args.out_dir.mkdir(parents=True, exist_ok=True)
-        write_csv(rows, args.out_dir / "tradeoff.csv")
+        write_csv(rows, CSV_COLUMNS, args.out_dir / "tradeoff.csv")
         write_markdown(rows, args.out_dir / "tradeoff.md",
-                       header_block(command_line(argv), args, outcomes, t_used, elapsed))
+                       header_block(command_line(PROG, argv), args, outcomes, t_used, elapsed))
         plot(rows, labels, args.out_dir / "tradeoff.png",
              f"two-link benchmark, t_end {t_used:g} s: tip error against solve time")
     except OSError as exc:
