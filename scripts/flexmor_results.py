@@ -18,7 +18,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-__all__ = ["ResultFileError", "load_node_path", "node_labels", "run_attributes"]
+__all__ = ["ResultFileError", "load_node_path", "node_labels", "run_attributes", "to_python"]
 
 
 class ResultFileError(Exception):
@@ -85,15 +85,16 @@ def load_node_path(path: str | os.PathLike, label: str = "tip") -> tuple[np.ndar
     return t, xyz
 
 
-def _to_python(value: Any) -> Any:
+def to_python(value: Any) -> Any:
+    """An HDF5 attribute value as plain Python (bytes decoded, numpy scalars unwrapped)."""
     if isinstance(value, bytes):
         return value.decode("utf-8", errors="replace")
     if isinstance(value, np.ndarray):
         if value.dtype.kind in "SO":
-            return [_to_python(v) for v in value.tolist()]
+            return [to_python(v) for v in value.tolist()]
         return value
     if isinstance(value, np.generic):
-        return _to_python(value.item())
+        return to_python(value.item())
     return value
 
 
@@ -101,4 +102,4 @@ def run_attributes(path: str | os.PathLike) -> dict[str, Any]:
     """Root attributes of a result file as plain Python values (str, int, float; arrays stay
     numpy arrays)."""
     with _open(path) as f:
-        return {name: _to_python(value) for name, value in f.attrs.items()}
+        return {name: to_python(value) for name, value in f.attrs.items()}

@@ -34,6 +34,8 @@ from typing import Any, Iterable
 import h5py
 import numpy as np
 
+from flexmor_results import to_python
+
 __all__ = [
     "METRIC_UNITS", "STATUS_NAMES", "Sweep", "SweepFileError", "case_number", "fmt_param",
     "fmt_value", "load_sweep", "matches", "parse_where", "skip_note", "status_text", "value_list",
@@ -167,18 +169,6 @@ def _decode(value: Any) -> str:
     return str(value).rstrip("\x00 ")
 
 
-def _to_python(value: Any) -> Any:
-    if isinstance(value, bytes):
-        return value.decode("utf-8", errors="replace")
-    if isinstance(value, np.ndarray):
-        if value.dtype.kind in "SO":
-            return [_to_python(v) for v in value.tolist()]
-        return value
-    if isinstance(value, np.generic):
-        return _to_python(value.item())
-    return value
-
-
 def _open(path: str) -> h5py.File:
     if not os.path.exists(path):
         raise SweepFileError(f"{path}: no such file")
@@ -227,7 +217,7 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
         wall = np.asarray(_dataset(path, f, "cases/wall_time_s", n), dtype=float)
         rank = np.asarray(_dataset(path, f, "cases/rank", n), dtype=np.int64)
         metrics = _float_group(path, f, "cases/metrics", n)
-        attrs = {name: _to_python(value) for name, value in f.attrs.items()}
+        attrs = {name: to_python(value) for name, value in f.attrs.items()}
     return Sweep(path, parameters, status, messages, wall, rank, metrics, attrs)
 
 
