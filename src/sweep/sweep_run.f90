@@ -10,6 +10,7 @@
 !> With one rank, rank 0 runs the cases itself.
 module sweep_run
   use, intrinsic :: iso_c_binding, only: c_int
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
   use mpi_f08, only: MPI_Comm, MPI_Status, MPI_Comm_rank, MPI_Comm_size, MPI_Send, MPI_Recv, &
     MPI_Iprobe, MPI_Bcast, MPI_INTEGER, MPI_DOUBLE_PRECISION, MPI_CHARACTER, MPI_ANY_SOURCE, &
     MPI_ANY_TAG, MPI_Wtime
@@ -193,7 +194,7 @@ contains
     out%icase = icase
     out%rank = rank
     out%metrics = not_available()
-    out%wall_time_s = not_available_scalar()
+    out%wall_time_s = ieee_value(1.0_wp, ieee_quiet_nan)
     call apply_case(spec, base, icase, scene_file, err)
     run%verbose = .false.
     if (err%ok()) call run%load_parsed(scene_file, err)
@@ -207,12 +208,6 @@ contains
       out%message = err%message
     end if
   end subroutine run_case
-
-  real(wp) function not_available_scalar() result(x)
-    real(wp) :: m(size(METRIC_NAMES))
-    m = not_available()
-    x = m(1)
-  end function not_available_scalar
 
   subroutine run_serial(spec, base, pending, file, progress, err)
     type(sweep_spec_t), intent(in) :: spec
