@@ -1,0 +1,162 @@
+!> The result file of one run (layout: docs/output.md): the writers of analysis_run.
+submodule (analysis_run) analysis_run_output
+  use io_hdf5, only: h5_writer_t
+  implicit none
+
+contains
+
+  !> Write the result file (temporary name, renamed on success).
+  module subroutine run_write(this, path, err)
+    class(run_t), intent(inout) :: this
+    character(len=*), intent(in) :: path
+    type(error_t), intent(out) :: err
+    type(h5_writer_t) :: h5
+    call h5%open(path, err)
+    if (err%ok()) call write_attributes(this, h5, err)
+    if (err%ok() .and. this%scene%static%active) call write_static(this, h5, err)
+    if (err%ok() .and. this%scene%modal%active) call write_modal(this, h5, err)
+    if (err%ok() .and. this%scene%dynamic%active) call write_dynamic(this, h5, err)
+    if (err%ok() .and. allocated(this%red)) call write_reduction(this, h5, err)
+    if (err%ok()) call h5%commit(err)
+    if (.not. err%ok()) call h5%abort()
+  end subroutine run_write
+
+  subroutine write_attributes(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    call h5%write_string_attr('/', 'flexmor_version', FLEXMOR_VERSION, err)
+    if (err%ok()) call h5%write_string_attr('/', 'input', this%file%text, err)
+    if (err%ok()) call h5%write_string_attr('/', 'input_file', this%file%path, err)
+    if (err%ok()) call h5%write_string_attr('/', 'title', this%scene%title, err)
+    if (err%ok()) call h5%write_string_attr('/', 'status', 'ok', err)
+    if (err%ok()) call h5%write_real_attr('/', 'wall_time_s', this%wall_time_s, err)
+    if (err%ok()) call h5%write_int_attr('/', 'n_dynamic_coordinates', this%dyn%model%n_dy, err)
+    if (err%ok()) call h5%write_int_attr('/', 'n_elements', this%dyn%model%n_elements, err)
+    if (err%ok()) call h5%write_int_attr('/', 'n_kinematic_solves', this%dyn%kin%n_solves, err)
+    if (.not. this%scene%dynamic%active) return
+    associate (s => this%stats, d => this%scene%dynamic)
+      if (err%ok()) call h5%write_string_attr('/', 'integrator', d%integrator, err)
+      if (err%ok()) call h5%write_real_attr('/', 'rtol', d%rtol, err)
+      if (err%ok()) call h5%write_real_attr('/', 'atol', d%atol, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_steps', s%n_steps, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_rhs_evals', s%n_rhs_evals, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_jac_evals', s%n_jac_evals, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_err_test_fails', s%n_err_test_fails, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_nonlin_fails', s%n_nonlin_fails, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_restarts', s%n_restarts, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_model_evals', this%dyn%n_evals, err)
+      if (err%ok()) call h5%write_string_attr('/', 'jacobian', d%jacobian, err)
+    end associate
+  end subroutine write_attributes
+
+  !> Node positions (n, 3) and rotations (n) of the output nodes from coordinate histories.
+  subroutine write_nodes(this, h5, group, x, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    character(len=*), intent(in) :: group
+    real(wp), intent(in) :: x(:, :)
+    type(error_t), intent(inout) :: err
+    real(wp) :: pos(3, size(x, 2))
+    integer :: i, in, ic(3)
+    do i = 1, size(this%scene%output_nodes)
+      associate (label => this%scene%output_nodes(i)%s)
+        in = this%dyn%model%find_node(label)
+        ic = this%dyn%model%node_coord(:, in)
+        pos(1, :) = x(ic(1), :)
+        pos(2, :) = x(ic(2), :)
+        pos(3, :) = 0.0_wp
+        if (err%ok()) call h5%write_real_2d(group // '/nodes/' // label // '/position', pos, &
+          err, units='m')
+        if (ic(3) > 0 .and. err%ok()) call h5%write_real_1d(group // '/nodes/' // label // &
+          '/rotation', x(ic(3), :), err, units='rad')
+      end associate
+    end do
+  end subroutine write_nodes
+
+  subroutine write_static(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    integer :: k, n
+    n = this%scene%static%n_steps
+    call h5%write_real_1d('/static/load_factor', [(real(k, wp) / n, k=1, n)], err)
+    if (err%ok()) call h5%write_real_1d('/static/q', this%q_static, err)
+    call write_nodes(this, h5, '/static', this%x_static, err)
+  end subroutine write_static
+
+  subroutine write_modal(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    real(wp), allocatable :: shape(:, :)
+    integer :: i, in, ic(3)
+    call h5%write_real_1d('/modal/frequency_hz', this%modal%frequency_hz, err, units='Hz')
+    if (err%ok()) call h5%write_real_2d('/modal/shapes', this%modal%shapes, err)
+    if (err%ok()) call h5%write_real_attr('/modal', 'time', this%scene%modal%time, err)
+    do i = 1, size(this%scene%output_nodes)
+      in = this%dyn%model%find_node(this%scene%output_nodes(i)%s)
+      ic = this%dyn%model%node_coord(:, in)
+      allocate(shape(3, size(this%modal%frequency_hz)))
+      shape(1, :) = this%modal%node_shapes(ic(1), :, 1)
+      shape(2, :) = this%modal%node_shapes(ic(2), :, 1)
+      shape(3, :) = 0.0_wp
+      if (err%ok()) call h5%write_real_2d('/modal/nodes/' // this%scene%output_nodes(i)%s // &
+        '/shape', shape, err, units='m')
+      deallocate(shape)
+    end do
+  end subroutine write_modal
+
+  subroutine write_dynamic(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    call h5%write_real_1d('/time', this%time, err, units='s')
+    call write_nodes(this, h5, '', this%dyn%x_hist, err)
+    if (err%ok()) call h5%write_real_2d('/q', this%dyn%q_hist, err)
+    if (err%ok()) call h5%write_real_2d('/qd', this%dyn%v_hist, err)
+    if (err%ok()) call h5%write_real_1d('/energy/kinetic', this%dyn%energy_hist(1, :), err, &
+      units='J')
+    if (err%ok()) call h5%write_real_1d('/energy/potential', this%dyn%energy_hist(2, :), err, &
+      units='J')
+  end subroutine write_dynamic
+
+  !> The reduced analysis: basis, reduced coordinates, error indicator and basis updates.
+  subroutine write_reduction(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    character(len=*), parameter :: g = '/reduction'
+    associate (b => this%initial_basis, red => this%red, r => this%scene%reduction)
+      call h5%write_real_2d(g // '/eta', red%eta_hist, err)
+      if (err%ok()) call h5%write_real_2d(g // '/eta_dot', red%eta_dot_hist, err)
+      if (err%ok()) call h5%write_real_2d(g // '/basis', b%v, err)
+      if (err%ok()) call h5%write_real_1d(g // '/frequency_hz', b%frequency_hz, err, units='Hz')
+      if (err%ok()) call h5%write_real_1d(g // '/residual', red%residual, err)
+      if (err%ok() .and. red%has_estimate) call h5%write_real_1d(g // '/error_estimate', &
+        red%estimate, err, units='m')
+      if (err%ok()) call h5%write_int_attr(g, 'n_modes', b%k(), err)
+      if (err%ok()) call h5%write_string_attr(g, 'selection', r%selection, err)
+      if (err%ok()) call h5%write_string_attr(g, 'reason', b%reason, err)
+      if (err%ok()) call h5%write_real_attr(g, 'cutoff_hz', b%cutoff_hz, err)
+      if (err%ok()) call h5%write_real_attr(g, 'motion_bandwidth_hz', b%bandwidth_hz, err)
+      if (err%ok()) call h5%write_real_attr(g, 'basis_time', r%basis_time, err)
+      if (err%ok()) call h5%write_string_attr(g, 'eigensolver', trim(b%solver), err)
+      if (err%ok()) call h5%write_string_attr(g, 'static_correction', &
+        merge('yes', 'no ', r%static_correction), err)
+      if (err%ok()) call h5%write_real_attr(g, 'residual_max', maxval(red%residual), err)
+      if (err%ok() .and. red%has_estimate) call h5%write_real_attr(g, 'error_estimate_max', &
+        maxval(red%estimate), err)
+      if (err%ok()) call h5%write_string_attr(g, 'update', r%update, err)
+      if (err%ok()) call h5%write_int_attr(g, 'n_updates', this%updates%n_updates, err)
+      if (err%ok() .and. size(this%updates%time) > 0) then
+        call h5%write_real_1d(g // '/checks/time', this%updates%time, err, units='s')
+        if (err%ok()) call h5%write_real_1d(g // '/checks/min_mac', this%updates%min_mac, err)
+        if (err%ok()) call h5%write_int_1d(g // '/checks/updated', &
+          merge(1, 0, this%updates%updated), err)
+        if (err%ok()) call h5%write_real_2d(g // '/checks/frequency_hz', &
+          this%updates%frequency_hz, err, units='Hz')
+      end if
+    end associate
+  end subroutine write_reduction
+end submodule analysis_run_output
