@@ -1,6 +1,7 @@
 !> The result file of one run (layout: docs/output.md): the writers of analysis_run.
 submodule (analysis_run) analysis_run_output
   use io_hdf5, only: h5_writer_t
+  use model_system, only: COORD_PHI, COORD_Y
   implicit none
 
 contains
@@ -13,6 +14,7 @@ contains
     type(h5_writer_t) :: h5
     call h5%open(path, err)
     if (err%ok()) call write_attributes(this, h5, err)
+    if (err%ok()) call write_model(this%dyn%model, h5, err)
     if (err%ok() .and. this%scene%static%active) call write_static(this, h5, err)
     if (err%ok() .and. this%scene%modal%active) call write_modal(this, h5, err)
     if (err%ok() .and. this%scene%dynamic%active) call write_dynamic(this, h5, err)
@@ -50,6 +52,78 @@ contains
     end associate
   end subroutine write_attributes
 
+  !> The reference geometry and connectivity (/model), so that a result file alone can draw the
+  !> mechanism: every node with its coordinates, every element with its coordinates and nodes.
+  subroutine write_model(model, h5, err)
+    type(model_t), intent(in) :: model
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    character(len=*), parameter :: g = '/model'
+    integer :: n_nodes, i, j, k, owner
+    integer, allocatable :: coord_node(:), el_coords(:, :), el_nodes(:, :)
+    character(len=16), allocatable :: el_type(:)
+    character(len=64), allocatable :: el_label(:)
+    real(wp), allocatable :: pos(:, :)
+
+    n_nodes = size(model%node_label)
+    ! Which node each coordinate belongs to: positions and own rotations from the node table,
+    ! a rotation an element carries after its node's x and y (beam: x1 y1 phi1 x2 y2 phi2)
+    ! from that node; a hinge then finds its rotations among them.
+    allocate(coord_node(model%n_x), source=0)
+    do i = 1, n_nodes
+      do j = 1, 3
+        if (model%node_coord(j, i) > 0) coord_node(model%node_coord(j, i)) = i
+      end do
+    end do
+    allocate(el_coords(6, model%n_elements), el_nodes(2, model%n_elements), source=0)
+    allocate(el_type(model%n_elements), el_label(model%n_elements))
+    do i = 1, model%n_elements
+      associate (e => model%elements(i)%e)
+        el_type(i) = e%type_name()
+        el_label(i) = e%label
+        el_coords(1:size(e%dofs), i) = e%dofs
+        owner = 0
+        do j = 1, size(e%dofs)
+          if (model%coord_kind(e%dofs(j)) /= COORD_PHI) owner = coord_node(e%dofs(j))
+          if (model%coord_kind(e%dofs(j)) == COORD_PHI .and. owner > 0 .and. &
+              coord_node(e%dofs(j)) == 0) coord_node(e%dofs(j)) = owner
+        end do
+      end associate
+    end do
+    do i = 1, model%n_elements
+      associate (e => model%elements(i)%e)
+        k = 0
+        do j = 1, size(e%dofs)
+          if (k == 2) exit
+          ! An element's nodes: those of its positions, or of its rotations if it has none.
+          if (model%coord_kind(e%dofs(j)) == COORD_PHI .and. any(model%coord_kind(e%dofs) /= &
+              COORD_PHI)) cycle
+          if (model%coord_kind(e%dofs(j)) == COORD_Y) cycle
+          k = k + 1
+          el_nodes(k, i) = coord_node(e%dofs(j))
+        end do
+      end associate
+    end do
+    allocate(pos(3, n_nodes))
+    do i = 1, n_nodes
+      pos(1:2, i) = model%x0(model%node_coord(1:2, i))
+      pos(3, i) = 0.0_wp
+    end do
+    call h5%write_string_1d(g // '/coordinates/name', model%coord_name, err)
+    if (err%ok()) call h5%write_real_1d(g // '/coordinates/reference', model%x0, err)
+    if (err%ok()) call h5%write_int_1d(g // '/coordinates/kind', model%coord_kind, err)
+    if (err%ok()) call h5%write_string_1d(g // '/nodes/label', model%node_label, err)
+    if (err%ok()) call h5%write_real_2d(g // '/nodes/position', pos, err, units='m')
+    if (err%ok()) call h5%write_int_2d(g // '/nodes/coordinates', model%node_coord, err)
+    if (err%ok()) call h5%write_string_1d(g // '/elements/label', el_label, err)
+    if (err%ok()) call h5%write_string_1d(g // '/elements/type', el_type, err)
+    if (err%ok()) call h5%write_int_2d(g // '/elements/coordinates', el_coords, err)
+    if (err%ok()) call h5%write_int_2d(g // '/elements/nodes', el_nodes, err)
+    if (err%ok()) call h5%write_int_attr(g, 'n_nodes', n_nodes, err)
+    if (err%ok()) call h5%write_int_attr(g, 'n_elements', model%n_elements, err)
+    if (err%ok()) call h5%write_int_attr(g, 'n_coordinates', model%n_x, err)
+  end subroutine write_model
+
   !> Node positions (n, 3) and rotations (n) of the output nodes from coordinate histories.
   subroutine write_nodes(this, h5, group, x, err)
     type(run_t), intent(in) :: this
@@ -82,6 +156,7 @@ contains
     n = this%scene%static%n_steps
     call h5%write_real_1d('/static/load_factor', [(real(k, wp) / n, k=1, n)], err)
     if (err%ok()) call h5%write_real_1d('/static/q', this%q_static, err)
+    if (err%ok()) call h5%write_real_2d('/static/x', this%x_static, err)
     call write_nodes(this, h5, '/static', this%x_static, err)
   end subroutine write_static
 
@@ -113,6 +188,7 @@ contains
     type(error_t), intent(inout) :: err
     call h5%write_real_1d('/time', this%time, err, units='s')
     call write_nodes(this, h5, '', this%dyn%x_hist, err)
+    if (err%ok()) call h5%write_real_2d('/x', this%dyn%x_hist, err)
     if (err%ok()) call h5%write_real_2d('/q', this%dyn%q_hist, err)
     if (err%ok()) call h5%write_real_2d('/qd', this%dyn%v_hist, err)
     if (err%ok()) call h5%write_real_1d('/energy/kinetic', this%dyn%energy_hist(1, :), err, &

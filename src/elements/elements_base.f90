@@ -24,6 +24,8 @@ module elements_base
     procedure(evaluate_iface), deferred :: evaluate
     procedure(second_iface), deferred :: second
     procedure(stiffness_iface), deferred :: stiffness
+    !> 'beam', 'hinge', 'truss': names the element type in result files.
+    procedure(type_name_iface), deferred, nopass :: type_name
     procedure :: n_modes => element_n_modes
     procedure :: has_inertia => element_no_inertia
     procedure :: inertia => element_zero_inertia
@@ -59,6 +61,9 @@ module elements_base
       class(element_t), intent(in) :: this
       real(wp), intent(out) :: s(:, :)
     end subroutine stiffness_iface
+    pure function type_name_iface() result(name)
+      character(len=:), allocatable :: name
+    end function type_name_iface
   end interface
 
 contains

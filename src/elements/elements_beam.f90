@@ -33,6 +33,7 @@ module elements_beam
     procedure :: evaluate => beam_evaluate
     procedure :: second => beam_second
     procedure :: stiffness => beam_stiffness
+    procedure, nopass :: type_name => beam_type_name
     procedure :: has_inertia => beam_has_inertia
     procedure :: inertia => beam_inertia
     procedure :: weight => beam_weight
@@ -232,4 +233,8 @@ contains
     f = this%rho_a * this%l0 * f
     potential = this%rho_a * this%l0 * potential
   end subroutine beam_weight
+  pure function beam_type_name() result(name)
+    character(len=:), allocatable :: name
+    name = 'beam'
+  end function beam_type_name
 end module elements_beam

@@ -14,6 +14,7 @@ module elements_hinge
     procedure :: evaluate => hinge_evaluate
     procedure :: second => hinge_second
     procedure :: stiffness => hinge_stiffness
+    procedure, nopass :: type_name => hinge_type_name
   end type hinge_t
 
 contains
@@ -38,4 +39,8 @@ contains
     real(wp), intent(out) :: s(:, :)
     s(1, 1) = this%k
   end subroutine hinge_stiffness
+  pure function hinge_type_name() result(name)
+    character(len=:), allocatable :: name
+    name = 'hinge'
+  end function hinge_type_name
 end module elements_hinge

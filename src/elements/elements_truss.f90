@@ -16,6 +16,7 @@ module elements_truss
     procedure :: evaluate => truss_evaluate
     procedure :: second => truss_second
     procedure :: stiffness => truss_stiffness
+    procedure, nopass :: type_name => truss_type_name
     procedure :: has_inertia => truss_has_inertia
     procedure :: inertia => truss_inertia
     procedure :: weight => truss_weight
@@ -90,4 +91,8 @@ contains
     diag = 0.0_wp
     if (.not. this%consistent) diag = this%rho_a * this%l0 / 2
   end subroutine truss_lumped_mass
+  pure function truss_type_name() result(name)
+    character(len=:), allocatable :: name
+    name = 'truss'
+  end function truss_type_name
 end module elements_truss

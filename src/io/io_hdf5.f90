@@ -31,7 +31,7 @@
 !> the sweep result file (io_sweep_file).
 !> The writer holds all its state; the module has none. A writer is not thread-safe.
 module io_hdf5
-  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_null_ptr
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_null_ptr, c_char, c_null_char
   use hdf5, only: hid_t, hsize_t, h5fcreate_f, h5fflush_f, h5fclose_f, H5F_ACC_TRUNC_F, &
     H5F_SCOPE_GLOBAL_F, h5pcreate_f, h5pset_create_inter_group_f, H5P_LINK_CREATE_F, &
     h5lexists_f, h5oopen_f, h5oclose_f, h5kind_to_type, H5T_IEEE_F64LE, &
@@ -39,7 +39,7 @@ module io_hdf5
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_IO
   use io_fs, only: rename_file, delete_file, sync_file
-  use io_h5base, only: h5_init, h5_close, h5_int_file_type, h5_put_string_attr, &
+  use io_h5base, only: h5_init, h5_close, h5_int_file_type, h5_string_type, h5_put_string_attr, &
     h5_put_real_attr, h5_put_int_attr, h5_create_dataset
   implicit none
   private
@@ -63,6 +63,11 @@ module io_hdf5
     procedure, private :: h5w_write_int_1d, h5w_write_int_1d_i8
     !> `write_int_1d(name, data(:), err [, units])`, data default integer or integer(i8).
     generic :: write_int_1d => h5w_write_int_1d, h5w_write_int_1d_i8
+    !> `write_int_2d(name, data(:,:), err)`: default integers, Fortran (ncol, nrow) as above.
+    procedure :: write_int_2d => h5w_write_int_2d
+    !> `write_string_1d(name, values(:), err)`: variable-length UTF-8 strings, trailing blanks
+    !> of the Fortran strings removed (h5py reads a list of str).
+    procedure :: write_string_1d => h5w_write_string_1d
     !> `write_string_attr(object, name, value, err)`; object '/' for the root, or a path.
     procedure :: write_string_attr => h5w_write_string_attr
     !> `write_real_attr(object, name, value, err)`, value real(wp).
@@ -183,6 +188,55 @@ contains
     call write_dataset(this, name, shape(data, kind=hsize_t), &
                        h5kind_to_type(i8, H5_INTEGER_KIND), h5_int_file_type(i8), p, err, units)
   end subroutine h5w_write_int_1d_i8
+
+  subroutine h5w_write_int_2d(this, name, data, err)
+    class(h5_writer_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: data(:, :)
+    type(error_t), intent(out) :: err
+    integer, allocatable, target :: buf(:, :)
+    type(c_ptr) :: p
+    allocate(buf, source=data)
+    p = c_null_ptr
+    if (size(buf) > 0) p = c_loc(buf)
+    call write_dataset(this, name, shape(data, kind=hsize_t), &
+                       h5kind_to_type(kind(data), H5_INTEGER_KIND), &
+                       h5_int_file_type(kind(data)), p, err)
+  end subroutine h5w_write_int_2d
+
+  subroutine h5w_write_string_1d(this, name, values, err)
+    class(h5_writer_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    character(len=*), intent(in) :: values(:)
+    type(error_t), intent(out) :: err
+    ! All strings NUL-terminated in one buffer; the dataset's elements point into it.
+    character(kind=c_char), allocatable, target :: chars(:)
+    type(c_ptr), allocatable, target :: ptrs(:)
+    integer(hid_t) :: type_id
+    integer :: i, j, at, hdferr
+    allocate(chars(sum(len_trim(values)) + size(values)), ptrs(size(values)))
+    at = 1
+    do i = 1, size(values)
+      ptrs(i) = c_loc(chars(at))
+      do j = 1, len_trim(values(i))
+        chars(at) = values(i)(j:j)
+        at = at + 1
+      end do
+      chars(at) = c_null_char
+      at = at + 1
+    end do
+    call h5_string_type(type_id, hdferr)
+    if (hdferr < 0) then
+      call err%set(ERR_IO, this%path // ": cannot make the string type of dataset '" // &
+                   abs_name(name) // "'")
+    else if (size(values) == 0) then
+      call write_dataset(this, name, [0_hsize_t], type_id, type_id, c_null_ptr, err)
+    else
+      call write_dataset(this, name, shape(values, kind=hsize_t), type_id, type_id, &
+                         c_loc(ptrs), err)
+    end if
+    call h5_close(type_id)
+  end subroutine h5w_write_string_1d
 
   !> Attach a string attribute (variable-length UTF-8, read by h5py as str) to `object`
   !> ('/' for the root, or the path of a group or dataset).
