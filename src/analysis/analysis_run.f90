@@ -14,7 +14,7 @@ module analysis_run
   use reduction_modal, only: modal_result_t, modal_analysis
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use integrators_driver, only: integrate
-  use core_strings, only: int_str, real_str
+  use core_strings, only: int_str, real_str, approx_str
   use reduction_basis, only: basis_spec_t, basis_t, compute_basis
   use reduction_system, only: reduced_t
   use reduction_adaptive, only: update_spec_t, update_log_t, integrate_reduced
@@ -78,6 +78,8 @@ contains
     if (.not. err%ok()) return
     call build_model(this%scene, model, err)
     if (err%ok()) call check_output_nodes(this%scene, model, err)
+    if (err%ok() .and. this%scene%dynamic%active) call check_history_size(this%scene%dynamic, &
+      model, err)
     if (err%ok()) then
       allocate(this%q_static(model%n_dy))
       this%q_static = 0.0_wp
@@ -106,6 +108,27 @@ contains
       end if
     end do
   end subroutine check_output_nodes
+
+  !> Refuse, before the run, histories that would not fit in memory or steps that would not end
+  !> (the limits are in docs/input.md).
+  subroutine check_history_size(d, model, err)
+    type(dynamic_rec_t), intent(in) :: d
+    type(model_t), intent(in) :: model
+    type(error_t), intent(inout) :: err
+    real(wp), parameter :: MAX_HISTORY_BYTES = 4.0e9_wp, MAX_FIXED_STEPS = 1.0e9_wp
+    real(wp) :: n_out, bytes
+    n_out = d%t_end / d%output_dt + 2.0_wp
+    ! Per output time: all coordinates, q and qd, energies (8 bytes each).
+    bytes = 8.0_wp * n_out * real(model%n_x + 2 * model%n_q + 4, wp)
+    if (bytes > MAX_HISTORY_BYTES) then
+      call err%set(ERR_INPUT, 'group &dynamic: variable ''output_dt'': t_end / output_dt ' // &
+        'gives ' // approx_str(n_out) // ' output times, whose histories would need ' // &
+        approx_str(bytes / 1.0e9_wp) // ' GB (limit 4 GB): increase output_dt or shorten t_end')
+    else if (d%integrator == 'galpha' .and. d%t_end / d%dt > MAX_FIXED_STEPS) then
+      call err%set(ERR_INPUT, 'group &dynamic: variable ''dt'': t_end / dt gives ' // &
+        approx_str(d%t_end / d%dt) // ' fixed steps (limit 1e9): increase dt')
+    end if
+  end subroutine check_history_size
 
   !> Run the analyses the scene asks for.
   subroutine run_execute(this, err)

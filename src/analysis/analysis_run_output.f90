@@ -219,7 +219,7 @@ contains
       if (err%ok()) call h5%write_real_attr(g, 'basis_time', r%basis_time, err)
       if (err%ok()) call h5%write_string_attr(g, 'eigensolver', trim(b%solver), err)
       if (err%ok()) call h5%write_string_attr(g, 'static_correction', &
-        merge('yes', 'no ', r%static_correction), err)
+        trim(merge('yes', 'no ', r%static_correction)), err)
       if (err%ok()) call h5%write_real_attr(g, 'residual_max', maxval(red%residual), err)
       if (err%ok() .and. red%has_estimate) call h5%write_real_attr(g, 'error_estimate_max', &
         maxval(red%estimate), err)

@@ -1,11 +1,13 @@
 !> flexmor FILE.nml [-o OUT.h5] [-q]: run the analyses of one scene file, write one HDF5 file.
 !> Exit status 0 on success; on error a one-line message on stderr and status 1 (input),
-!> 2 (model), 3 (numerical failure), 4 (file system) or 5 (internal).
+!> 2 (model), 3 (numerical failure), 4 (file system) or 5 (internal); interrupted by SIGINT or
+!> SIGTERM, one line and 130 or 143, leaving no result file.
 program flexmor_main
   use, intrinsic :: iso_fortran_env, only: error_unit
   use core_error, only: error_t
   use core_linalg, only: single_thread_blas
   use io_cli, only: cli_args_t, parse_cli
+  use io_fs, only: check_output_path, install_interrupt_guard
   use analysis_run, only: run_t, FLEXMOR_VERSION
   implicit none
   type(run_t) :: run
@@ -19,6 +21,8 @@ program flexmor_main
     'flexmor ' // FLEXMOR_VERSION, .false., args, err)
   if (args%done) stop
   run%verbose = args%verbose
+  if (err%ok()) call install_interrupt_guard(err)
+  if (err%ok()) call check_output_path(args%output, err)
   if (err%ok()) call run%load(args%input, err)
   if (err%ok()) call run%execute(err)
   if (err%ok()) call run%write(args%output, err)

@@ -3,7 +3,7 @@ module core_strings
   use core_kinds, only: wp
   implicit none
   private
-  public :: int_str, real_str
+  public :: int_str, real_str, approx_str
 
 contains
 
@@ -30,4 +30,23 @@ contains
     if (s(m:m) == '.') m = m - 1
     s = s(:m) // s(e:)
   end function real_str
+
+  !> About three significant digits, for estimates in messages: 192, 13.3, 0.0441, 1.20E+09.
+  pure function approx_str(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=:), allocatable :: s
+    character(len=32) :: buf, fmt
+    integer :: decimals
+    if (abs(x) >= 1.0e-2_wp .and. abs(x) < 1.0e6_wp) then
+      decimals = max(0, 2 - floor(log10(abs(x))))
+      write(fmt, '(a,i0,a)') '(f0.', decimals, ')'
+      write(buf, fmt) x
+      s = trim(buf)
+      if (s(1:1) == '.') s = '0' // s
+      if (s(len(s):len(s)) == '.') s = s(:len(s) - 1)
+    else
+      write(buf, '(es10.2)') x
+      s = trim(adjustl(buf))
+    end if
+  end function approx_str
 end module core_strings

@@ -1,4 +1,10 @@
-!> Small file-system operations Fortran lacks: rename, delete, fsync (POSIX, via src/io/io_fs.c).
+!> Small file-system operations Fortran lacks: rename, delete, fsync, probing an output path,
+!> and the interrupt guard of a result file (POSIX, via src/io/io_fs.c).
+!>
+!> The guard: once `install_interrupt_guard` has run (the executables do it at start), SIGINT and
+!> SIGTERM delete the result file being written (its temporary name, and the final one from the
+!> moment the commit starts), print one line and exit with 130 or 143. Library callers that do
+!> not install it keep the default signal behaviour; `guard_result_file` is then harmless.
 !>
 !> Paths are passed as given (not trimmed). Failures come back in `err` (ERR_IO) with the path(s)
 !> and the system's reason, e.g. "cannot rename 'a.tmp' to 'a': No such file or directory".
@@ -7,9 +13,11 @@ module io_fs
   use core_error, only: error_t, ERR_IO
   implicit none
   private
-  public :: rename_file, delete_file, sync_file
+  public :: rename_file, delete_file, sync_file, check_output_path, install_interrupt_guard, &
+    guard_result_file, clear_result_guard
 
-  integer(c_int), parameter :: ENOENT = 2  !< errno "No such file or directory" (Linux)
+  integer(c_int), parameter :: ENOENT = 2   !< errno "No such file or directory" (Linux)
+  integer(c_int), parameter :: EISDIR = 21  !< errno "Is a directory" (Linux)
 
   interface
     integer(c_int) function c_rename(from, to) bind(C, name='flexmor_rename')
@@ -26,6 +34,26 @@ module io_fs
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: path(*)
     end function c_fsync_path
+
+    integer(c_int) function c_probe_output(path, tmp, folder_missing) &
+        bind(C, name='flexmor_probe_output')
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*), tmp(*)
+      integer(c_int), intent(out) :: folder_missing
+    end function c_probe_output
+
+    integer(c_int) function c_guard_install() bind(C, name='flexmor_guard_install')
+      import :: c_int
+    end function c_guard_install
+
+    subroutine c_guard_set(tmp, final, final_ours) bind(C, name='flexmor_guard_set')
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: tmp(*), final(*)
+      integer(c_int), value :: final_ours
+    end subroutine c_guard_set
+
+    subroutine c_guard_clear() bind(C, name='flexmor_guard_clear')
+    end subroutine c_guard_clear
 
     subroutine c_strerror(code, buf, len) bind(C, name='flexmor_strerror')
       import :: c_int, c_char, c_size_t
@@ -67,6 +95,53 @@ contains
     rc = c_fsync_path(to_c(path))
     if (rc /= 0) call err%set(ERR_IO, "cannot sync '" // path // "' to disk: " // errno_text(rc))
   end subroutine sync_file
+
+  !> Fail early (ERR_IO) when `path` cannot become the result file: it is a folder, its folder
+  !> does not exist or is not writable. Run before the analyses, so a long run does not end in
+  !> a write error. Creates and removes `path // '.tmp'`, the name the writer uses.
+  subroutine check_output_path(path, err)
+    character(len=*), intent(in) :: path
+    type(error_t), intent(out) :: err
+    integer(c_int) :: rc, folder_missing
+    integer :: slash
+    if (len_trim(path) == 0) then
+      call err%set(ERR_IO, 'the result file name is empty')
+      return
+    end if
+    rc = c_probe_output(to_c(path), to_c(path // '.tmp'), folder_missing)
+    if (rc == 0) return
+    slash = index(path, '/', back=.true.)
+    if (rc == EISDIR) then
+      call err%set(ERR_IO, "cannot write the result file '" // path // "': it is a folder " // &
+        "(give a file name, e.g. -o " // path // "/result.h5)")
+    else if (folder_missing /= 0 .and. slash > 1) then
+      call err%set(ERR_IO, "cannot write the result file '" // path // "': the folder '" // &
+        path(1:slash - 1) // "' does not exist")
+    else
+      call err%set(ERR_IO, "cannot write the result file '" // path // "': " // errno_text(rc))
+    end if
+  end subroutine check_output_path
+
+  !> Make SIGINT and SIGTERM remove the guarded result file and exit 130/143 with one line.
+  subroutine install_interrupt_guard(err)
+    type(error_t), intent(out) :: err
+    integer(c_int) :: rc
+    rc = c_guard_install()
+    if (rc /= 0) call err%set(ERR_IO, 'cannot install the SIGINT/SIGTERM handler: ' // &
+      errno_text(rc))
+  end subroutine install_interrupt_guard
+
+  !> From now on an interrupt deletes `tmp`, and `final` too when `final_ours`.
+  subroutine guard_result_file(tmp, final, final_ours)
+    character(len=*), intent(in) :: tmp, final
+    logical, intent(in) :: final_ours
+    call c_guard_set(to_c(tmp), to_c(final), merge(1_c_int, 0_c_int, final_ours))
+  end subroutine guard_result_file
+
+  !> An interrupt deletes nothing any more.
+  subroutine clear_result_guard()
+    call c_guard_clear()
+  end subroutine clear_result_guard
 
   !> NUL-terminated copy of a Fortran string.
   pure function to_c(s) result(c)

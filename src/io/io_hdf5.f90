@@ -38,7 +38,7 @@ module io_hdf5
     H5_REAL_KIND, H5_INTEGER_KIND
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_IO
-  use io_fs, only: rename_file, delete_file, sync_file
+  use io_fs, only: rename_file, delete_file, sync_file, guard_result_file, clear_result_guard
   use io_h5base, only: h5_init, h5_close, h5_int_file_type, h5_string_type, h5_put_string_attr, &
     h5_put_real_attr, h5_put_int_attr, h5_create_dataset
   implicit none
@@ -107,6 +107,7 @@ contains
 
     call h5_init(path, err)
     if (.not. err%ok()) return
+    call guard_result_file(this%tmp, this%path, final_ours=.false.)
     call h5fcreate_f(this%tmp, H5F_ACC_TRUNC_F, this%file_id, hdferr)
     if (hdferr < 0) then
       this%file_id = -1
@@ -288,8 +289,7 @@ contains
 
   !> Flush and close the file, fsync it and rename it to the final name (atomic: readers see the
   !> old file or the complete new one). On success the writer is closed and may be opened again.
-  !> If closing fails the temporary file is deleted; if only the rename fails, the complete file
-  !> is kept under the temporary name (the message says where) until `abort` is called.
+  !> If any step fails the temporary file is deleted and nothing is left.
   subroutine h5w_commit(this, err)
     class(h5_writer_t), intent(inout) :: this
     type(error_t), intent(out) :: err
@@ -326,10 +326,13 @@ contains
       call err%set(ERR_IO, this%path // ': ' // fs_err%message // ' (nothing was written)')
       return
     end if
+    ! From here an interrupt removes the final file too: a run stopped while committing leaves
+    ! nothing, like one stopped earlier (the executables never clear this guard).
+    call guard_result_file(this%tmp, this%path, final_ours=.true.)
     call rename_file(this%tmp, this%path, fs_err)
     if (.not. fs_err%ok()) then
-      call err%set(ERR_IO, this%path // ': ' // fs_err%message // " (the results are kept in '" &
-                   // this%tmp // "')")
+      call this%abort()
+      call err%set(ERR_IO, this%path // ': ' // fs_err%message // ' (nothing was written)')
       return
     end if
     this%tmp_left = .false.
@@ -348,6 +351,7 @@ contains
     if (this%tmp_left) then
       call delete_file(this%tmp)
       this%tmp_left = .false.
+      call clear_result_guard()
     end if
   end subroutine h5w_abort
 

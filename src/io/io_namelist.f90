@@ -132,7 +132,9 @@ contains
     pos = 1
     line = 1
     do
-      ! Outside groups only '&' matters; '!' comments are skipped so '&' in them is harmless.
+      ! Outside groups only blanks, '!' comments and the '&' of the next group may stand:
+      ! anything else is text the user meant to say something with (a group whose '&' is
+      ! missing, a value after the closing '/'), and dropping it silently changes the model.
       do while (pos <= len(text))
         if (text(pos:pos) == '&') exit
         if (text(pos:pos) == '!') then
@@ -141,6 +143,10 @@ contains
             pos = pos + 1
           end do
           cycle
+        end if
+        if (scan(text(pos:pos), WHITE) == 0) then
+          call err%set(ERR_INPUT, at(path, line) // outside_message(text, pos))
+          return
         end if
         if (text(pos:pos) == achar(10)) line = line + 1
         pos = pos + 1
@@ -167,6 +173,27 @@ contains
       call move_alloc(tmp, this%groups)
     end do
   end subroutine file_parse
+
+  !> Why the text at `pos`, outside every group, is refused (it shows the rest of the line).
+  function outside_message(text, pos) result(msg)
+    character(*), intent(in) :: text
+    integer, intent(in) :: pos
+    character(:), allocatable :: msg, rest
+    integer :: eol
+    eol = index(text(pos:), achar(10))
+    if (eol == 0) eol = len(text) - pos + 2
+    rest = trim(text(pos:pos + eol - 2))
+    if (len(rest) > 0) then
+      if (rest(len(rest):len(rest)) == achar(13)) rest = rest(:len(rest) - 1)
+    end if
+    if (len(rest) > 40) rest = rest(:37) // '...'
+    if (text(pos:pos) == '$') then
+      msg = "'$' group syntax is not supported: write &name ... / ('" // rest // "')"
+    else
+      msg = "text outside a group: '" // rest // "' (a group starts with '&name' and " // &
+        "ends with '/'; notes belong in '!' comments)"
+    end if
+  end function outside_message
 
   subroutine parse_group_body(g, text, pos, line, err)
     type(nml_group_t), intent(inout) :: g

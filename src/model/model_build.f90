@@ -5,7 +5,7 @@
 module model_build
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT, ERR_MODEL
-  use core_strings, only: int_str
+  use core_strings, only: int_str, approx_str
   use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC
   use elements_beam, only: beam_t, BENDING_ANGLE, BENDING_SINE
   use elements_hinge, only: hinge_t
@@ -15,7 +15,13 @@ module model_build
   use model_scene, only: scene_t, link_rec_t
   implicit none
   private
-  public :: build_model, mode_class_from_name
+  public :: build_model, mode_class_from_name, MAX_COORDINATES
+
+  !> Largest model built: every analysis works on dense matrices of the coordinates, so memory
+  !> grows as n^2 (about DENSE_BYTES_PER_N2 n^2 bytes: 13 GB at the limit) and a step's cost as
+  !> n^2 to n^3; beyond this a run would not end in any reasonable time.
+  integer, parameter :: MAX_COORDINATES = 10000
+  real(wp), parameter :: DENSE_BYTES_PER_N2 = 128.0_wp
 
   !> Work data of one build; lives only during build_model.
   type :: builder_t
@@ -43,6 +49,7 @@ contains
     type(error_t), intent(out) :: err
     type(builder_t) :: b
     integer :: i
+    call check_size(scene, err); if (.not. err%ok()) return
     call model%init()
     model%gravity = scene%gravity
     call add_nodes(scene, model, b, err); if (.not. err%ok()) return
@@ -59,6 +66,25 @@ contains
     end do
     call model%finalize(err)
   end subroutine build_model
+
+  !> Refuse a scene too large for dense linear algebra before anything is allocated. The count
+  !> is an upper bound from the records (reals: n_elements may be near huge()).
+  subroutine check_size(scene, err)
+    type(scene_t), intent(in) :: scene
+    type(error_t), intent(out) :: err
+    real(wp) :: n
+    integer :: i
+    ! Every node x, y, phi; per link 3 per inner node; per hinge a link-end rotation.
+    n = 3.0_wp * size(scene%nodes) + 2.0_wp * size(scene%hinges)
+    do i = 1, size(scene%links)
+      n = n + 3.0_wp * (real(scene%links(i)%n_elements, wp) - 1.0_wp)
+    end do
+    if (n <= MAX_COORDINATES) return
+    call err%set(ERR_INPUT, 'the scene is too large: about ' // approx_str(n) // &
+      ' nodal coordinates, limit ' // int_str(MAX_COORDINATES) // ' (dense matrices would ' // &
+      'need about ' // approx_str(DENSE_BYTES_PER_N2 * n**2 / 1.0e9_wp) // &
+      ' GB; reduce n_elements of the &link groups)')
+  end subroutine check_size
 
   integer function node_index(scene, label) result(idx)
     type(scene_t), intent(in) :: scene
