@@ -21,7 +21,7 @@ program flexmor_main
     'flexmor ' // FLEXMOR_VERSION, .false., args, err)
   if (args%done) stop
   run%verbose = args%verbose
-  if (err%ok()) call install_interrupt_guard(err)
+  if (err%ok()) call install_interrupt_guard('flexmor', 'no result file written', err)
   if (err%ok()) call check_output_path(args%output, err)
   if (err%ok()) call run%load(args%input, err)
   if (err%ok()) call run%execute(err)

@@ -1,13 +1,15 @@
 !> flexmor-sweep SWEEP.nml [-o OUT.h5] [-q] [--check]: run a parameter sweep (docs/sweep.md) on
 !> all ranks of MPI_COMM_WORLD (mpirun -n N, or alone as one rank) into one HDF5 file. Rerunning
 !> on an existing file resumes it. Exit status as flexmor: 0 ok (failed cases are results, not
-!> errors), 1 input, 4 file system, 5 internal; rank 0 prints the message.
+!> errors), 1 input, 4 file system, 5 internal; rank 0 prints the message. SIGINT/SIGTERM: one
+!> line, exit 130/143, the finished cases stay in the file (rerun to resume).
 program flexmor_sweep_main
   use, intrinsic :: iso_fortran_env, only: error_unit
   use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_Comm_rank, MPI_COMM_WORLD
   use core_error, only: error_t
   use core_linalg, only: single_thread_blas
   use io_cli, only: cli_args_t, parse_cli
+  use io_fs, only: install_interrupt_guard
   use analysis_run, only: FLEXMOR_VERSION
   use sweep_spec, only: sweep_spec_t
   use sweep_run, only: run_sweep, check_sweep
@@ -33,7 +35,10 @@ program flexmor_sweep_main
       call check_sweep(spec, err)
       if (err%ok() .and. rank == 0) call list_cases(spec)
     else
-      call run_sweep(spec, args%output, MPI_COMM_WORLD, args%verbose, err)
+      ! The sweep file is flushed after every case: an interrupt keeps what is done.
+      call install_interrupt_guard('flexmor-sweep', 'the finished cases are kept in ' // &
+        args%output // '; rerun the same command to resume', err, silent=rank /= 0)
+      if (err%ok()) call run_sweep(spec, args%output, MPI_COMM_WORLD, args%verbose, err)
     end if
   end if
   code = 0

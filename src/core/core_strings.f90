@@ -37,7 +37,9 @@ contains
     character(len=:), allocatable :: s
     character(len=32) :: buf, fmt
     integer :: decimals
-    if (abs(x) >= 1.0e-2_wp .and. abs(x) < 1.0e6_wp) then
+    if (x == 0.0_wp) then
+      s = '0'
+    else if (abs(x) >= 1.0e-2_wp .and. abs(x) < 1.0e6_wp) then
       decimals = max(0, 2 - floor(log10(abs(x))))
       write(fmt, '(a,i0,a)') '(f0.', decimals, ')'
       write(buf, fmt) x

@@ -94,19 +94,26 @@ static void put_text(const char *s)
     (void)ignored;
 }
 
+static char guard_msg_int[1024];
+static char guard_msg_term[1024];
+
 static void on_interrupt(int sig)
 {
     if (guard_tmp[0] != '\0') (void)unlink(guard_tmp);
     if (guard_final_ours && guard_final[0] != '\0') (void)unlink(guard_final);
-    put_text(sig == SIGINT ? "flexmor: interrupted (SIGINT): no result file written\n"
-                           : "flexmor: terminated (SIGTERM): no result file written\n");
+    put_text(sig == SIGINT ? guard_msg_int : guard_msg_term);
     _exit(128 + sig);
 }
 
-/* Install the handler for SIGINT and SIGTERM (the executables call it once at start). */
-int flexmor_guard_install(void)
+/* Install the handler for SIGINT and SIGTERM (the executables call it once at start); it prints
+ * the line given for that signal (may be empty) and exits with 128 + the signal number. It is
+ * installed even when the shell started us with SIGINT ignored (a background job): an
+ * interrupt must never leave half a result behind. */
+int flexmor_guard_install(const char *msg_int, const char *msg_term)
 {
     struct sigaction sa;
+    snprintf(guard_msg_int, sizeof guard_msg_int, "%s", msg_int);
+    snprintf(guard_msg_term, sizeof guard_msg_term, "%s", msg_term);
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_interrupt;
     sigfillset(&sa.sa_mask);

@@ -42,8 +42,10 @@ module io_fs
       integer(c_int), intent(out) :: folder_missing
     end function c_probe_output
 
-    integer(c_int) function c_guard_install() bind(C, name='flexmor_guard_install')
-      import :: c_int
+    integer(c_int) function c_guard_install(msg_int, msg_term) &
+        bind(C, name='flexmor_guard_install')
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: msg_int(*), msg_term(*)
     end function c_guard_install
 
     subroutine c_guard_set(tmp, final, final_ours) bind(C, name='flexmor_guard_set')
@@ -122,11 +124,25 @@ contains
     end if
   end subroutine check_output_path
 
-  !> Make SIGINT and SIGTERM remove the guarded result file and exit 130/143 with one line.
-  subroutine install_interrupt_guard(err)
+  !> Make SIGINT and SIGTERM remove the guarded result file, print `program: interrupted
+  !> (SIGINT): outcome` (or terminated, SIGTERM) and exit 130/143; `outcome` says what is left.
+  !> With `silent`, print nothing (the other ranks of an MPI job).
+  subroutine install_interrupt_guard(program, outcome, err, silent)
+    character(len=*), intent(in) :: program, outcome
     type(error_t), intent(out) :: err
+    logical, intent(in), optional :: silent
+    character(len=*), parameter :: NL = achar(10)
     integer(c_int) :: rc
-    rc = c_guard_install()
+    if (present(silent)) then
+      if (silent) then
+        rc = c_guard_install(to_c(''), to_c(''))
+        if (rc /= 0) call err%set(ERR_IO, 'cannot install the SIGINT/SIGTERM handler: ' // &
+          errno_text(rc))
+        return
+      end if
+    end if
+    rc = c_guard_install(to_c(program // ': interrupted (SIGINT): ' // outcome // NL), &
+      to_c(program // ': terminated (SIGTERM): ' // outcome // NL))
     if (rc /= 0) call err%set(ERR_IO, 'cannot install the SIGINT/SIGTERM handler: ' // &
       errno_text(rc))
   end subroutine install_interrupt_guard

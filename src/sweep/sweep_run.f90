@@ -16,7 +16,7 @@ module sweep_run
     MPI_ANY_TAG, MPI_Wtime
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
-  use core_strings, only: int_str
+  use core_strings, only: int_str, approx_str
   use io_namelist, only: nml_file_t
   use io_sweep_file, only: sweep_file_t, sweep_attrs_t
   use analysis_run, only: run_t, FLEXMOR_VERSION
@@ -327,7 +327,6 @@ contains
     logical, intent(in) :: final
     real(wp) :: now, rate, eta
     integer :: left
-    character(len=160) :: line
     if (.not. progress%verbose) return
     now = MPI_Wtime()
     if (.not. final .and. now - progress%t_last < 5.0_wp) return
@@ -335,10 +334,9 @@ contains
     rate = progress%done / max(now - progress%t_start, 1.0e-9_wp)
     left = progress%total - progress%skipped - progress%done
     eta = left / max(rate, 1.0e-12_wp)
-    write(line, '(a,i0,a,i0,a,i0,a,f0.2,a,f0.1,a)') 'sweep: ', progress%skipped + &
-      progress%done, '/', progress%total, ' done, ', progress%failed, ' failed, ', rate, &
-      ' cases/s, ETA ', eta, ' s'
-    write(*, '(a)') trim(line)
+    write(*, '(a)') 'sweep: ' // int_str(progress%skipped + progress%done) // '/' // &
+      int_str(progress%total) // ' done, ' // int_str(progress%failed) // ' failed, ' // &
+      approx_str(rate) // ' cases/s, ETA ' // approx_str(eta) // ' s'
     flush(6)
   end subroutine report
 end module sweep_run

@@ -247,3 +247,34 @@ def test_sweep_string_attributes_are_unpadded(tmp_path):
                           capture_output=True, text=True, timeout=600)
     assert (tmp_path / "s.h5").exists(), proc.stderr
     assert_unpadded(tmp_path / "s.h5", {base, sweep})
+
+
+@pytest.mark.skipif(not Path(SWEEP_BIN).is_file(), reason="flexmor-sweep not built")
+@pytest.mark.parametrize("sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_interrupted_sweep_keeps_its_cases_and_says_so(tmp_path, sig, status):
+    base = LONG.replace("t_end = 0.3", "t_end = 0.1").replace("&modal n_modes = 2 /\n", "")
+    (tmp_path / "base.nml").write_text(base)
+    (tmp_path / "sweep.nml").write_text(
+        "&sweep base = 'base.nml', mode = 'product' /\n"
+        "&parameter name = 'motion.m1.end', values = 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8 /\n")
+    proc = subprocess.Popen([SWEEP_BIN, "sweep.nml", "-o", "s.h5", "-q"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 600
+    # Interrupt once the file holds a finished case (polled without locking it).
+    while time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.2)
+        try:
+            with h5py.File(tmp_path / "s.h5", "r", locking=False) as f:
+                if (f["cases/status"][:] >= 0).any():
+                    break
+        except (OSError, KeyError):
+            pass
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=600)
+    if proc.returncode == 0:
+        pytest.skip("the sweep finished before the interrupt (very fast machine)")
+    assert proc.returncode == status, err
+    assert err.strip().splitlines() == [err.strip()] and "rerun" in err and "s.h5" in err
+    with h5py.File(tmp_path / "s.h5") as f:
+        done = int((f["cases/status"][:] >= 0).sum())
+    assert 1 <= done < 8
