@@ -165,6 +165,24 @@ contains
     end if
   end subroutine positive
 
+  !> An option of one setting that is given with another (`dt` with integrator = 'bdf') would be
+  !> ignored without a word: refuse it, saying when it applies.
+  subroutine only_with(g, vars, applies, when, err)
+    type(nml_group_t), intent(in) :: g
+    character(len=*), intent(in) :: vars(:), when
+    logical, intent(in) :: applies
+    type(error_t), intent(inout) :: err
+    integer :: i
+    if (.not. err%ok() .or. applies) return
+    do i = 1, size(vars)
+      if (g%has(trim(vars(i)))) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''' // trim(vars(i)) // &
+          ''' applies only ' // when // ': remove it or change that setting')
+        return
+      end if
+    end do
+  end subroutine only_with
+
   subroutine read_scene_group(g, scene, err)
     type(nml_group_t), intent(inout) :: g
     type(scene_t), intent(inout) :: scene
@@ -343,6 +361,15 @@ contains
       call rd_real(g, 't_end', d%t_end, err)
       call rd_real(g, 'output_dt', d%output_dt, err, default=1.0e-3_wp)
       call rd_string(g, 'integrator', d%integrator, err, default='bdf', lower=.true.)
+      if (err%ok()) then
+        associate (m => d%integrator, when => 'with integrator = ')
+          call only_with(g, ['dt     ', 'rho_inf'], m == 'galpha', when // '''galpha''', err)
+          call only_with(g, ['max_order'], m == 'bdf', when // '''bdf''', err)
+          call only_with(g, ['erk_order'], m == 'erk', when // '''erk''', err)
+          call only_with(g, ['max_step'], m /= 'galpha', when // '''bdf'' or ''erk''', err)
+          call only_with(g, ['jacobian'], m /= 'erk', when // '''bdf'' or ''galpha''', err)
+        end associate
+      end if
       call rd_string(g, 'jacobian', d%jacobian, err, default='linearised', lower=.true.)
       call rd_real(g, 'rtol', d%rtol, err, default=1.0e-6_wp)
       call rd_real(g, 'atol', d%atol, err, default=1.0e-8_wp)
@@ -412,6 +439,12 @@ contains
       end if
       call rd_logical(g, 'static_correction', r%static_correction, err, default=.false.)
       call rd_string(g, 'update', r%update, err, default='none', lower=.true.)
+      if (err%ok()) then
+        call only_with(g, ['update_interval'], r%update == 'interval' .or. r%update == 'mac', &
+          'with update = ''interval'' or ''mac''', err)
+        call only_with(g, ['mac_threshold'], r%update == 'mac', &
+          'with update = ''mac''', err)
+      end if
       call rd_real(g, 'mac_threshold', r%mac_threshold, err, default=0.9_wp)
       call rd_string(g, 'eigensolver', r%eigensolver, err, default='auto', lower=.true.)
       if (.not. err%ok()) return

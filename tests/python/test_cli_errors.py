@@ -172,6 +172,16 @@ CASES.update({
         RED.format("n_modes = 1, static_correction = .true.").replace(
             "mode = 'prescribed', motion = 'm1'", "mode = 'dynamic'"),
         ["static_correction", "positive definite"]),
+    "dt with bdf": (GOOD.replace("t_end = 0.02", "t_end = 0.02, dt = 1e-4"),
+                    ["&dynamic", "'dt'", "galpha"]),
+    "max_order with erk": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'erk', "
+                                        "max_order = 3"), ["'max_order'", "bdf"]),
+    "max_step with galpha": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'galpha', "
+                                          "max_step = 1e-3"), ["'max_step'"]),
+    "mac_threshold without mac": (RED.format("n_modes = 1, mac_threshold = 0.5"),
+                                  ["'mac_threshold'", "update = 'mac'"]),
+    "update_interval without update": (RED.format("n_modes = 1, update_interval = 0.1"),
+                                       ["'update_interval'", "interval"]),
     "erk order": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'erk', erk_order = 7"),
                   ["'erk_order'"]),
 })
