@@ -145,6 +145,22 @@ contains
     end if
   end subroutine rd_string
 
+  !> A label names a node, link, ... in references and in the result file's paths: it must be
+  !> non-empty and must not contain '/' (an HDF5 path separator) or leading/trailing blanks.
+  subroutine rd_label(g, label, err)
+    type(nml_group_t), intent(inout) :: g
+    character(len=:), allocatable, intent(inout) :: label
+    type(error_t), intent(inout) :: err
+    call rd_string(g, 'label', label, err)
+    if (.not. err%ok()) return
+    if (len_trim(label) == 0) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''label'' must not be empty')
+    else if (index(label, '/') > 0 .or. label /= trim(adjustl(label))) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''label'': ''' // label // &
+        ''' may not contain ''/'' or start or end with a blank')
+    end if
+  end subroutine rd_label
+
   !> Error unless value > 0 (or >= 0 when zero is allowed).
   subroutine positive(g, var, value, err, zero_ok)
     type(nml_group_t), intent(in) :: g
@@ -206,7 +222,7 @@ contains
     type(node_rec_t), intent(out) :: n
     type(error_t), intent(inout) :: err
     logical :: fixed
-    call rd_string(g, 'label', n%label, err)
+    call rd_label(g, n%label, err)
     call rd_real(g, 'x', n%x, err)
     call rd_real(g, 'y', n%y, err)
     call rd_logical(g, 'fixed', fixed, err, default=.false.)
@@ -219,7 +235,7 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(link_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
-    call rd_string(g, 'label', r%label, err)
+    call rd_label(g, r%label, err)
     call rd_string(g, 'from', r%from, err)
     call rd_string(g, 'to', r%to, err)
     call rd_int(g, 'n_elements', r%n_elements, err, default=1)
@@ -249,7 +265,7 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(hinge_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
-    call rd_string(g, 'label', r%label, err)
+    call rd_label(g, r%label, err)
     call rd_string(g, 'node', r%node, err)
     call rd_string(g, 'link', r%link, err)
     call rd_string(g, 'mode', r%mode, err, default='dynamic', lower=.true.)
@@ -266,7 +282,7 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(truss_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
-    call rd_string(g, 'label', r%label, err)
+    call rd_label(g, r%label, err)
     call rd_string(g, 'from', r%from, err)
     call rd_string(g, 'to', r%to, err)
     call rd_real(g, 'E', r%e_modulus, err)
@@ -308,7 +324,7 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(motion_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
-    call rd_string(g, 'label', r%label, err)
+    call rd_label(g, r%label, err)
     call rd_string(g, 'law', r%law, err, default='cubic', lower=.true.)
     call rd_real(g, 'start', r%start, err, default=0.0_wp)
     if (.not. err%ok()) return

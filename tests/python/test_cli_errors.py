@@ -172,6 +172,9 @@ CASES.update({
         RED.format("n_modes = 1, static_correction = .true.").replace(
             "mode = 'prescribed', motion = 'm1'", "mode = 'dynamic'"),
         ["static_correction", "positive definite"]),
+    "empty label": (GOOD.replace("label = 'arm'", "label = ''"), ["&link", "'label'", "empty"]),
+    "label with a slash": (GOOD.replace("label = 'tip', x", "label = 'a/b', x"),
+                           ["&node", "'label'", "'/'"]),
     "dt with bdf": (GOOD.replace("t_end = 0.02", "t_end = 0.02, dt = 1e-4"),
                     ["&dynamic", "'dt'", "galpha"]),
     "max_order with erk": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'erk', "
