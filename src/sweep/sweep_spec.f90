@@ -577,8 +577,8 @@ contains
     end do
   end subroutine gen_zip
 
-  !> random: independent uniform samples; lhs: in each parameter, one sample in each of the
-  !> n_samples equal strata, the strata in a random order. Each parameter draws from a stream
+  !> Mode 'random': independent uniform samples; mode 'lhs': in each parameter, one sample in
+  !> each of the n_samples equal strata, the strata in a random order. Each parameter draws from a stream
   !> of its own, so adding a parameter leaves the earlier parameters' values unchanged.
   subroutine gen_sampled(this, err)
     type(sweep_spec_t), intent(inout) :: this
