@@ -578,8 +578,8 @@ contains
   end subroutine gen_zip
 
   !> Mode 'random': independent uniform samples; mode 'lhs': in each parameter, one sample in
-  !> each of the n_samples equal strata, the strata in a random order. Each parameter draws from a stream
-  !> of its own, so adding a parameter leaves the earlier parameters' values unchanged.
+  !> each of the n_samples equal strata, the strata in a random order. Each parameter draws from
+  !> a stream of its own, so adding a parameter leaves the earlier parameters' values unchanged.
   subroutine gen_sampled(this, err)
     type(sweep_spec_t), intent(inout) :: this
     type(error_t), intent(inout) :: err
