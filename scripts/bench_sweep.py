@@ -34,7 +34,8 @@ overhead = wall - sum(case solve times)/W; the summed solve time per worker rank
 balance) and worker ranks that got no case. The per-case cost distribution comes from the
 1-rank run. A projection to --project-ranks ranks (default 64) states its model in the report.
 
-Usage (from anywhere; --bin defaults to build/bin/flexmor-sweep in the repository):
+Usage (from anywhere, with the flexmor Python package installed: scripts/setup.sh or
+`pip install .`; --bin defaults to build/bin/flexmor-sweep in the repository):
 
     python3 scripts/bench_sweep.py [--bin BIN] [--mpirun MPIRUN] [--ranks 1,2,3,4] \\
         [--repeats 3] [--repeats-full 1] [--probe-cases 500] [--no-full] \\
@@ -73,10 +74,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from flexmor_sweep import SweepFileError, fmt_value, load_sweep  # noqa: E402
-from bench_common import (command_line, cpu_model, git_commit, last_line,  # noqa: E402
-                          usable_cores, write_csv)
+from flexmor.bench import (command_line, cpu_model, git_commit, last_line, usable_cores,
+                           write_csv)
+from flexmor.sweep import SweepFileError, fmt_value, load_sweep
 
 PROG = "bench_sweep.py"
 ROOT = Path(__file__).resolve().parents[1]
@@ -1041,7 +1041,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                    f"{os.getloadavg()[0]:.2f} at the end (other processes skew times). With "
                    f"{cores} cores, N = {cores + 1} puts rank 0 (mostly asleep) on a shared "
                    f"core and N > {cores + 1} makes the workers time-share the cores.",
-        "flexmor": f"version {version}, binary `{args.bin}`, git commit {git_commit()}",
+        "flexmor": f"version {version}, binary `{args.bin}`, git commit {git_commit(ROOT)}",
         "MPI": mpi_version(args.mpirun) + "; environment " + ", ".join(
             f"{k}={v}" for k, v in RUN_ENV.items()),
         "Timing": "wall clock of the whole command (launch to exit), fresh result file each "

@@ -21,7 +21,8 @@ The variants are made by text substitution of the base scene: its ``&dynamic`` g
 replaced, a ``&reduction`` group added, ``&modal`` (not needed) removed; output_dt stays
 1e-3 s so that every run has the reference's time grid.
 
-Usage (from anywhere; --bin defaults to build/bin/flexmor in the repository):
+Usage (from anywhere, with the flexmor Python package installed: scripts/setup.sh or
+`pip install .`; --bin defaults to build/bin/flexmor in the repository):
 
     python3 scripts/bench_tradeoff.py [--bin BIN] [--repeats 3] [--out-dir bench_out] \\
         [--quick] [--update-interval 0.01] [--mac-threshold 0.999] [--timeout 900]
@@ -55,10 +56,8 @@ from typing import Any, Sequence
 import h5py
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from flexmor_results import ResultFileError, load_node_path, run_attributes  # noqa: E402
-from bench_common import (command_line, cpu_model, git_commit, last_line,  # noqa: E402
-                          write_csv)
+from flexmor.bench import command_line, cpu_model, git_commit, last_line, write_csv
+from flexmor.results import ResultFileError, load_node_path, run_attributes
 
 PROG = "bench_tradeoff.py"
 ROOT = Path(__file__).resolve().parents[1]
@@ -657,7 +656,7 @@ def header_block(command: str, args: argparse.Namespace, outcomes: list[Outcome]
                    f"{platform.release()}; 1-min load average {args.load_start:.2f} at the "
                    f"start, {os.getloadavg()[0]:.2f} at the end (other processes skew times)",
         "flexmor": f"version {version or 'unknown'}, binary `{args.bin}`, git commit "
-                   f"{git_commit()}",
+                   f"{git_commit(ROOT)}",
         "Repeats": f"{args.repeats} per case (cases run one at a time)",
         "Scene": f"input/two_link.nml, t_end {t_end:g} s, output_dt {OUTPUT_DT:g} s"
                  + (" (--quick)" if args.quick else ""),

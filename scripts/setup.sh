@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Install what flexmor needs on Debian 12 (see docs of the toolchain): the Debian packages that
-# are missing, and numpy/h5py/matplotlib/pytest for the python3 on PATH if it cannot import them.
+# are missing, numpy/h5py/matplotlib/meshio/pytest/wheel for the python3 on PATH if it cannot
+# import them, and the flexmor Python package (python/flexmor, `pip install .` of the repository)
+# when it is not installed or its version differs from the repository's VERSION.
 # Safe to run again: it checks first and only installs what is missing (no apt-get update when
 # nothing is missing). Runs as root, or through sudo when not root.
 #
@@ -16,14 +18,15 @@ DEBIAN_PACKAGES=(
   libarpack2-dev libparpack2-dev libsundials-dev libsundials-fortran-dev
   liblapack-dev libopenblas-dev pkg-config cmake make
 )
-PYTHON_PACKAGES=(numpy h5py matplotlib pytest)
-PYTHON_IMPORTS="import numpy, h5py, matplotlib, pytest"
+# wheel: lets tests/python/test_package.py build the package without network (setuptools < 70.1).
+PYTHON_PACKAGES=(numpy h5py matplotlib meshio pytest wheel)
+PYTHON_IMPORTS="import numpy, h5py, matplotlib, meshio, pytest, wheel"
 
 check_only=0
 case "${1:-}" in
   --check) check_only=1 ;;
   "") ;;
-  -h|--help) sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+  -h|--help) sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
   *) echo "setup.sh: unknown option '$1' (use --check or nothing)" >&2; exit 2 ;;
 esac
 
@@ -92,13 +95,12 @@ if ! command -v python3 > /dev/null 2>&1; then
 fi
 python=$(command -v python3)
 python_exe=$(python3 -c 'import sys; print(sys.executable)')
+export PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_ROOT_USER_ACTION=ignore
 
-if python3 -c "$PYTHON_IMPORTS" > /dev/null 2>&1; then
-  say "Python packages: ${PYTHON_PACKAGES[*]} importable by $python_exe"
-elif [[ $check_only -eq 1 ]]; then
-  say "Python packages: some of ${PYTHON_PACKAGES[*]} not importable by $python_exe"
-  missing_status=1
-else
+# pip install as the user running the script (a pyenv interpreter belongs to that user); Debian's
+# own python3 refuses with "externally-managed-environment" unless told otherwise.
+pip_install() {
+  local log
   if ! python3 -m pip --version > /dev/null 2>&1; then
     # A pyenv or self-built interpreter brings ensurepip; Debian's python3 needs python3-pip.
     if ! python3 -m ensurepip --upgrade > /dev/null 2>&1; then
@@ -106,26 +108,58 @@ else
       apt_install python3-pip
     fi
   fi
-  export PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_ROOT_USER_ACTION=ignore
-  say "Python packages: pip install ${PYTHON_PACKAGES[*]} for $python_exe"
-  # Install as the user running the script (a pyenv interpreter belongs to that user); Debian's
-  # own python3 refuses with "externally-managed-environment" unless told otherwise.
-  if ! log=$(python3 -m pip install --quiet "${PYTHON_PACKAGES[@]}" 2>&1); then
+  if ! log=$(python3 -m pip install --quiet "$@" 2>&1); then
     if grep -q 'externally-managed-environment' <<< "$log"; then
       say "pip: externally managed environment, retrying with --break-system-packages"
-      python3 -m pip install --quiet --break-system-packages "${PYTHON_PACKAGES[@]}"
+      python3 -m pip install --quiet --break-system-packages "$@"
     else
       echo "$log" >&2
-      echo "setup: pip install failed for $python_exe" >&2
+      echo "setup: pip install $* failed for $python_exe" >&2
       exit 1
     fi
   fi
+}
+
+if python3 -c "$PYTHON_IMPORTS" > /dev/null 2>&1; then
+  say "Python packages: ${PYTHON_PACKAGES[*]} importable by $python_exe"
+elif [[ $check_only -eq 1 ]]; then
+  say "Python packages: some of ${PYTHON_PACKAGES[*]} not importable by $python_exe"
+  missing_status=1
+else
+  say "Python packages: pip install ${PYTHON_PACKAGES[*]} for $python_exe"
+  pip_install "${PYTHON_PACKAGES[@]}"
   if ! python3 -c "$PYTHON_IMPORTS" > /dev/null 2>&1; then
     echo "setup: after pip install, '$python' still cannot run: $PYTHON_IMPORTS" >&2
     python3 -c "$PYTHON_IMPORTS" || true
     exit 1
   fi
   say "Python packages: installed"
+fi
+
+# --- the flexmor Python package ----------------------------------------------------------------
+# The installed copy (not one on PYTHONPATH; imported outside the repository) must have the
+# repository's version.
+root=$(cd "$(dirname "$0")/.." && pwd)
+want=$(tr -d '[:space:]' < "$root/VERSION")
+flexmor_version() {
+  (cd / && env -u PYTHONPATH python3 -c 'import flexmor; print(flexmor.__version__)' 2> /dev/null) \
+    || true
+}
+have=$(flexmor_version)
+if [[ "$have" == "$want" ]]; then
+  say "flexmor Python package: $want installed"
+elif [[ $check_only -eq 1 ]]; then
+  say "flexmor Python package: ${have:-not installed}, repository has $want"
+  missing_status=1
+else
+  say "flexmor Python package: ${have:-not installed}, installing $want (pip install $root)"
+  pip_install "$root"
+  have=$(flexmor_version)
+  if [[ "$have" != "$want" ]]; then
+    echo "setup: after pip install, 'import flexmor' gives version '${have:-none}', not $want" >&2
+    exit 1
+  fi
+  say "flexmor Python package: installed $want"
 fi
 
 if [[ $check_only -eq 1 ]]; then

@@ -17,10 +17,10 @@
 # the file are skipped and only the rest are run. Use a fresh file name for a fresh sweep.
 #
 # Afterwards (on a login node):
-#   python3 scripts/sweep_summary.py sweep.h5            # table, failures, wall-time spread
-#   python3 scripts/sweep_summary.py sweep.h5 --failed   # only the failed cases
-#   python3 scripts/sweep_plot.py sweep.h5 --metric max_tip_deflection --x PARAM -o plot.png
-#   python3 scripts/sweep_tradeoff.py sweep.h5 --fidelity reduction.n_modes -o tradeoff.png
+#   flexmor-sweep-summary sweep.h5            # table, failures, wall-time spread
+#   flexmor-sweep-summary sweep.h5 --failed   # only the failed cases
+#   flexmor-sweep-plot sweep.h5 --metric max_tip_deflection --x PARAM -o plot.png
+#   flexmor-sweep-tradeoff sweep.h5 --fidelity reduction.n_modes -o tradeoff.png
 #
 #SBATCH --job-name=flexmor-sweep
 #SBATCH --nodes=2

@@ -1,19 +1,14 @@
-"""scripts/plot_tip_path.py and scripts/flexmor_results.py on small synthetic result files."""
+"""flexmor-plot-tip-path (flexmor.plot_tip_path) and flexmor.results on small synthetic result
+files."""
 import subprocess
 import sys
-from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-SCRIPTS = ROOT / "scripts"
-SCRIPT = SCRIPTS / "plot_tip_path.py"
-sys.path.insert(0, str(SCRIPTS))
-
-import flexmor_results  # noqa: E402
-import plot_tip_path  # noqa: E402
+import flexmor.results as flexmor_results
+from flexmor import plot_tip_path
 
 
 def write_result(path, amplitude=0.0, labels=("tip", "elbow"), nt=141, t_end=0.7):
@@ -39,8 +34,8 @@ def write_result(path, amplitude=0.0, labels=("tip", "elbow"), nt=141, t_end=0.7
 
 
 def run_script(*args, cwd=None):
-    return subprocess.run([sys.executable, str(SCRIPT), *map(str, args)], capture_output=True,
-                          text=True, timeout=120, cwd=cwd)
+    return subprocess.run([sys.executable, "-m", "flexmor.plot_tip_path", *map(str, args)],
+                          capture_output=True, text=True, timeout=120, cwd=cwd)
 
 
 # --- flexmor_results ------------------------------------------------------------------------

@@ -1,5 +1,5 @@
-"""scripts/seed_fig2.py end to end: the seed paper's Fig. 2 case (full model, 1 and 2 modes)
-and the accuracy the reduced models reach against the full 3-element run."""
+"""flexmor-seed-fig2 (flexmor.seed_fig2) end to end: the seed paper's Fig. 2 case (full model,
+1 and 2 modes) and the accuracy the reduced models reach against the full 3-element run."""
 import os
 import subprocess
 import sys
@@ -7,18 +7,17 @@ from pathlib import Path
 
 import pytest
 
+from flexmor import seed_fig2
+
 ROOT = Path(__file__).resolve().parents[2]
 BIN = Path(os.environ.get("FLEXMOR_BIN", ROOT / "build-debug" / "bin" / "flexmor"))
-sys.path.insert(0, str(ROOT / "scripts"))
-
-import seed_fig2  # noqa: E402
 
 
 @pytest.mark.skipif(not BIN.is_file(), reason="flexmor binary not built")
 def test_fig2_runs_and_reduced_models_are_close(tmp_path):
-    proc = subprocess.run([sys.executable, str(ROOT / "scripts" / "seed_fig2.py"), "--bin",
-                           str(BIN), "--out-dir", str(tmp_path)], capture_output=True, text=True,
-                          timeout=600)
+    proc = subprocess.run([sys.executable, "-m", "flexmor.seed_fig2", "--bin", str(BIN),
+                           "--input-dir", str(ROOT / "input"), "--out-dir", str(tmp_path)],
+                          capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "seed_fig2.png").stat().st_size > 10_000
     rows = {line[:30].strip(): line[30:].split() for line in proc.stdout.splitlines()[1:4]}
@@ -29,11 +28,11 @@ def test_fig2_runs_and_reduced_models_are_close(tmp_path):
 
 
 def test_missing_binary_is_a_clean_error(tmp_path):
-    proc = subprocess.run([sys.executable, str(ROOT / "scripts" / "seed_fig2.py"), "--bin",
+    proc = subprocess.run([sys.executable, "-m", "flexmor.seed_fig2", "--bin",
                            str(tmp_path / "nope"), "--out-dir", str(tmp_path)],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
-    assert proc.stderr.startswith("seed_fig2.py: error: ") and "Traceback" not in proc.stderr
+    assert proc.stderr.startswith("flexmor-seed-fig2: error: ") and "Traceback" not in proc.stderr
 
 
 def test_tip_distance_needs_equal_times():

@@ -1,22 +1,15 @@
-"""scripts/flexmor_sweep.py, sweep_summary.py, sweep_plot.py and sweep_tradeoff.py on small
+"""flexmor.sweep and the commands flexmor-sweep-summary, -plot and -tradeoff on small
 synthetic sweep files written with the layout of docs/sweep.md ("Result file")."""
 import csv
 import subprocess
 import sys
-from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-SCRIPTS = ROOT / "scripts"
-sys.path.insert(0, str(SCRIPTS))
-
-import flexmor_sweep  # noqa: E402
-import sweep_plot  # noqa: E402
-import sweep_summary  # noqa: E402
-import sweep_tradeoff  # noqa: E402
+import flexmor.sweep as flexmor_sweep
+from flexmor import sweep_plot, sweep_summary, sweep_tradeoff
 
 PNG = b"\x89PNG\r\n\x1a\n"
 END, MODES = "motion.phi1.end", "reduction.n_modes"
@@ -107,7 +100,8 @@ def sweep_file(tmp_path):
 
 
 def run_script(name, *args):
-    return subprocess.run([sys.executable, str(SCRIPTS / name), *map(str, args)],
+    """The command of module flexmor.<name>, as its console script runs it."""
+    return subprocess.run([sys.executable, "-m", f"flexmor.{name}", *map(str, args)],
                           capture_output=True, text=True, timeout=120)
 
 
@@ -412,13 +406,14 @@ def test_tradeoff_cli_table_and_plot(sweep_file, tmp_path, capsys):
 
 def test_cli_missing_file(tmp_path):
     missing = tmp_path / "missing.h5"
-    for name, extra in (("sweep_summary.py", []),
-                        ("sweep_plot.py", ["--metric", "n_steps", "--x", END]),
-                        ("sweep_tradeoff.py", ["--fidelity", MODES])):
+    for name, extra in (("sweep_summary", []),
+                        ("sweep_plot", ["--metric", "n_steps", "--x", END]),
+                        ("sweep_tradeoff", ["--fidelity", MODES])):
         proc = run_script(name, missing, *extra, "-o" if extra else "--failed",
                           *([tmp_path / "x.png"] if extra else []))
         assert proc.returncode == 2, (name, proc.stderr)
-        assert_one_line_error(proc.stderr, name, "missing.h5", "no such file")
+        assert_one_line_error(proc.stderr, "flexmor-" + name.replace("_", "-"), "missing.h5",
+                              "no such file")
 
 
 def test_cli_not_a_sweep_file(tmp_path):
@@ -426,13 +421,13 @@ def test_cli_not_a_sweep_file(tmp_path):
     with h5py.File(single, "w") as f:
         f["time"] = np.arange(3.0)
         f["nodes/tip/position"] = np.zeros((3, 3))
-    proc = run_script("sweep_summary.py", single)
+    proc = run_script("sweep_summary", single)
     assert proc.returncode == 2
     assert_one_line_error(proc.stderr, "run.h5", "not a sweep file")
 
 
 def test_cli_unknown_metric(sweep_file, tmp_path):
-    proc = run_script("sweep_plot.py", sweep_file, "--metric", "tip_error", "--x", END,
+    proc = run_script("sweep_plot", sweep_file, "--metric", "tip_error", "--x", END,
                       "-o", tmp_path / "x.png")
     assert proc.returncode == 2
     assert_one_line_error(proc.stderr, "no metric 'tip_error'", "available:", "n_model_evals")

@@ -1,9 +1,8 @@
-#!/usr/bin/env python3
 """Plot a metric of a flexmor-sweep result file over one or two swept parameters.
 
-    python3 scripts/sweep_plot.py SWEEP.h5 --metric NAME --x PARAM [--by PARAM] \\
+    flexmor-sweep-plot SWEEP.h5 --metric NAME --x PARAM [--by PARAM] \\
         [--where PARAM=VALUE ...] -o out.png
-    python3 scripts/sweep_plot.py SWEEP.h5 --metric NAME --x PARAM --y PARAM \\
+    flexmor-sweep-plot SWEEP.h5 --metric NAME --x PARAM --y PARAM \\
         [--where PARAM=VALUE ...] -o out.png
 
 Over one parameter (--x): a line of the metric against x; with --by a line per value of that
@@ -35,16 +34,14 @@ import argparse
 import os
 import sys
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from flexmor_sweep import (METRIC_UNITS, Sweep, SweepFileError, fmt_param,  # noqa: E402
+from flexmor.sweep import (METRIC_UNITS, Sweep, SweepFileError, fmt_param,
                            load_sweep, parse_where, skip_note, value_list, varying,
                            where_mask)
 
-PROG = "sweep_plot.py"
+PROG = "flexmor-sweep-plot"
 
 
 class UserError(Exception):

@@ -1,7 +1,6 @@
-#!/usr/bin/env python3
 """Speed/accuracy trade-off of a flexmor-sweep that varies model fidelity.
 
-    python3 scripts/sweep_tradeoff.py SWEEP.h5 --metric max_tip_deflection \\
+    flexmor-sweep-tradeoff SWEEP.h5 --metric max_tip_deflection \\
         --fidelity reduction.n_modes [--fidelity dynamic.rtol ...] [--relative] \\
         [--higher PARAM] [--lower PARAM] [--where PARAM=VALUE ...] -o tradeoff.png
 
@@ -39,15 +38,13 @@ import math
 import os
 import sys
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from flexmor_sweep import (METRIC_UNITS, Sweep, SweepFileError, case_number,  # noqa: E402
+from flexmor.sweep import (METRIC_UNITS, Sweep, SweepFileError, case_number,
                            fmt_param, load_sweep, parse_where, skip_note, where_mask)
 
-PROG = "sweep_tradeoff.py"
+PROG = "flexmor-sweep-tradeoff"
 
 HIGHER_NAMES = ("n_modes", "n_elements")
 LOWER_NAMES = ("rtol", "atol", "dt")

@@ -1,4 +1,4 @@
-"""Reading flexmor-sweep result files (HDF5), shared by the sweep_*.py scripts.
+"""Reading flexmor-sweep result files (HDF5), shared by the sweep commands.
 
 Layout read here (see docs/sweep.md, "Result file"), every dataset of shape (n_cases,):
 
@@ -10,19 +10,19 @@ Layout read here (see docs/sweep.md, "Result file"), every dataset of shape (n_c
 - ``/cases/metrics/<name>``: float64 scalar results (NaN where not run, failed or not applicable)
 - root attributes: ``mode``, ``n_cases``, ``node``, ``title``, ``base_scene``, ...
 
-Usage from a script::
+Usage::
 
-    from flexmor_sweep import SweepFileError, load_sweep
-    sweep = load_sweep("sweep.h5")
+    import flexmor
+    sweep = flexmor.read_sweep("sweep.h5")
     sweep.parameters["reduction.n_modes"], sweep.metric("max_tip_deflection"), sweep.ok
 
-Case numbers: the arrays are indexed from 0; the scripts print case *numbers* from 1
+Case numbers: the arrays are indexed from 0; the commands print case *numbers* from 1
 (:func:`case_number`, index + 1), as flexmor-sweep's own progress lines ('sweep: case 3
 failed: ...') do, so a number on the terminal and in a summary name the same case.
 
 Every failure (missing file, not an HDF5 file, not a sweep file, inconsistent shapes, a
 parameter or metric the file does not have) raises :class:`SweepFileError` with a one-line
-message naming the file, so a script can print it and exit without a traceback.
+message naming the file, so a command can print it and exit without a traceback.
 """
 from __future__ import annotations
 
@@ -34,12 +34,12 @@ from typing import Any, Iterable
 import h5py
 import numpy as np
 
-from flexmor_results import to_python
+from flexmor.results import open_h5, to_python
 
 __all__ = [
     "METRIC_UNITS", "STATUS_NAMES", "Sweep", "SweepFileError", "case_number", "fmt_param",
-    "fmt_value", "load_sweep", "matches", "parse_where", "skip_note", "status_text", "value_list",
-    "varying", "where_mask",
+    "fmt_value", "load_sweep", "matches", "parse_where", "read_sweep", "skip_note", "status_text",
+    "value_list", "varying", "where_mask",
 ]
 
 #: flexmor exit codes recorded in /cases/status (docs/sweep.md).
@@ -169,17 +169,6 @@ def _decode(value: Any) -> str:
     return str(value).rstrip("\x00 ")
 
 
-def _open(path: str) -> h5py.File:
-    if not os.path.exists(path):
-        raise SweepFileError(f"{path}: no such file")
-    if os.path.isdir(path):
-        raise SweepFileError(f"{path}: is a folder, not a sweep file")
-    try:
-        return h5py.File(path, "r")
-    except OSError as exc:
-        raise SweepFileError(f"{path}: not a readable HDF5 file ({exc})") from None
-
-
 def _dataset(path: str, f: h5py.File, name: str, n: int | None) -> np.ndarray:
     obj = f.get(name)
     if not isinstance(obj, h5py.Dataset):
@@ -204,7 +193,7 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
     missing, not HDF5, not a sweep file (no ``/cases`` with ``status`` and parameters) or its
     datasets disagree in length."""
     path = os.fspath(path)
-    with _open(path) as f:
+    with open_h5(path, SweepFileError, "sweep file") as f:
         if not isinstance(f.get("cases"), h5py.Group):
             hint = " (a single-run result file?)" if "time" in f else ""
             raise SweepFileError(f"{path}: not a sweep file (no group /cases){hint}")
@@ -219,6 +208,10 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
         metrics = _float_group(path, f, "cases/metrics", n)
         attrs = {name: to_python(value) for name, value in f.attrs.items()}
     return Sweep(path, parameters, status, messages, wall, rank, metrics, attrs)
+
+
+#: The package-level name (``flexmor.read_sweep``), as ``flexmor.read_result``.
+read_sweep = load_sweep
 
 
 def parse_where(text: str) -> tuple[str, float]:

@@ -1,5 +1,6 @@
-"""What the benchmark scripts (bench_tradeoff.py, bench_sweep.py) share: the machine and
-commit they ran on, the command that ran them, CSV output and process output helpers."""
+"""What the benchmark drivers (scripts/bench_tradeoff.py, scripts/bench_sweep.py) share: the
+machine and commit they ran on, the command that ran them, CSV output and process output
+helpers."""
 from __future__ import annotations
 
 import csv
@@ -10,8 +11,6 @@ import subprocess
 import sys
 from pathlib import Path
 from typing import Any, Sequence
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def last_line(text: str) -> str:
@@ -37,16 +36,16 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
-def git_commit() -> str:
-    """Short commit of the repository, with '+ uncommitted changes' when the tracked files
-    differ from it (read only: no index refresh); 'unknown' without git."""
+def git_commit(root: str | os.PathLike) -> str:
+    """Short commit of the repository at ``root``, with '+ uncommitted changes' when the
+    tracked files differ from it (read only: no index refresh); 'unknown' without git."""
     try:
-        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root,
                               capture_output=True, text=True, timeout=30)
         if head.returncode != 0:
             return "unknown"
         status = subprocess.run(["git", "--no-optional-locks", "status", "--porcelain",
-                                 "--untracked-files=no"], cwd=ROOT, capture_output=True,
+                                 "--untracked-files=no"], cwd=root, capture_output=True,
                                 text=True, timeout=30)
     except (OSError, subprocess.SubprocessError):
         return "unknown"

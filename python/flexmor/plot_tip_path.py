@@ -1,11 +1,10 @@
-#!/usr/bin/env python3
 """Plot the x-y path of a node from one or more flexmor result files.
 
 Two panels, as in Fig. 2 of the seed paper: the full path (equal axes) and a detail view near
 the upper extreme of the path (a window around the point of maximum y). Several files are
 overlaid, e.g. full and reduced models; legend labels are the file names or --label.
 
-    python3 scripts/plot_tip_path.py RESULT.h5 [MORE.h5 ...] -o tip_path.png \\
+    flexmor-plot-tip-path RESULT.h5 [MORE.h5 ...] -o tip_path.png \\
         [--node tip] [--label NAME ...] [--zoom 0.05]
 
 Exit status 0 on success, 2 with a one-line message (no traceback) for a missing or unreadable
@@ -20,10 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from flexmor_results import ResultFileError, load_node_path  # noqa: E402
+from flexmor.results import ResultFileError, load_node_path
 
-PROG = "plot_tip_path.py"
+PROG = "flexmor-plot-tip-path"
 
 
 def default_labels(paths: list[str]) -> list[str]:

@@ -1,7 +1,6 @@
-#!/usr/bin/env python3
 """Summarise a flexmor-sweep result file: one row per case, then totals.
 
-    python3 scripts/sweep_summary.py SWEEP.h5 [--csv OUT.csv] [--failed]
+    flexmor-sweep-summary SWEEP.h5 [--csv OUT.csv] [--failed]
 
 Rows: case number (from 1, as flexmor-sweep's progress lines print it: array index + 1), the
 swept parameters, status ('ok', 'not run' or the failure kind with its flexmor exit code, e.g.
@@ -26,16 +25,14 @@ import csv
 import math
 import sys
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from flexmor_sweep import (Sweep, SweepFileError, case_number, fmt_value,  # noqa: E402
+from flexmor.sweep import (Sweep, SweepFileError, case_number, fmt_value,
                            load_sweep, status_text)
 
-PROG = "sweep_summary.py"
+PROG = "flexmor-sweep-summary"
 
 
 @dataclass

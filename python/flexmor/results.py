@@ -1,0 +1,333 @@
+"""Reading flexmor result files (HDF5): the layout of docs/output.md.
+
+:func:`read_result` reads a whole file into a :class:`Result`; :func:`load_node_path`,
+:func:`node_labels` and :func:`run_attributes` read single pieces (and accept any HDF5 file with
+those datasets, e.g. synthetic test files).
+
+Every failure (missing file, not an HDF5 file, not a flexmor result file, missing node or
+dataset, wrong shape) raises :class:`ResultFileError` with a one-line message naming the file,
+so a command can print it and exit without a traceback.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import h5py
+import numpy as np
+
+from flexmor.model import Model, read_model
+
+__all__ = ["Modal", "NodePath", "Result", "ResultFileError", "Static", "load_node_path",
+           "node_labels", "read_result", "run_attributes", "to_python"]
+
+
+class ResultFileError(Exception):
+    """A result file is missing, unreadable or lacks what was asked for."""
+
+
+def open_h5(path: str | os.PathLike, error: type[Exception] = ResultFileError,
+            what: str = "result file") -> h5py.File:
+    """Open ``path`` read-only; ``error`` with a one-line message when that is impossible."""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise error(f"{path}: no such file")
+    if os.path.isdir(path):
+        raise error(f"{path}: is a folder, not a {what}")
+    try:
+        return h5py.File(path, "r")
+    except OSError as exc:
+        raise error(f"{path}: not a readable HDF5 file ({exc})") from None
+
+
+def to_python(value: Any) -> Any:
+    """An HDF5 attribute value as plain Python (bytes decoded, numpy scalars unwrapped)."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", errors="replace")
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "SO":
+            return [to_python(v) for v in value.tolist()]
+        return value
+    if isinstance(value, np.generic):
+        return to_python(value.item())
+    return value
+
+
+def _attrs(obj: h5py.HLObject) -> dict[str, Any]:
+    return {name: to_python(value) for name, value in obj.attrs.items()}
+
+
+def _node_labels(group: h5py.Group | None) -> list[str]:
+    if not isinstance(group, h5py.Group):
+        return []
+    return sorted(name for name, obj in group.items()
+                  if isinstance(obj, h5py.Group) and isinstance(obj.get("position"), h5py.Dataset))
+
+
+def node_labels(path: str | os.PathLike) -> list[str]:
+    """Sorted labels of the nodes whose position is stored (``/nodes/<label>/position``)."""
+    with open_h5(path) as f:
+        return _node_labels(f.get("nodes"))
+
+
+def load_node_path(path: str | os.PathLike, label: str = "tip") -> tuple[np.ndarray, np.ndarray]:
+    """Return ``(t, xyz)``: times (nt,) in seconds and positions (nt, 3) in metres of node
+    ``label``. Raises :class:`ResultFileError` naming the file and, for a missing label, the
+    labels that are available."""
+    path = os.fspath(path)
+    with open_h5(path) as f:
+        labels = _node_labels(f.get("nodes"))
+        if label not in labels:
+            available = ", ".join(labels) if labels else "none"
+            raise ResultFileError(
+                f"{path}: no node '{label}' (no dataset /nodes/{label}/position); "
+                f"available: {available}")
+        if not isinstance(f.get("time"), h5py.Dataset):
+            raise ResultFileError(f"{path}: no dataset /time")
+        t = np.asarray(f["time"][...], dtype=float)
+        xyz = np.asarray(f[f"nodes/{label}/position"][...], dtype=float)
+    if t.ndim != 1:
+        raise ResultFileError(f"{path}: /time has shape {t.shape}, expected (nt,)")
+    _check_rows(path, f"/nodes/{label}/position", xyz, t.shape[0], (3,), "/time")
+    return t, xyz
+
+
+def run_attributes(path: str | os.PathLike) -> dict[str, Any]:
+    """Root attributes of a result file as plain Python values (str, int, float; arrays stay
+    numpy arrays)."""
+    with open_h5(path) as f:
+        return _attrs(f)
+
+
+def _check_rows(path: str, name: str, data: np.ndarray, n: int, tail: tuple[int, ...],
+                against: str) -> None:
+    expected = (n, *tail)
+    if data.shape != expected:
+        hint = " (stored transposed?)" if data.shape == expected[::-1] and len(tail) else ""
+        shown = ", ".join(["n" if i == 0 else str(d) for i, d in enumerate(expected)])
+        raise ResultFileError(f"{path}: {name} has shape {data.shape}, expected {expected} "
+                              f"(({shown}) with n from {against}){hint}")
+
+
+@dataclass
+class NodePath:
+    """Positions (n, 3) [m] and, for nodes that have one, rotations (n,) [rad] of one node at
+    each output time (or load step)."""
+
+    position: np.ndarray
+    rotation: np.ndarray | None = None
+
+
+@dataclass
+class Modal:
+    """``&modal`` results: frequencies (n_modes,) [Hz], shapes (n_modes, n_dy) in the dynamic
+    coordinates and per output node the (n_modes, 3) nodal displacement of each mode."""
+
+    frequency_hz: np.ndarray
+    shapes: np.ndarray
+    nodes: dict[str, np.ndarray] = field(default_factory=dict)
+    time: float | None = None
+
+
+@dataclass
+class Static:
+    """``&static`` results: per load step the load factor, node paths, all coordinates ``x``
+    (n_steps, n_x) and the ``stable`` flag (None where the file does not have them), and
+    ``q`` (n_dy,) at the full load."""
+
+    load_factor: np.ndarray
+    q: np.ndarray | None
+    nodes: dict[str, NodePath] = field(default_factory=dict)
+    x: np.ndarray | None = None
+    stable: np.ndarray | None = None
+
+
+@dataclass
+class Result:
+    """The contents of one flexmor result file (docs/output.md). Absent parts are None (or
+    empty dicts): ``time``, ``nodes``, ``q``, ``qd``, ``energy`` and ``x`` come from
+    ``&dynamic``, ``static`` from ``&static``, ``modal`` from ``&modal``, ``reduction`` from
+    ``&reduction``, ``model`` from files that store the ``/model`` group."""
+
+    path: str
+    attrs: dict[str, Any]
+    time: np.ndarray | None = None
+    nodes: dict[str, NodePath] = field(default_factory=dict)
+    q: np.ndarray | None = None
+    qd: np.ndarray | None = None
+    energy: dict[str, np.ndarray] = field(default_factory=dict)
+    x: np.ndarray | None = None
+    static: Static | None = None
+    modal: Modal | None = None
+    reduction: dict[str, Any] | None = None
+    model: Model | None = None
+
+    @property
+    def node_labels(self) -> list[str]:
+        """Labels of the output nodes with a dynamic path."""
+        return list(self.nodes)
+
+    def node_path(self, label: str = "tip") -> tuple[np.ndarray, np.ndarray]:
+        """``(t, xyz)`` of node ``label`` (as :func:`load_node_path`)."""
+        if self.time is None:
+            raise ResultFileError(f"{self.path}: no dynamic results (no dataset /time)")
+        if label not in self.nodes:
+            available = ", ".join(self.nodes) if self.nodes else "none"
+            raise ResultFileError(f"{self.path}: no node '{label}'; available: {available}")
+        return self.time, self.nodes[label].position
+
+    def motion(self) -> tuple[np.ndarray, np.ndarray, str]:
+        """``(values, x, what)``: all coordinates x (n, n_x) with their times (``what`` 'time')
+        from the dynamic analysis, else at the static load steps with their load factors
+        (``what`` 'load factor'); :class:`ResultFileError` when the file has neither."""
+        if self.x is not None and self.time is not None:
+            return self.time, self.x, "time"
+        if self.static is not None and self.static.x is not None:
+            return self.static.load_factor, self.static.x, "load factor"
+        raise ResultFileError(f"{self.path}: no coordinate history (no dataset /x with /time "
+                              f"nor /static/x): the scene needs &dynamic or &static")
+
+    def require_model(self) -> Model:
+        """The model, or :class:`ResultFileError` for files written without ``/model``."""
+        if self.model is None:
+            raise ResultFileError(f"{self.path}: no group /model (written by an older flexmor; "
+                                  f"rerun the scene with a current one)")
+        return self.model
+
+
+def _float(path: str, f: h5py.File, name: str) -> np.ndarray | None:
+    obj = f.get(name)
+    if obj is None:
+        return None
+    if not isinstance(obj, h5py.Dataset):
+        raise ResultFileError(f"{path}: /{name} is not a dataset")
+    return np.asarray(obj[...], dtype=float)
+
+
+def _paths(path: str, group: h5py.Group | None, prefix: str, n: int, against: str
+           ) -> dict[str, NodePath]:
+    out: dict[str, NodePath] = {}
+    if not isinstance(group, h5py.Group):
+        return out
+    for label in sorted(group):  # HDF5 keeps no creation order here: sorted labels
+        node = group[label]
+        if not isinstance(node, h5py.Group) or not isinstance(node.get("position"), h5py.Dataset):
+            continue
+        position = np.asarray(node["position"][...], dtype=float)
+        _check_rows(path, f"/{prefix}/{label}/position", position, n, (3,), against)
+        rotation = None
+        if isinstance(node.get("rotation"), h5py.Dataset):
+            rotation = np.asarray(node["rotation"][...], dtype=float)
+            _check_rows(path, f"/{prefix}/{label}/rotation", rotation, n, (), against)
+        out[label] = NodePath(position, rotation)
+    return out
+
+
+def _coordinates(path: str, x: np.ndarray | None, name: str, n: int, against: str,
+                 model: Model | None) -> np.ndarray | None:
+    if x is None:
+        return None
+    if x.ndim != 2 or x.shape[0] != n:
+        raise ResultFileError(f"{path}: /{name} has shape {x.shape}, expected ({n}, n_x) to "
+                              f"match {against}")
+    if model is not None and x.shape[1] != model.n_coordinates:
+        raise ResultFileError(f"{path}: /{name} has {x.shape[1]} columns, /model has "
+                              f"{model.n_coordinates} coordinates")
+    return x
+
+
+def _read_static(path: str, f: h5py.File, model: Model | None) -> Static | None:
+    if not isinstance(f.get("static"), h5py.Group):
+        return None
+    load = _float(path, f, "static/load_factor")
+    if load is None or load.ndim != 1:
+        raise ResultFileError(f"{path}: /static has no 1-D dataset load_factor")
+    n = load.shape[0]
+    against = "/static/load_factor"
+    stable = f.get("static/stable")
+    if stable is not None:
+        stable = np.asarray(stable[...]).astype(bool)
+        _check_rows(path, "/static/stable", stable, n, (), against)
+    x = _coordinates(path, _float(path, f, "static/x"), "static/x", n, against, model)
+    return Static(load, _float(path, f, "static/q"), _paths(path, f.get("static/nodes"),
+                  "static/nodes", n, against), x, stable)
+
+
+def _read_modal(path: str, f: h5py.File) -> Modal | None:
+    group = f.get("modal")
+    if not isinstance(group, h5py.Group):
+        return None
+    freq = _float(path, f, "modal/frequency_hz")
+    shapes = _float(path, f, "modal/shapes")
+    if freq is None or shapes is None:
+        raise ResultFileError(f"{path}: /modal lacks frequency_hz or shapes")
+    if shapes.ndim != 2 or shapes.shape[0] != freq.shape[0]:
+        raise ResultFileError(f"{path}: /modal/shapes has shape {shapes.shape}, expected "
+                              f"({freq.shape[0]}, n_dy) to match /modal/frequency_hz")
+    nodes = {}
+    if isinstance(group.get("nodes"), h5py.Group):
+        for label, node in group["nodes"].items():
+            if isinstance(node, h5py.Group) and isinstance(node.get("shape"), h5py.Dataset):
+                shape = np.asarray(node["shape"][...], dtype=float)
+                _check_rows(path, f"/modal/nodes/{label}/shape", shape, freq.shape[0], (3,),
+                            "/modal/frequency_hz")
+                nodes[label] = shape
+    time = group.attrs.get("time")
+    return Modal(freq, shapes, nodes, None if time is None else float(time))
+
+
+def _read_group(group: h5py.Group) -> dict[str, Any]:
+    """Datasets of a group (recursively, keys 'a/b') and its attributes under 'attrs'."""
+    out: dict[str, Any] = {"attrs": _attrs(group)}
+    for name, obj in group.items():
+        if isinstance(obj, h5py.Dataset):
+            out[name] = obj[...]
+        elif isinstance(obj, h5py.Group):
+            for key, value in _read_group(obj).items():
+                if key != "attrs":
+                    out[f"{name}/{key}"] = value
+    return out
+
+
+def read_result(path: str | os.PathLike) -> Result:
+    """Read a flexmor result file. Raises :class:`ResultFileError` naming the file when it is
+    missing, not HDF5, not a flexmor result file (no root attribute ``flexmor_version``, or a
+    sweep file) or inconsistent (shapes that do not match ``/time``, ``/model``)."""
+    path = os.fspath(path)
+    with open_h5(path) as f:
+        if isinstance(f.get("cases"), h5py.Group):
+            raise ResultFileError(f"{path}: a flexmor-sweep file, not a result file "
+                                  f"(read it with flexmor.read_sweep)")
+        if "flexmor_version" not in f.attrs:
+            raise ResultFileError(f"{path}: not a flexmor result file (no root attribute "
+                                  f"flexmor_version)")
+        try:
+            model = read_model(f) if "model" in f else None
+        except ValueError as exc:
+            raise ResultFileError(f"{path}: {exc}") from None
+        result = Result(path, _attrs(f), model=model)
+        time = _float(path, f, "time")
+        if time is not None:
+            if time.ndim != 1:
+                raise ResultFileError(f"{path}: /time has shape {time.shape}, expected (nt,)")
+            nt = time.shape[0]
+            result.time = time
+            result.nodes = _paths(path, f.get("nodes"), "nodes", nt, "/time")
+            for name in ("q", "qd"):
+                value = _float(path, f, name)
+                if value is not None and (value.ndim != 2 or value.shape[0] != nt):
+                    raise ResultFileError(f"{path}: /{name} has shape {value.shape}, expected "
+                                          f"({nt}, n_dy) to match /time")
+                setattr(result, name, value)
+            if isinstance(f.get("energy"), h5py.Group):
+                result.energy = {k: np.asarray(v[...], dtype=float)
+                                 for k, v in f["energy"].items() if isinstance(v, h5py.Dataset)}
+            result.x = _coordinates(path, _float(path, f, "x"), "x", nt, "/time", model)
+        elif "x" in f:
+            raise ResultFileError(f"{path}: dataset /x without /time")
+        result.static = _read_static(path, f, model)
+        result.modal = _read_modal(path, f)
+        if isinstance(f.get("reduction"), h5py.Group):
+            result.reduction = _read_group(f["reduction"])
+    return result
