@@ -15,6 +15,8 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE="$python" > 
 # Only the two programs it runs, not the tests (scripts/test.sh builds those).
 cmake --build build -j "$(nproc)" --target flexmor flexmor-sweep
 cd "$here"
+# The repository's own copy of the package, also when an older one is installed.
+export PYTHONPATH="$root/python${PYTHONPATH:+:$PYTHONPATH}"
 "$python" -m flexmor.seed_fig2 --bin "$root/build/bin/flexmor" --input-dir "$root/input" \
   --out-dir "$here"
 "$python" -m flexmor.animate two_link.h5 -o two_link.gif --every 10
