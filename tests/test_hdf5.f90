@@ -269,9 +269,8 @@ contains
     call h5%open(p4, err)
     if (err%ok()) call h5%write_real_1d('/time', time, err)
     if (err%ok()) call h5%commit(err)
-    call t%check(err%code == ERR_IO .and. index(msg(err), 'nothing was written') > 0 .and. &
-                 index(msg(err), '.tmp') == 0, 'a failed rename says nothing was written: ' // &
-                 msg(err))
+    call t%check(err%code == ERR_IO .and. index(msg(err), 'nothing was written') > 0, &
+                 'a failed rename says nothing was written: ' // msg(err))
     call t%check(.not. exists(p4 // '.tmp'), 'no temporary file is left after a failed rename')
     call t%check(.not. h5%is_open(), 'the writer is closed after a failed commit')
     call h5%abort()

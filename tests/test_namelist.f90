@@ -179,14 +179,14 @@ contains
     integer :: k
     character(:), allocatable :: s
     character(*), parameter :: CRLF = achar(13) // achar(10)
-    call parse_ok(f, 'free text before, ignored: it''s fine ! & in a comment' // NL // &
+    call parse_ok(f, '! notes before the groups: it''s fine ! & in a comment' // NL // &
       '&node x = 1 /' // NL // &
-      'between groups' // NL // &
+      '   ! between groups' // NL // &
       '&LINK e = 2 /' // NL // &
       '&Node x = 3,' // NL // &
       '/' // NL // &
       '&old x = 4 &end' // NL // &
-      'trailing text')
+      '! trailing comment')
     call t%check(size(f%groups) == 4, 'four groups')
     call t%check(f%count('node') == 2 .and. f%count('link') == 1 .and. f%count('foo') == 0, &
       'count')
@@ -206,7 +206,7 @@ contains
     call f%check_known_groups([character(4) :: 'node', 'old'], err)
     call expect_error(err, [character(40) :: 'scene.nml:4: unknown group &link'], &
       'unknown group')
-    call parse_ok(f, '! only comments' // NL // 'and text')
+    call parse_ok(f, '! only comments' // NL // '  ! and more')
     call t%check(size(f%groups) == 0 .and. f%count('node') == 0, 'no groups at all')
     call parse_ok(f, '&g' // CRLF // ' a = ''x''' // CRLF // ' b = 2' // CRLF // '/' // CRLF)
     call f%groups(1)%get_string('a', s, err)
@@ -359,6 +359,14 @@ contains
   subroutine test_parse_errors()
     call parse_fails('&g' // NL // ' s = ''abc' // NL // ' t = 1 /', &
       [character(40) :: 'scene.nml:2: group &g #1', 'unterminated string'], 'unterminated string')
+    call parse_fails('&g a = 1 /' // NL // 'x = 1' // NL // '&h b = 2 /', &
+      [character(40) :: 'scene.nml:2:', 'text outside a group', '''x = 1'''], 'loose text')
+    call parse_fails('&g a = 1 / b = 2', [character(40) :: 'scene.nml:1:', '''b = 2'''], &
+      'a value after the closing slash')
+    call parse_fails('g a = 1 /', [character(40) :: 'scene.nml:1:', '''g a = 1 /'''], &
+      'a group without its ampersand')
+    call parse_fails(NL // '$g a = 1 $end', [character(40) :: 'scene.nml:2:', '''$'''], &
+      'dollar groups')
     call parse_fails('&g a = 1' // NL // NL, &
       [character(60) :: "scene.nml:1: group &g #1: missing closing '/'"], 'no closing / at EOF')
     call parse_fails('&g a = 1' // NL // '&h b = 2 /', &

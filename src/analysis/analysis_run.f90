@@ -2,8 +2,10 @@
 !> then modal, then dynamic, each optional) and write one HDF5 result file. The layout is
 !> documented in docs/output.md. On any error nothing is left on disk.
 module analysis_run
+  use, intrinsic :: iso_fortran_env, only: error_unit
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_INPUT
+  use core_version, only: FLEXMOR_VERSION
   use io_namelist, only: nml_file_t
   use io_scene, only: read_scene
   use model_scene, only: scene_t, dynamic_rec_t
@@ -13,6 +15,7 @@ module analysis_run
   use dynamics_static, only: static_solve
   use reduction_modal, only: modal_result_t, modal_analysis
   use integrators_system, only: integrator_options_t, integrator_stats_t
+  use core_progress, only: progress_t
   use integrators_driver, only: integrate
   use core_strings, only: int_str, real_str, approx_str
   use reduction_basis, only: basis_spec_t, basis_t, compute_basis
@@ -20,9 +23,7 @@ module analysis_run
   use reduction_adaptive, only: update_spec_t, update_log_t, integrate_reduced
   implicit none
   private
-  public :: run_t, FLEXMOR_VERSION
-
-  character(len=*), parameter :: FLEXMOR_VERSION = '0.2.0'
+  public :: run_t
 
   !> Everything one run computes, kept so that callers (the sweep) can take metrics from it.
   type :: run_t
@@ -31,6 +32,7 @@ module analysis_run
     type(dynamics_t) :: dyn
     type(modal_result_t) :: modal
     real(wp), allocatable :: q_static(:), x_static(:, :)
+    logical, allocatable :: static_stable(:)  !< per load step (dynamics_static: stable_tangent)
     real(wp), allocatable :: time(:)
     type(integrator_stats_t) :: stats
     type(reduced_t), allocatable :: red       !< a reduced dynamic analysis
@@ -38,9 +40,15 @@ module analysis_run
     type(update_log_t) :: updates             !< its basis checks and updates
     integer :: static_iterations = 0
     real(wp) :: wall_time_s = 0.0_wp
+    !> Summary lines on stdout, and progress lines on stderr during long analyses.
     logical :: verbose = .true.
+    !> Warnings on stderr (e.g. an unstable static equilibrium). Off unless the caller asks:
+    !> the flexmor program does, with or without -q; a sweep's cases keep quiet.
+    logical :: warnings = .false.
+    type(progress_t) :: progress
   contains
     procedure :: load => run_load
+    procedure :: load_text => run_load_text
     procedure :: load_parsed => run_load_parsed
     procedure :: execute => run_execute
     procedure :: write => run_write
@@ -66,6 +74,17 @@ contains
     call file%load(path, err)
     if (err%ok()) call this%load_parsed(file, err)
   end subroutine run_load
+
+  !> Parse scene text (the contents of a scene file, docs/input.md) and build the model;
+  !> `name` stands for the file name in messages and in the result file's input_file.
+  subroutine run_load_text(this, text, name, err)
+    class(run_t), intent(inout) :: this
+    character(len=*), intent(in) :: text, name
+    type(error_t), intent(out) :: err
+    type(nml_file_t) :: file
+    call file%parse(text, name, err)
+    if (err%ok()) call this%load_parsed(file, err)
+  end subroutine run_load_text
 
   !> Build the model of an already parsed (and possibly edited, e.g. by a sweep) scene file.
   subroutine run_load_parsed(this, file, err)
@@ -132,9 +151,10 @@ contains
 
   !> Run the analyses the scene asks for.
   subroutine run_execute(this, err)
-    class(run_t), intent(inout) :: this
+    class(run_t), intent(inout), target :: this
     type(error_t), intent(out) :: err
     integer(i8) :: c0, c1, rate
+    this%progress%enabled = this%verbose
     call system_clock(c0, rate)
     call run_analyses(this, err)
     if (.not. err%ok()) then
@@ -146,7 +166,7 @@ contains
   end subroutine run_execute
 
   subroutine run_analyses(this, err)
-    type(run_t), intent(inout) :: this
+    type(run_t), intent(inout), target :: this
     type(error_t), intent(out) :: err
     if (this%scene%static%active) then
       call run_static(this, err)
@@ -168,22 +188,40 @@ contains
     type(run_t), intent(inout) :: this
     type(error_t), intent(out) :: err
     associate (s => this%scene%static)
-      allocate(this%x_static(this%dyn%model%n_x, s%n_steps))
+      allocate(this%x_static(this%dyn%model%n_x, s%n_steps), this%static_stable(s%n_steps))
+      call this%progress%start('static', 0.0_wp, 1.0_wp)
       call static_solve(this%dyn, 0.0_wp, s%n_steps, s%tol, s%max_iter, this%q_static, &
-        this%x_static, this%static_iterations, err)
+        this%x_static, this%static_iterations, err, this%static_stable, this%progress)
     end associate
-    if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a)') 'static: ', &
+    if (.not. err%ok()) return
+    if (this%verbose) write(*, '(a,i0,a,i0,a)') 'static: ', &
       this%scene%static%n_steps, ' load steps, ', this%static_iterations, ' Newton iterations'
+    if (this%warnings) call warn_unstable(this%static_stable)
   end subroutine run_static
 
+  !> One line naming the first load step whose equilibrium is unstable, if any.
+  subroutine warn_unstable(stable)
+    logical, intent(in) :: stable(:)
+    integer :: k, n
+    if (all(stable)) return
+    n = size(stable)
+    k = findloc(stable, .false., dim=1)
+    write(error_unit, '(a)') 'flexmor: warning: static: equilibrium unstable from load step ' &
+      // int_str(k) // ' of ' // int_str(n) // ' (load factor ' // real_str(real(k, wp) / n) &
+      // '): the tangent stiffness is not positive definite (buckled? try a perturbation)'
+  end subroutine warn_unstable
+
   subroutine run_dynamic(this, err)
-    type(run_t), intent(inout) :: this
+    type(run_t), intent(inout), target :: this
     type(error_t), intent(out) :: err
     type(integrator_options_t) :: opts
     real(wp), allocatable :: breaks(:), v0(:)
     integer :: i
     this%time = output_times(this%scene%dynamic)
     opts = integrator_options(this%scene%dynamic)
+    opts%progress => this%progress
+    call this%progress%start(merge('reduced', 'dynamic', this%scene%reduction%active), &
+      this%time(1), this%time(size(this%time)))
     this%dyn%jacobian_kind = this%scene%dynamic%jacobian
     allocate(breaks(0))
     do i = 1, this%dyn%model%n_motions

@@ -157,6 +157,7 @@ contains
     call h5%write_real_1d('/static/load_factor', [(real(k, wp) / n, k=1, n)], err)
     if (err%ok()) call h5%write_real_1d('/static/q', this%q_static, err)
     if (err%ok()) call h5%write_real_2d('/static/x', this%x_static, err)
+    if (err%ok()) call h5%write_int_1d('/static/stable', merge(1, 0, this%static_stable), err)
     call write_nodes(this, h5, '/static', this%x_static, err)
   end subroutine write_static
 

@@ -10,7 +10,7 @@ program flexmor_sweep_main
   use core_linalg, only: single_thread_blas
   use io_cli, only: cli_args_t, parse_cli
   use io_fs, only: install_interrupt_guard
-  use analysis_run, only: FLEXMOR_VERSION
+  use core_version, only: FLEXMOR_VERSION
   use sweep_spec, only: sweep_spec_t
   use sweep_run, only: run_sweep, check_sweep
   implicit none

@@ -142,7 +142,7 @@ contains
     integer :: n, iwq(1)
     n = size(k, 1)
     v = k
-    b = m
+    allocate(b, source=m)
     call dsygvd(1, 'V', 'L', n, v, n, b, n, lambda, wq, -1, iwq, -1, info)
     allocate(work(int(wq(1))), iwork(iwq(1)))
     call dsygvd(1, 'V', 'L', n, v, n, b, n, lambda, work, size(work), iwork, size(iwork), info)

@@ -1,4 +1,4 @@
-!> Equations of motion of a model (formulation.md section 5) as an `ode2_system_t`:
+!> Equations of motion of a model (docs/theory.md section 5) as an `ode2_system_t`:
 !>   Mbar a = DF_dy^T [f - M (D2F qd qd + DF_rh qdd_rh) - h] - sigma_dy
 !> sigma_dy are the stress resultants of the dynamic modes, sigma = S e + beta S e_dot, with the
 !> mode values taken from q itself (DF_e restricted to the dynamic columns is the identity on

@@ -1,10 +1,10 @@
-!> Planar beam (formulation.md section 2). Coordinates x = (xp, yp, phi_p, xq, yq, phi_q);
+!> Planar beam (docs/theory.md section 2.1). Coordinates x = (xp, yp, phi_p, xq, yq, phi_q);
 !> modes e_bar = (e1_bar, e2, e3): elongation with the second-order arc-shortening term, and
 !> the two bending modes in the angle form (e2 = l0 theta_p, e3 = -l0 theta_q, default) or the
 !> sine form (l0 sin theta). theta is the rotation of a nodal tangent relative to the chord.
 !>
 !> The angle form is the default: on the two-link benchmark it converges far faster with the
-!> mesh (formulation.md), and its linear limit is identical.
+!> mesh (docs/theory.md section 2.1), and its linear limit is identical.
 module elements_beam
   use core_kinds, only: wp
   use elements_base, only: element_t

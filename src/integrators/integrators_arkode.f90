@@ -23,6 +23,7 @@ module integrators_arkode
   use core_strings, only: int_str, real_str
   use core_error, only: error_t, ERR_NUMERIC, ERR_INTERNAL
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use core_progress, only: progress_t
   use integrators_sundials, only: sundials_bridge_t, new_bridge, open_sundials, close_sundials, &
     sundials_rhs, sundials_error_handler, put_state, get_state, check, set_failure, &
     erk_return_flag_name
@@ -65,6 +66,7 @@ module integrators_arkode
     real(wp) :: t_trouble = 0
     !> Counters of the segments before the last ERKStepReInit, which resets ARKODE's own.
     type(integrator_stats_t) :: done
+    type(progress_t), pointer :: progress => null()   !< polled once per step
   contains
     procedure :: start => erk_start
     procedure :: advance => erk_advance
@@ -91,6 +93,7 @@ contains
 
     call this%finish()
     this%max_steps = opts%max_steps
+    this%progress => opts%progress
     this%done = integrator_stats_t()
     this%t = t0
     this%q_accepted = q
@@ -127,6 +130,7 @@ contains
     do while (this%t < t_target)
       call take_step(this, t_target, err)
       if (.not. err%ok()) return
+      if (associated(this%progress)) call report_progress(this)
     end do
     if (this%t == t_target) then
       q = this%q_accepted
@@ -173,6 +177,14 @@ contains
       call report_failure(this, flag, t_target, err)
     end if
   end subroutine take_step
+
+  subroutine report_progress(this)
+    type(erk_solver_t), intent(in) :: this
+    type(integrator_stats_t) :: stats
+    if (.not. this%progress%due()) return
+    call this%get_stats(stats)
+    call this%progress%report_time(this%t, stats%n_steps)
+  end subroutine report_progress
 
   logical function recoverable(this, flag)
     type(erk_solver_t), intent(in) :: this

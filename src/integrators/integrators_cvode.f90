@@ -76,7 +76,9 @@ contains
       call err%set(ERR_INTERNAL, 'CVODE: CVodeCreate failed')
       return
     end if
-    call check(solver, FCVodeInit(this%mem, c_funloc(sundials_rhs), t0, this%y), 'CVodeInit', err)
+    this%bridge%progress => opts%progress
+    this%bridge%mem = this%mem
+    call check(solver, FCVodeInit(this%mem, c_funloc(cvode_rhs), t0, this%y), 'CVodeInit', err)
     call check(solver, FCVodeSetUserData(this%mem, c_loc(this%bridge)), 'CVodeSetUserData', err)
     call check(solver, FCVodeSetErrHandlerFn(this%mem, c_funloc(sundials_error_handler), &
       c_loc(this%bridge)), 'CVodeSetErrHandlerFn', err)
@@ -156,6 +158,7 @@ contains
     call this%get_stats(so_far)
     this%done = so_far
     this%done%n_restarts = this%done%n_restarts + 1
+    this%bridge%steps_before = this%done%n_steps
     this%bridge%t_lo = t_lo
     this%bridge%t_hi = t_hi
     call put_state(this%y, q, v)
@@ -210,6 +213,22 @@ contains
   end subroutine report_failure
 
   ! ---- C callbacks --------------------------------------------------------------------------
+
+  !> sundials_rhs, and the progress line when one is due: polled per evaluation, as one CVode
+  !> call may take very many steps between two output times.
+  integer(c_int) function cvode_rhs(t, y_nv, ydot_nv, user_data) result(ierr) bind(C)
+    real(c_double), value :: t
+    type(N_Vector) :: y_nv, ydot_nv
+    type(c_ptr), value :: user_data
+    type(sundials_bridge_t), pointer :: b
+    integer(c_long) :: n(1)
+    ierr = sundials_rhs(t, y_nv, ydot_nv, user_data)
+    call c_f_pointer(user_data, b)
+    if (.not. associated(b%progress)) return
+    if (.not. b%progress%due()) return
+    if (FCVodeGetNumSteps(b%mem, n) /= 0) n = 0
+    call b%progress%report_time(real(t, wp), b%steps_before + int(n(1), i8))
+  end function cvode_rhs
 
   !> J = df/dy = [[0, I], [da/dq, da/dv]], column-major in CVODE's dense matrix.
   integer(c_int) function cvode_jac(t, y_nv, fy_nv, jac_sm, user_data, tmp1, tmp2, tmp3) &

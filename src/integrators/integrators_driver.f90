@@ -50,6 +50,9 @@ contains
       breakpoints_inside(breakpoints, t_out(1), t_out(size(t_out))), q, v, err)
     call stepper_stats(stepper, stats)
     call stepper_finish(stepper)
+    ! The next integration (a reduced run's next segment) counts on from here.
+    if (associated(opts%progress)) opts%progress%steps_done = opts%progress%steps_done + &
+      stats%n_steps
   end subroutine integrate
 
   subroutine run_segments(stepper, sys, opts, t_out, bps, q, v, err)

@@ -22,6 +22,7 @@ module integrators_galpha
   use core_linalg, only: lu_factor, lu_solve_vector
   use core_error, only: error_t, ERR_NUMERIC
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use core_progress, only: progress_t
   implicit none
   private
   public :: galpha_solver_t
@@ -67,6 +68,7 @@ module integrators_galpha
     !> The last non-zero status of accel, for the error message.
     integer :: bad_status = 0
     type(integrator_stats_t) :: stats
+    type(progress_t), pointer :: progress => null()   !< polled once per step
   contains
     procedure :: start => galpha_start
     procedure :: advance => galpha_advance
@@ -89,6 +91,7 @@ contains
     this%rtol = opts%rtol
     this%atol = opts%atol
     this%max_steps = opts%max_steps
+    this%progress => opts%progress
     rho = opts%rho_inf
     this%alpha_m = (2 * rho - 1) / (rho + 1)
     this%alpha_f = rho / (rho + 1)
@@ -162,6 +165,9 @@ contains
       select case (outcome)
       case (STEP_OK)
         call after_success(this)
+        if (associated(this%progress)) then
+          if (this%progress%due()) call this%progress%report_time(this%t, this%stats%n_steps)
+        end if
       case (STEP_FATAL)
         call err%set(ERR_NUMERIC, 'galpha: accel returned status ' // &
           int_str(this%bad_status) // ' in the step from t = ' // real_str(this%t) // &

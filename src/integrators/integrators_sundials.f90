@@ -16,6 +16,7 @@ module integrators_sundials
   use core_strings, only: int_str, real_str
   use core_error, only: error_t, ERR_NUMERIC, ERR_INTERNAL
   use integrators_system, only: ode2_system_t
+  use core_progress, only: progress_t
   use fsundials_context_mod, only: FSUNContext_Create, FSUNContext_Free
   use fsundials_nvector_mod, only: N_Vector, FN_VDestroy, FN_VGetArrayPointer
   use fnvector_serial_mod, only: FN_VNew_Serial
@@ -41,6 +42,11 @@ module integrators_sundials
     character(len=:), allocatable :: message
     !> Work arrays of CVODE's Jacobian callback, allocated only with the system's Jacobian.
     real(wp), allocatable :: dadq(:, :), dadv(:, :)
+    !> Progress lines from inside a long solver call (CVODE polls per right-hand side): the
+    !> solver's memory to count its steps, and the steps before its last re-initialisation.
+    type(progress_t), pointer :: progress => null()
+    type(c_ptr) :: mem = c_null_ptr
+    integer(i8) :: steps_before = 0
   end type sundials_bridge_t
 
   interface

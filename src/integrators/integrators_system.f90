@@ -6,6 +6,7 @@
 !> step and retries, e.g. a kinematic Newton solve that did not converge), < 0 fatal.
 module integrators_system
   use core_kinds, only: wp, i8
+  use core_progress, only: progress_t
   implicit none
   private
   public :: ode2_system_t, integrator_options_t, integrator_stats_t, system_fd_jacobian
@@ -53,6 +54,9 @@ module integrators_system
     character(len=16) :: jacobian = 'system'  !< 'system' (ode2_system_t%jacobian) or 'internal'
     real(wp) :: dt = 1.0e-3_wp                !< step of fixed-step methods
     real(wp) :: rho_inf = 0.8_wp              !< generalized-alpha spectral radius at infinity
+    !> Progress lines of a long run, polled per step or right-hand side evaluation (none when
+    !> not associated). The run owns it; the integration only reports to it.
+    type(progress_t), pointer :: progress => null()
   end type integrator_options_t
 
   !> Counters written to the output so runs can be compared.

@@ -321,19 +321,20 @@ contains
     character(len=*), intent(in), optional :: metric_units(:)
     logical, intent(in), optional :: overwrite
     logical, intent(in), optional :: sync
-    character(len=:), allocatable :: names(:)
     integer :: j, longest
     longest = 1
     do j = 1, size(param_names)
       if (allocated(param_names(j)%s)) longest = max(longest, len(param_names(j)%s))
     end do
-    allocate(character(len=longest) :: names(size(param_names)))
-    do j = 1, size(param_names)
-      names(j) = ''
-      if (allocated(param_names(j)%s)) names(j) = param_names(j)%s
-    end do
-    call sf_create(this, path, attrs, names, param_values, metric_names, err, metric_units, &
-                   overwrite, sync)
+    block
+      character(len=longest) :: names(size(param_names))
+      do j = 1, size(param_names)
+        names(j) = ''
+        if (allocated(param_names(j)%s)) names(j) = param_names(j)%s
+      end do
+      call sf_create(this, path, attrs, names, param_values, metric_names, err, metric_units, &
+                     overwrite, sync)
+    end block
   end subroutine sf_create_strings
 
   ! ---------------------------------------------------------------------------------------------
@@ -347,8 +348,8 @@ contains
     character(len=*), intent(in), optional :: base_input_text
     logical, intent(in), optional :: sync
     character(len=*), parameter :: not_sweep = ' (remove it or choose another -o)'
-    character(len=:), allocatable :: text, names(:)
-    integer(hid_t) :: fid, did
+    character(len=:), allocatable :: text
+    integer(hid_t) :: fid
     integer :: hdferr, n, j, why
     logical :: exists, is_h5
     integer, allocatable, target :: st(:)
@@ -424,19 +425,17 @@ contains
       call open_dataset(this, '/cases/wall_time_s', H5T_FLOAT_F, this%wall_id, err)
       call open_dataset(this, '/cases/rank', H5T_INTEGER_F, this%rank_id, err)
       if (.not. err%ok()) exit work
-      call group_members(this, '/cases/parameters', names, err)
-      do j = 1, size(names)
-        call open_dataset(this, '/cases/parameters/' // trim(names(j)), H5T_FLOAT_F, did, err)
-        call h5_close(did)
-      end do
+      ! The names come from a function: a local deferred-length array passed to group_members
+      ! makes gfortran 12 -O2 read its length uninitialized.
+      call check_float_datasets(this, '/cases/parameters/', &
+        group_member_names(this, '/cases/parameters', err), err)
       if (.not. err%ok()) exit work
-      call group_members(this, '/cases/metrics', names, err)
+      call group_members(this, '/cases/metrics', this%metric_list, err)
       if (.not. err%ok()) exit work
-      this%metric_list = names
-      allocate(this%metric_ids(size(names)))
+      allocate(this%metric_ids(size(this%metric_list)))
       this%metric_ids = -1
-      do j = 1, size(names)
-        call open_dataset(this, '/cases/metrics/' // trim(names(j)), H5T_FLOAT_F, &
+      do j = 1, size(this%metric_list)
+        call open_dataset(this, '/cases/metrics/' // trim(this%metric_list(j)), H5T_FLOAT_F, &
                           this%metric_ids(j), err)
       end do
       if (.not. err%ok()) exit work
@@ -736,6 +735,30 @@ contains
                     // '-byte strings, so this is not a sweep result file', err)
     end if
   end subroutine open_dataset
+
+  !> Every dataset prefix // names(j) must be a float dataset of n_cases elements; nothing is
+  !> checked if err is already set.
+  subroutine check_float_datasets(this, prefix, names, err)
+    class(sweep_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: prefix, names(:)
+    type(error_t), intent(inout) :: err
+    integer(hid_t) :: did
+    integer :: j
+    if (.not. err%ok()) return
+    do j = 1, size(names)
+      call open_dataset(this, prefix // trim(names(j)), H5T_FLOAT_F, did, err)
+      call h5_close(did)
+    end do
+  end subroutine check_float_datasets
+
+  !> The members of `group` in creation order (empty, and err set, if it cannot be listed).
+  function group_member_names(this, group, err) result(names)
+    class(sweep_file_t), intent(inout) :: this
+    character(len=*), intent(in) :: group
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: names(:)
+    call group_members(this, group, names, err)
+  end function group_member_names
 
   !> Names of the members of group `group` in creation order.
   subroutine group_members(this, group, names, err)

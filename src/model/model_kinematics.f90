@@ -1,4 +1,4 @@
-!> Kinematic analysis (formulation.md section 4): Newton solution of the calculable nodal
+!> Kinematic analysis (docs/theory.md section 4): Newton solution of the calculable nodal
 !> coordinates for given generalised coordinates q, then the first- and second-order
 !> transfer functions DF and D2F from the one LU factorisation of the Jacobian at the solution.
 module model_kinematics

@@ -244,7 +244,7 @@ contains
   end function model_q_name
 
   !> Values of an element's modes from the generalised coordinates: rigid 0, prescribed and
-  !> dynamic from q (exactly, not recomputed from x: see formulation.md section 5); released
+  !> dynamic from q (exactly, not recomputed from x: see docs/theory.md section 5); released
   !> modes carry no stress and are returned as 0.
   pure subroutine model_mode_values(this, iel, q, e)
     class(model_t), intent(in) :: this

@@ -62,6 +62,7 @@ contains
     red%last_eta_dot = red%last_eta
     all_index = [(iseg, iseg = 1, nt)]
     seg_start = t_out(1)
+    if (associated(opts%progress) .and. spec%mode /= 'none') opts%progress%n_updates = 0
     do iseg = 1, size(checks) + 1
       seg_end = t_out(nt)
       if (iseg <= size(checks)) seg_end = checks(iseg)
@@ -79,6 +80,8 @@ contains
       if (.not. err%ok()) return
       if (iseg <= size(checks)) call check_basis(red, spec, seg_end, log, err)
       if (.not. err%ok()) return
+      if (associated(opts%progress) .and. spec%mode /= 'none') &
+        opts%progress%n_updates = log%n_updates
       seg_start = seg_end
     end do
   end subroutine integrate_reduced

@@ -1,4 +1,4 @@
-!> The basis of a reduced model, dq_dy = V eta (formulation.md section 7): the M0-normalised
+!> The basis of a reduced model, dq_dy = V eta (docs/theory.md section 9): the M0-normalised
 !> lowest modes at a configuration, how many of them to keep, and how to follow them when the
 !> configuration changes (mode tracking by the modal assurance criterion, MAC).
 module reduction_basis

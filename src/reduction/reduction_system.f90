@@ -1,4 +1,4 @@
-!> A reduced model (formulation.md section 7): q_dy = q_ref + V eta, the full non-linear
+!> A reduced model (docs/theory.md section 9): q_dy = q_ref + V eta, the full non-linear
 !> equations of motion evaluated by the full model and projected with V^T:
 !>     (V^T Mbar V) eta'' = V^T gen_force.
 !> It is an `ode2_system_t` in eta, so every integrator of flexmor advances it.

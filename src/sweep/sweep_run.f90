@@ -19,7 +19,8 @@ module sweep_run
   use core_strings, only: int_str, approx_str
   use io_namelist, only: nml_file_t
   use io_sweep_file, only: sweep_file_t, sweep_attrs_t
-  use analysis_run, only: run_t, FLEXMOR_VERSION
+  use core_version, only: FLEXMOR_VERSION
+  use analysis_run, only: run_t
   use sweep_spec, only: sweep_spec_t, apply_case
   use sweep_metrics, only: METRIC_NAMES, METRIC_UNITS, case_metrics, not_available, &
     check_metric_node

@@ -1,0 +1,165 @@
+!> Progress lines on stderr for long runs, e.g.
+!>     flexmor: dynamic  t = 0.3120 of 0.7000 s (44.6 %), 12345 steps, 4.1 s elapsed, ETA 5.2 s
+!>     flexmor: static   load step 7 of 20 (load factor 0.3500), 3.2 s elapsed, ETA 6.0 s
+!> one line per report, the first after `interval` seconds of wall time (short runs stay silent)
+!> and then one every `interval`. The run owns the object and hands it to the solvers (through
+!> integrator_options_t%progress, or an argument of static_solve); they poll it where they take
+!> steps or evaluate the right-hand side: `due` reads the clock only (some 20 ns), everything
+!> else happens once per line.
+module core_progress
+  use, intrinsic :: iso_fortran_env, only: error_unit
+  use core_kinds, only: wp, i8
+  use core_strings, only: int_str
+  implicit none
+  private
+  public :: progress_t
+
+  type :: progress_t
+    !> Off (the default): `due` is always false and nothing is printed.
+    logical :: enabled = .false.
+    real(wp) :: interval = 2.0_wp        !< wall time [s] before the first line and between lines
+    integer :: unit = error_unit
+    !> Steps of the integrations already finished (the segments of a reduced run); the solvers
+    !> add their own count of the current one.
+    integer(i8) :: steps_done = 0
+    !> Basis updates of an adaptive reduced run so far; < 0: not shown.
+    integer :: n_updates = -1
+    integer :: n_lines = 0               !< lines printed since `start`
+    character(len=8), private :: kind = ''
+    integer(i8), private :: rate = 1, c_start = 0, c_next = huge(1_i8)
+    real(wp), private :: t_begin = 0, t_end = 0, t_shown = -huge(1.0_wp)
+  contains
+    procedure :: start => progress_start
+    procedure :: due => progress_due
+    procedure :: report_time => progress_report_time
+    procedure :: report_load => progress_report_load
+  end type progress_t
+
+contains
+
+  !> Begin a phase: kind 'dynamic' or 'reduced' integrates from t_begin to t_end, 'static'
+  !> (t_begin, t_end unused) steps the load. Counters and the clock start again.
+  subroutine progress_start(this, kind, t_begin, t_end)
+    class(progress_t), intent(inout) :: this
+    character(len=*), intent(in) :: kind
+    real(wp), intent(in) :: t_begin, t_end
+    this%kind = kind
+    this%t_begin = t_begin
+    this%t_end = t_end
+    this%t_shown = -huge(1.0_wp)
+    this%steps_done = 0
+    this%n_updates = -1
+    this%n_lines = 0
+    call system_clock(this%c_start, this%rate)
+    this%c_next = this%c_start + ticks(this)
+  end subroutine progress_start
+
+  !> Whether a line is due: cheap enough to call at every step or right-hand side evaluation.
+  logical function progress_due(this) result(due)
+    class(progress_t), intent(in) :: this
+    integer(i8) :: c
+    due = .false.
+    if (.not. this%enabled) return
+    call system_clock(c)
+    due = c >= this%c_next
+  end function progress_due
+
+  !> The line of an integration at time t after n_steps steps of the current integration.
+  subroutine progress_report_time(this, t, n_steps)
+    class(progress_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    integer(i8), intent(in) :: n_steps
+    character(len=:), allocatable :: line
+    real(wp) :: elapsed, frac
+    integer :: d
+    ! An evaluation of a step that gets rejected may lie ahead of a later one: never go back.
+    this%t_shown = min(max(this%t_shown, t, this%t_begin), this%t_end)
+    elapsed = next_line(this)
+    frac = 1
+    if (this%t_end > this%t_begin) frac = (this%t_shown - this%t_begin) / (this%t_end - this%t_begin)
+    ! Four significant digits of t_end.
+    d = 4
+    if (abs(this%t_end) > 0) d = min(12, max(1, 3 - floor(log10(abs(this%t_end)))))
+    line = 'flexmor: ' // this%kind // ' t = ' // fixed(this%t_shown, d) // ' of ' // &
+      fixed(this%t_end, d) // ' s (' // fixed(100 * frac, 1) // ' %), ' // &
+      count_str(this%steps_done + n_steps) // ' steps, '
+    if (this%n_updates >= 0) line = line // int_str(this%n_updates) // ' basis updates, '
+    line = line // duration(elapsed) // ' elapsed' // eta(elapsed, frac)
+    write(this%unit, '(a)') line
+    flush(this%unit)
+  end subroutine progress_report_time
+
+  !> The line of load step k of n (load factor lambda) under way.
+  subroutine progress_report_load(this, k, n, lambda)
+    class(progress_t), intent(inout) :: this
+    integer, intent(in) :: k, n
+    real(wp), intent(in) :: lambda
+    real(wp) :: elapsed
+    elapsed = next_line(this)
+    write(this%unit, '(a)') 'flexmor: ' // this%kind // ' load step ' // &
+      int_str(k) // ' of ' // int_str(n) // ' (load factor ' // &
+      fixed(lambda, 4) // '), ' // duration(elapsed) // ' elapsed' // &
+      eta(elapsed, real(k - 1, wp) / n)
+    flush(this%unit)
+  end subroutine progress_report_load
+
+  ! ---- helpers ------------------------------------------------------------------------------
+
+  integer(i8) function ticks(this)
+    type(progress_t), intent(in) :: this
+    ticks = max(1_i8, nint(this%interval * this%rate, i8))
+  end function ticks
+
+  !> Elapsed wall time [s]; schedules the next line.
+  real(wp) function next_line(this) result(elapsed)
+    type(progress_t), intent(inout) :: this
+    integer(i8) :: c
+    call system_clock(c)
+    elapsed = real(c - this%c_start, wp) / this%rate
+    this%c_next = c + ticks(this)
+    this%n_lines = this%n_lines + 1
+  end function next_line
+
+  !> ', ETA ...' from the fraction done so far, or nothing before there is a rate to go by.
+  function eta(elapsed, frac) result(s)
+    real(wp), intent(in) :: elapsed, frac
+    character(len=:), allocatable :: s
+    s = ''
+    if (frac > 1.0e-6_wp .and. frac <= 1) s = ', ETA ' // duration(elapsed * (1 - frac) / frac)
+  end function eta
+
+  !> Seconds below two minutes, then minutes, then hours.
+  function duration(sec) result(s)
+    real(wp), intent(in) :: sec
+    character(len=:), allocatable :: s
+    if (sec < 120) then
+      s = fixed(sec, 1) // ' s'
+    else if (sec < 7200) then
+      s = fixed(sec / 60, 1) // ' min'
+    else
+      s = fixed(sec / 3600, 1) // ' h'
+    end if
+  end function duration
+
+  !> v with d decimals and a leading zero (F0.d leaves it out for |v| < 1 on some compilers).
+  function fixed(v, d) result(s)
+    real(wp), intent(in) :: v
+    integer, intent(in) :: d
+    character(len=:), allocatable :: s
+    character(len=40) :: buf
+    character(len=16) :: fmt
+    write(fmt, '(a,i0,a)') '(f0.', d, ')'
+    write(buf, fmt) v
+    s = trim(adjustl(buf))
+    if (s(1:1) == '.') s = '0' // s
+    if (len(s) > 1) then
+      if (s(1:2) == '-.') s = '-0' // s(2:)
+    end if
+  end function fixed
+
+  function count_str(i) result(s)
+    integer(i8), intent(in) :: i
+    character(len=:), allocatable :: s
+    s = int_str(int(min(i, int(huge(1), i8))))
+  end function count_str
+end module core_progress
