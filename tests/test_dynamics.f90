@@ -1,4 +1,4 @@
-!> Dynamics of whole models (formulation.md section 5, verification.md 'Conservation'):
+!> Dynamics of whole models (docs/theory.md section 5; section 10, 'Energy conservation'):
 !>  1. energy conservation of undamped free vibrations: the two-link of input/two_link.nml with
 !>     both joints held (law = 'constant'), released from its static deflection under a tip
 !>     load, with BDF (rtol 1e-8) and generalized-alpha (rho_inf = 1 conserves, rho_inf = 0.8
@@ -328,8 +328,10 @@ contains
     drift = maxval(abs(e - e(1))) / scale
     write(*, '(a,es10.3,a,es10.3,a)') '    galpha rho_inf = 1: max |E - E0| / max T = ', drift, &
       ', tip vs BDF ', tip_distance(tip_history(dyn), tip), ' m'
-    call suite%check(drift < 1.0e-5_wp, 'pendulum: generalized-alpha rho_inf = 1 keeps E ' // &
-      'to 1e-5 (nonlinear: not exactly conserving)')
+    ! Second order, not exactly conserving when nonlinear: C (omega dt)^2 with omega^2 = g / l
+    ! (l = 0.8 m); bound 10 (omega dt)^2 (first order would give omega dt).
+    call suite%check(drift < 10 * 9.81_wp / 0.8_wp * opts%dt**2, 'pendulum: generalized-' // &
+      'alpha rho_inf = 1 keeps E to 10 (omega dt)^2 (nonlinear: not exactly conserving)')
   end subroutine pendulum
 
   ! ------------------------------------------------------------------ 3. damping
@@ -424,7 +426,7 @@ contains
     integer(i8) :: evals(3)
     integer :: j
 
-    t = linspace(0.0_wp, 0.2_wp, 21)
+    allocate(t, source=linspace(0.0_wp, 0.2_wp, 21))
     opts%method = 'bdf'
     opts%rtol = 1.0e-8_wp
     opts%atol = 1.0e-9_wp
@@ -481,8 +483,8 @@ contains
     type(integrator_options_t) :: opts
     type(integrator_stats_t) :: stats
     type(error_t) :: err
-    real(wp), allocatable :: q0(:), t(:), e(:), tip_bdf(:, :)
-    real(wp) :: drift, e_stop, dist
+    real(wp), allocatable :: q0(:), t(:), e(:), tip_bdf(:, :), tip_fine(:, :)
+    real(wp) :: drift, e_stop, dist, estimate
     integer :: k_stop
 
     call make(text, dyn, err)
@@ -519,12 +521,22 @@ contains
     call run(dyn, opts, t, q0, stats, err)
     call expect_ok(err, 'benchmark: generalized-alpha dt = 5e-4 over 0..0.6 s')
     if (.not. err%ok()) return
-    dist = tip_distance(tip_history(dyn), tip_bdf)
+    tip_fine = tip_history(dyn)
+    dist = tip_distance(tip_fine, tip_bdf)
     write(*, '(a,i0,a,i0,a,es10.3,a)') '    galpha dt = 5e-4: ', stats%n_steps, ' steps, ', &
       stats%n_restarts, ' restarts; tip vs BDF rtol 1e-9: ', dist, ' m'
-    call suite%check(dist < 1.0e-4_wp, &
-      'benchmark: generalized-alpha dt = 5e-4 and BDF agree on the tip to 1e-4 m')
     call suite%check(stats%n_restarts >= 1, &
       'benchmark: generalized-alpha restarts at the end of the motion')
+    ! galpha's own error at dt by Richardson (second order: |x(2 dt) - x(dt)| / 3); BDF at
+    ! rtol 1e-9 is far more accurate, so the two agree to that estimate (10x margin).
+    opts%dt = 1.0e-3_wp
+    call run(dyn, opts, t, q0, stats, err)
+    call expect_ok(err, 'benchmark: generalized-alpha dt = 1e-3 over 0..0.6 s')
+    if (.not. err%ok()) return
+    estimate = tip_distance(tip_history(dyn), tip_fine) / 3
+    write(*, '(a,es10.3,a,es10.3,a)') '    galpha dt = 5e-4: tip vs BDF ', dist, &
+      ' m, Richardson estimate of its error ', estimate, ' m'
+    call suite%check(dist < 10 * estimate, &
+      'benchmark: generalized-alpha dt = 5e-4 and BDF agree on the tip within 10x its own error')
   end subroutine benchmark_run
 end program test_dynamics

@@ -58,7 +58,9 @@ contains
     real(wp) :: none(0)
     call run(bdf, t_b, force_at_t_b, [t_b], sys, stats, err)
     call suite%check(err%ok() .and. stats%n_restarts == 1, 'bdf restarts once at t_b')
-    call suite%check(sys%max_error < 100 * bdf%rtol, 'bdf is accurate across the jump')
+    ! Global error of an rtol-controlled run over one period of a unit-scale response is some
+    ! 10 rtol (told nothing of the jump too); 1000 rtol still fails on a mishandled jump (O(1)).
+    call suite%check(sys%max_error < 1000 * bdf%rtol, 'bdf is accurate across the jump')
     call suite%check(sys%n_evals_at_t_b == 0, 'bdf never evaluates a at t_b itself')
     call run(bdf, t_b, force_at_t_b, none, sys_blind, stats_blind, err)
     call suite%check(err%ok() .and. stats_blind%n_restarts == 0, &
@@ -81,7 +83,7 @@ contains
     call suite%check(sys%n_evals_at_t_b == 0, 'galpha never evaluates a at t_b itself')
     opts%dt = galpha%dt / 2
     call run(opts, t_b, force_at_t_b, [t_b], sys_fine, stats, err)
-    call suite%close(sys%max_error / sys_fine%max_error, 4.0_wp, 0.0_wp, 0.6_wp, &
+    call suite%order(sys%max_error, sys_fine%max_error, 2, &
       'galpha stays second order across the jump')
     ! Told nothing, galpha steps over the jump and drops to first order.
     call run(galpha, t_b, force_at_t_b, none, sys_blind, stats, err)
@@ -100,7 +102,7 @@ contains
       'breakpoints outside (t0, t_end) and repeats are ignored')
     ! A breakpoint a rounding error after an output time: no step to take, only a restart.
     call run(bdf, 0.4_wp, .false., [nearest(0.4_wp, 1.0_wp)], sys, stats, err)
-    call suite%check(err%ok() .and. stats%n_restarts == 1 .and. sys%max_error < 100 * bdf%rtol, &
+    call suite%check(err%ok() .and. stats%n_restarts == 1 .and. sys%max_error < 1000 * bdf%rtol, &
       'a breakpoint next to an output time is handled')
   end subroutine check_outside_and_repeated
 end program test_integrators_breakpoint

@@ -74,7 +74,9 @@ contains
       opts = integrator_options_t(method='erk', rtol=1.0e-8_wp, atol=1.0e-10_wp, &
         erk_order=orders(i))
       call run(opts, [0.0_wp, 2.0_wp], sys, stats, err)
-      call suite%check(err%ok() .and. sys%max_error < 20 * opts%rtol, &
+      ! Two periods at unit amplitude: up to 5 rtol (orders 2, 3); 100 rtol still fails a wrong
+      ! solution (O(1)) or an error control that ignores rtol.
+      call suite%check(err%ok() .and. sys%max_error < 100 * opts%rtol, &
         'erk order ' // int_str(orders(i)) // ' is accurate')
       steps(i) = stats%n_steps
     end do
@@ -145,8 +147,8 @@ contains
     sys%n_failures = 1
     call integrate(sys, integrator_options_t(method='erk'), t_out, [1.0_wp], [0.0_wp], &
       no_breakpoints, stats, err)
-    write(*, '(4x,a,i0,a,i0)') 'erk after one recoverable status: steps ', stats%n_steps, &
-      ', err test fails ', stats%n_err_test_fails
+    write(*, '(4x,a,i0,a,i0,a,es9.2)') 'erk after one recoverable status: steps ', &
+      stats%n_steps, ', err test fails ', stats%n_err_test_fails, ', error ', sys%max_error
     if (.not. err%ok()) write(*, '(4x,a)') 'message: ' // err%message
     call suite%check(sys%n_failures == 0, 'erk: the failing call happened')
     call suite%check(err%ok() .and. sys%n_records == size(t_out), &

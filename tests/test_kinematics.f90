@@ -1,4 +1,4 @@
-!> Kinematics (formulation.md section 4) and equations of motion (section 5) against finite
+!> Kinematics (docs/theory.md section 4) and equations of motion (section 5) against finite
 !> differences of full Newton solves, on models built from namelist text:
 !>   - the two-link manipulator of input/two_link.nml (as is, and with gravity and loads added),
 !>   - a driven crank with two spring trusses (truss/hinge mechanism, gravity, lumped and

@@ -32,7 +32,7 @@ program test_motion_bandwidth
     dt = seconds() - t0
     write(*, '(a,f10.4,a,f8.3,a)') '    ' // NAMES(i) // ' T = 0.5 s: F(0.99) = ', f99(i), &
       ' Hz (', 1.0e3_wp * dt, ' ms)'
-    call suite%check(dt < 0.1_wp, trim(NAMES(i)) // ': bandwidth_hz(0.99) cheap')
+    ! The time is printed, not checked: a wall-time bound fails on a slow or loaded machine.
     ! The definition itself: E(F) = 0.99 int a^2 dt.
     e = m%band_energy(f99(i))
     call suite%close(e / total, 0.99_wp, 1.0e-9_wp, 0.0_wp, trim(NAMES(i)) // &

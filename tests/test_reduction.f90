@@ -93,8 +93,9 @@ contains
     write(line, '(a,es9.2,a)') 'all modes: residual at round-off level (', &
       maxval(red%red%residual), ')'
     call suite%check(maxval(red%red%residual) < 1.0e-6_wp, trim(line))
-    call suite%check(maxval(red%red%estimate) < 1.0e-9_wp, &
-      'all modes: error estimate below 1 nm')
+    write(line, '(a,es9.2,a)') 'all modes: error estimate below 1 nm (', &
+      maxval(red%red%estimate), ' m)'
+    call suite%check(maxval(red%red%estimate) < 1.0e-9_wp, trim(line))
   end subroutine check_full_basis
 
   subroutine check_orthonormal_basis()
@@ -109,7 +110,8 @@ contains
     do i = 1, N_DY
       g(i, i) = g(i, i) - 1.0_wp
     end do
-    call suite%check(maxval(abs(g)) < 1.0e-10_wp, 'V^T M0 V = I to 1e-10')
+    call suite%check(maxval(abs(g)) < 1.0e-10_wp, 'V^T M0 V = I to 1e-10 (' // &
+      es(maxval(abs(g))) // ')')
   end subroutine check_orthonormal_basis
 
   subroutine check_indicator_and_static_correction()
@@ -142,29 +144,54 @@ contains
 
   !> A damped cantilever under a tip load comes to rest: with one mode it settles on the
   !> projection of the static solution, with the static correction on the static solution
-  !> itself (mode-acceleration: V eta + K0^-1 (f - K0 V eta) = K0^-1 f).
+  !> itself (mode-acceleration: V eta + K0^-1 (f - K0 V eta) = K0^-1 f), up to the element's
+  !> geometric non-linearity, which K0 leaves out. The reference is the static analysis of the
+  !> full model under the same load; the damping is strong enough that every mode has decayed.
   subroutine check_static_limit()
-    type(run_t) :: ref, plain, corrected
+    type(run_t) :: stat, ref, plain, corrected
     character(len=*), parameter :: beam = &
       "&node label = 'base', x = 0, y = 0, fixed = .true. / &node label = 'tip', x = 1, y = 0 /" &
       // " &link label = 'arm', from = 'base', to = 'tip', n_elements = 4, E = 7e10, " // &
-      "A = 1e-4, I = 1e-9, rho = 2700, damping = 2e-3 / &force node = 'tip', fy = -0.5 /" // &
-      " &output nodes = 'tip' / &dynamic t_end = 2.0, output_dt = 0.01 /"
-    real(wp) :: e_plain, e_corr
-    character(len=120) :: line
+      "A = 1e-4, I = 1e-9, rho = 2700, damping = 2e-2 / &force node = 'tip', fy = -0.5 /" // &
+      " &output nodes = 'tip' /"
+    real(wp), parameter :: T_END = 1.0_wp, BETA = 2.0e-2_wp, RTOL = 1.0e-10_wp, &
+      ATOL = 1.0e-13_wp, STATIC_TOL = 1.0e-12_wp, LEN = 1.0_wp
+    character(len=*), parameter :: dyn = " &dynamic t_end = 1.0, output_dt = 0.01, " // &
+      "rtol = 1e-10, atol = 1e-13 /"
+    real(wp) :: y_st, e_full, e_plain, e_corr, omega1, zeta1, rate, transient, solver, &
+      theta, bound
+    character(len=200) :: line
     integer :: ic(3), nt
-    call run_scene('beam_full', beam, ref)
-    call run_scene('beam_k1', beam // " &reduction n_modes = 1 /", plain)
-    call run_scene('beam_k1_corrected', beam // " &reduction n_modes = 1, " // &
+    call run_scene('beam_static', beam // " &static tol = 1e-12 /", stat)
+    call run_scene('beam_full', beam // dyn, ref)
+    call run_scene('beam_k1', beam // dyn // " &reduction n_modes = 1 /", plain)
+    call run_scene('beam_k1_corrected', beam // dyn // " &reduction n_modes = 1, " // &
       "static_correction = .true. /", corrected)
     ic = ref%dyn%model%node_coord(:, ref%dyn%model%find_node('tip'))
     nt = size(ref%time)
-    e_plain = abs(plain%dyn%x_hist(ic(2), nt) - ref%dyn%x_hist(ic(2), nt))
-    e_corr = abs(corrected%dyn%x_hist(ic(2), nt) - ref%dyn%x_hist(ic(2), nt))
-    write(line, '(a,es9.2,a,es9.2,a,es9.2,a)') 'settled tip: 1 mode off by ', e_plain, &
-      ' m, corrected ', e_corr, ' m (deflection ', abs(ref%dyn%x_hist(ic(2), nt)), ' m)'
-    call suite%check(e_corr < 1.0e-3_wp * e_plain .and. e_plain > 1.0e-3_wp * &
-      abs(ref%dyn%x_hist(ic(2), nt)), trim(line))
+    y_st = stat%x_static(ic(2), size(stat%x_static, 2))
+    e_full = abs(ref%dyn%x_hist(ic(2), nt) - y_st)
+    e_plain = abs(plain%dyn%x_hist(ic(2), nt) - y_st)
+    e_corr = abs(corrected%dyn%x_hist(ic(2), nt) - y_st)
+    ! Residual transient: with stiffness-proportional damping a mode decays at beta omega^2 / 2
+    ! (underdamped) or at least 1 / beta (overdamped), so mode 1 (or 1 / beta) is the slowest;
+    ! its step-response envelope is |y_st| exp(-rate t) / sqrt(1 - zeta^2).
+    omega1 = 2 * acos(-1.0_wp) * plain%red%basis%frequency_hz(1)
+    zeta1 = BETA * omega1 / 2
+    rate = min(BETA * omega1**2 / 2, 1 / BETA)
+    transient = abs(y_st) * exp(-rate * T_END) / sqrt(max(1 - zeta1**2, 1.0e-2_wp))
+    ! What the solvers leave: the integrator's rtol |y| + atol, the static Newton tol x L.
+    solver = RTOL * abs(y_st) + ATOL + STATIC_TOL * LEN
+    write(line, '(a,es9.2,a,es9.2,a,es9.2,a)') 'settled full run on the static solution (off by ', &
+      e_full, ' m; 10 x (transient ', transient, ' m + solver tolerances ', solver, ' m))'
+    call suite%check(e_full < 10 * (transient + solver), trim(line))
+    ! A linear correction leaves the geometric non-linearity: second order in the tip rotation
+    ! theta ~ |y_st| / L of the dropped part, 100 theta^2 e_plain allows an O(10) coefficient.
+    theta = abs(y_st) / LEN
+    bound = 100 * theta**2 * e_plain + 10 * (transient + solver)
+    write(line, '(a,es9.2,a,es9.2,a,es9.2,a,es9.2,a)') 'settled tip: 1 mode off by ', e_plain, &
+      ' m, corrected ', e_corr, ' m (bound ', bound, ' m; deflection ', abs(y_st), ' m)'
+    call suite%check(e_corr < bound .and. e_plain > 1.0e-3_wp * abs(y_st), trim(line))
   end subroutine check_static_limit
 
   !> Positions are continuous across basis updates: the second difference of q_dy at the
@@ -204,9 +231,12 @@ contains
     call suite%check(d_upd < 3 * d_fixed, trim(line))
     call run_scene('mac_low', scene(DYN // " &reduction n_modes = 2, update = 'mac', " // &
       "update_interval = 0.025, mac_threshold = 0.05 /"), mac_low)
+    ! The checks split the integration, so the step sequence differs: the paths agree to the
+    ! integrator's global error, 100 rtol x 1.22 m reach (an update would move it ~1e-3 m).
     call suite%check(mac_low%updates%n_updates == 0 .and. size(mac_low%updates%time) == 19 &
-      .and. tip_difference(mac_low, fixed) < 1.0e-6_wp, &
-      'mac threshold never reached: checks without updates, same path as the fixed basis')
+      .and. tip_difference(mac_low, fixed) < 100 * 1.0e-7_wp * 1.22_wp, &
+      'mac threshold never reached: checks without updates, same path as the fixed basis (' &
+      // es(tip_difference(mac_low, fixed)) // ' m)')
     call run_scene('mac_high', scene(DYN // " &reduction n_modes = 2, update = 'mac', " // &
       "update_interval = 0.025, mac_threshold = 0.99999 /"), mac_high)
     write(line, '(a,i0,a,f8.5)') 'mac threshold 0.99999: ', mac_high%updates%n_updates, &
@@ -256,6 +286,12 @@ contains
     call suite%close_array(by_angles%red%basis%frequency_hz, by_time%red%basis%frequency_hz, &
       1.0e-12_wp, 0.0_wp, 'basis_prescribed = the angles at basis_time gives the same modes')
     call suite%check(abs(by_time%red%basis%frequency_hz(2) / freqs(2) - 1) > 1.0e-3_wp, &
-      'the basis at the end configuration differs from the initial one')
+      'the basis at the end configuration differs from the initial one (f2 ' // &
+      es(by_time%red%basis%frequency_hz(2)) // ' vs ' // es(freqs(2)) // ' Hz)')
   end subroutine check_basis_configuration
+  function es(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=9) :: s
+    write(s, '(es9.2)') x
+  end function es
 end program test_reduction

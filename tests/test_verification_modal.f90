@@ -1,9 +1,9 @@
-!> Modal reference cases of verification.md:
+!> Modal reference cases of docs/theory.md section 10:
 !>  - clamped-free beam, f_n = (beta_n L)^2 / (2 pi L^2) sqrt(EI / (rho A)): convergence with
 !>    the mesh (consistent mass: upper bounds that decrease), axial modes with the elongation
 !>    dynamic;
 !>  - the two-link benchmark read from input/two_link.nml: the 12 frequencies of
-!>    verification.md, M0-orthonormal mode shapes, independence of phi1 (by the &modal time
+!>    docs/theory.md, M0-orthonormal mode shapes, independence of phi1 (by the &modal time
 !>    option after the motion, and by rotating the geometry), the same model meshed by hand,
 !>    and the lumped-mass variant.
 program test_verification_modal
@@ -23,7 +23,7 @@ program test_verification_modal
   ! Clamped-free beam: link 2 of the benchmark, 1.2 m long.
   real(wp), parameter :: LEN = 1.2_wp, E_MOD = 7.3e10_wp, AREA = 4.0e-4_wp, INER = 3.33e-9_wp, &
     RHO = 2700.0_wp
-  ! verification.md: two-link frequencies at phi2 = 0 [Hz]
+  ! docs/theory.md section 10: two-link frequencies at phi2 = 0 [Hz]
   real(wp), parameter :: TWO_LINK_HZ(12) = [3.06_wp, 23.2_wp, 83.9_wp, 198.0_wp, 286.0_wp, &
     575.0_wp, 687.0_wp, 1150.0_wp, 1490.0_wp, 2100.0_wp, 2660.0_wp, 4230.0_wp]
 
@@ -65,7 +65,9 @@ contains
     do i = 1, n
       ortho(i, i) = ortho(i, i) - 1
     end do
-    call suite%check(maxval(abs(ortho)) < 1.0e-10_wp, what // ': V^T M0 V = I to 1e-10')
+    ! Cholesky-based dsygvd: ~ n eps cond(M0); the 16-element beam's M0 (rotary terms (l/N)^2
+    ! below the translational ones) has cond ~1e4, n eps cond ~ 1e-10: bound 1e-9.
+    call suite%check(maxval(abs(ortho)) < 1.0e-9_wp, what // ': V^T M0 V = I to 1e-9')
     write(*, '(a,es9.2)') '    max |V^T M0 V - I| = ', maxval(abs(ortho))
     allocate(resid(n, n))
     do i = 1, n
@@ -164,7 +166,7 @@ contains
     character(len=*), intent(in) :: what
     integer :: i
     character(len=80) :: tag
-    write(*, '(a)') '  ' // what // ': frequency [Hz], verification.md, rel. diff'
+    write(*, '(a)') '  ' // what // ': frequency [Hz], reference, rel. diff'
     do i = 1, min(size(f_hz), size(TWO_LINK_HZ))
       write(*, '(i6,f12.4,f10.2,es11.2)') i, f_hz(i), TWO_LINK_HZ(i), &
         (f_hz(i) - TWO_LINK_HZ(i)) / TWO_LINK_HZ(i)

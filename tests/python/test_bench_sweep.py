@@ -169,7 +169,9 @@ def test_quick_run(tmp_path):
     assert all(r["status"] == "ok" and float(r["wall_median_s"]) > 0 for r in measured)
     assert measured[1]["busy_max_s"] and not measured[1]["idle_workers"]
     probe = {r["ranks"]: r for r in rows if r["kind"] == "probe"}
-    assert set(probe) == {"1", "2"} and float(probe["2"]["latency_s"]) > 0
+    # A difference of two measured times: noise can make it slightly negative, so only that
+    # it was measured is checked (never the sign or size of a wall time).
+    assert set(probe) == {"1", "2"} and math.isfinite(float(probe["2"]["latency_s"]))
     assert probe["1"]["n_cases"] == "400" and probe["2"]["n_cases"] == "40"
     assert any(r["kind"] == "projection" and r["ranks"] == "64" for r in rows)
 

@@ -81,7 +81,7 @@ contains
     integer(hid_t), intent(in) :: fid
     character(len=*), intent(in) :: name
     integer(hsize_t), allocatable :: dims(:)
-    dims = dataset_dims(fid, name)
+    allocate(dims, source=dataset_dims(fid, name))
     n = -1
     if (size(dims) == 1) n = dims(1)
   end function length_1d

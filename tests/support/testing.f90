@@ -16,6 +16,7 @@ module testing
     procedure :: check => suite_check
     procedure :: close => suite_close
     procedure :: close_array => suite_close_array
+    procedure :: order => suite_order
     procedure :: finish => suite_finish
   end type suite_t
 
@@ -52,8 +53,8 @@ contains
     logical :: good
     good = abs(actual - expected) <= atol + rtol * abs(expected)
     good = good .and. actual == actual
-    write(line, '(a,es16.8,a,es16.8,a,es9.2)') ' got ', actual, ' want ', expected, &
-      ' diff ', abs(actual - expected)
+    write(line, '(a,es16.8,a,es16.8,a,es9.2,a,es8.1,a)') ' got ', actual, ' want ', expected, &
+      ' diff ', abs(actual - expected), ' (bound ', atol + rtol * abs(expected), ')'
     call this%check(good, what // trim(line))
   end subroutine suite_close
 
@@ -62,7 +63,7 @@ contains
     real(wp), intent(in) :: actual(:), expected(:), rtol, atol
     character(len=*), intent(in) :: what
     character(len=120) :: line
-    real(wp) :: worst
+    real(wp) :: worst, used
     integer :: i
     logical :: good
     if (size(actual) /= size(expected)) then
@@ -72,12 +73,30 @@ contains
     good = all(abs(actual - expected) <= atol + rtol * abs(expected))
     good = good .and. all(actual == actual)
     worst = 0
+    used = 0   ! largest |diff| / bound: the margin is its inverse
     do i = 1, size(actual)
       worst = max(worst, abs(actual(i) - expected(i)))
+      if (atol + rtol * abs(expected(i)) > 0) used = max(used, abs(actual(i) - expected(i)) / &
+        (atol + rtol * abs(expected(i))))
     end do
-    write(line, '(a,es9.2)') ' max diff ', worst
+    write(line, '(a,es9.2,a,es8.1,a)') ' max diff ', worst, ' (', used, ' of its bound)'
     call this%check(good, what // trim(line))
   end subroutine suite_close_array
+
+  !> Observed convergence order log2(e(h) / e(h/2)) within 0.5 of `expected`: halfway to the
+  !> neighbouring orders, so a method one order off fails whatever the higher-order terms.
+  subroutine suite_order(this, e_coarse, e_fine, expected, what)
+    class(suite_t), intent(inout) :: this
+    real(wp), intent(in) :: e_coarse, e_fine   !< errors at step h and h / 2
+    integer, intent(in) :: expected
+    character(len=*), intent(in) :: what
+    character(len=80) :: line
+    real(wp) :: p
+    p = -huge(1.0_wp)
+    if (e_coarse > 0 .and. e_fine > 0) p = log(e_coarse / e_fine) / log(2.0_wp)
+    write(line, '(a,f7.3,a,i0,a)') ' (observed order ', p, ', expected ', expected, ' +- 0.5)'
+    call this%check(abs(p - expected) < 0.5_wp, what // trim(line))
+  end subroutine suite_order
 
   subroutine suite_finish(this)
     class(suite_t), intent(inout) :: this
