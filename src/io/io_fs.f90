@@ -110,7 +110,10 @@ contains
       call err%set(ERR_IO, 'the result file name is empty')
       return
     end if
+    ! An interrupt during the probe must not leave the probe file behind either.
+    call guard_result_file(path // '.tmp', path, final_ours=.false.)
     rc = c_probe_output(to_c(path), to_c(path // '.tmp'), folder_missing)
+    call clear_result_guard()
     if (rc == 0) return
     slash = index(path, '/', back=.true.)
     if (rc == EISDIR) then
