@@ -67,7 +67,7 @@ module io_sweep_file
   use core_error, only: error_t, ERR_INPUT, ERR_IO, ERR_INTERNAL
   use core_strings, only: int_str
   use io_namelist, only: string_t
-  use io_fs, only: delete_file, sync_file
+  use io_fs, only: delete_file, sync_file, check_output_path
   use io_h5base, only: h5_init, h5_close, h5_string_type, h5_put_string_attr, h5_put_int_attr, &
     h5_create_dataset, h5_create_group, h5_check_names, h5_write_element, h5_read_string_attr, &
     h5_read_int_attr, h5_open_dataset, h5_dataset_shape, h5_member_names, h5_probe_read_only, &
@@ -215,8 +215,9 @@ contains
     call h5fcreate_f(path, access, this%file_id, hdferr)
     if (hdferr < 0) then
       this%file_id = -1
-      call err%set(ERR_IO, path // ': cannot create the sweep result file (does the folder ' // &
-                   'exist and is it writable?)')
+      call check_output_path(path, err)
+      if (err%ok()) call err%set(ERR_IO, path // ': cannot create the sweep result file ' // &
+                                 '(does the folder exist and is it writable?)')
       return
     end if
     this%path = path
@@ -370,7 +371,9 @@ contains
 
     call h5fis_hdf5_f(path, is_h5, hdferr)
     if (hdferr < 0) then
-      call err%set(ERR_IO, path // ': cannot read the file (is it readable?)')
+      ! Say why when the file system can tell (a folder, no permission).
+      call check_output_path(path, err)
+      if (err%ok()) call err%set(ERR_IO, path // ': cannot read the file (is it readable?)')
       return
     end if
     if (.not. is_h5) then

@@ -293,3 +293,19 @@ def test_interrupted_sweep_keeps_its_cases_and_says_so(tmp_path, sig, status):
     with h5py.File(tmp_path / "s.h5") as f:
         done = int((f["cases/status"][:] >= 0).sum())
     assert 1 <= done < 8
+
+
+@pytest.mark.skipif(not Path(SWEEP_BIN).is_file(), reason="flexmor-sweep not built")
+@pytest.mark.parametrize("out,fragment", [("res", "is a folder"),
+                                          ("no/such/s.h5", "does not exist")])
+def test_sweep_output_path_errors_say_why(tmp_path, out, fragment):
+    (tmp_path / "res").mkdir()
+    (tmp_path / "base.nml").write_text(PLAIN.replace("&modal n_modes = 2 /\n", ""))
+    (tmp_path / "sweep.nml").write_text(
+        "&sweep base = 'base.nml' /\n&parameter name = 'motion.m1.end', values = 0.3 /\n")
+    proc = subprocess.run([SWEEP_BIN, "sweep.nml", "-o", out, "-q"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 4, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], proc.stderr
+    assert list((tmp_path / "res").iterdir()) == []
