@@ -2,7 +2,6 @@
 projection arithmetic), the error paths, and a --quick run with the real flexmor-sweep
 (FLEXMOR_SWEEP_BIN from the environment; skipped where it is not set or does not exist)."""
 import csv
-import importlib.util
 import math
 import os
 import shutil
@@ -13,19 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from helpers import ROOT, load_driver
+
 SCRIPTS = ROOT / "scripts"
 SCRIPT = SCRIPTS / "bench_sweep.py"
-
-
-def load_driver(path):
-    """A benchmark driver of scripts/ as a module (the drivers are scripts, not part of the
-    flexmor package; they import it)."""
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[path.stem] = module  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
 
 
 bs = load_driver(SCRIPT)

@@ -2,31 +2,19 @@
 binary, the error paths with a stand-in binary, and a --quick run with the real one
 (FLEXMOR_BIN, set by CTest; skipped where it does not exist)."""
 import csv
-import importlib.util
 import math
 import os
 import stat
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from helpers import BIN, ROOT, load_driver
+
 SCRIPTS = ROOT / "scripts"
 SCRIPT = SCRIPTS / "bench_tradeoff.py"
-BIN = os.environ.get("FLEXMOR_BIN", str(ROOT / "build-debug" / "bin" / "flexmor"))
-
-
-def load_driver(path):
-    """A benchmark driver of scripts/ as a module (the drivers are scripts, not part of the
-    flexmor package; they import it)."""
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[path.stem] = module  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
 
 
 bt = load_driver(SCRIPT)

@@ -1,21 +1,13 @@
 """Every bad input gets a one-line error naming the file (and group/variable where there is
 one), a non-zero exit status, no backtrace, no NaN, and no result file left behind."""
-import os
 import subprocess
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-BIN = os.environ.get("FLEXMOR_BIN", str(ROOT / "build-debug" / "bin" / "flexmor"))
+from helpers import ARM, BIN
 
-GOOD = """
-&node label = 'base', x = 0, y = 0, fixed = .true. /
-&node label = 'tip', x = 1, y = 0 /
-&link label = 'arm', from = 'base', to = 'tip', n_elements = 2,
-      E = 7.0e10, A = 1.0e-4, I = 1.0e-9, rho = 2700 /
-&hinge label = 'j1', node = 'base', link = 'arm', mode = 'prescribed', motion = 'm1' /
-&motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.05 /
+
+GOOD = "\n" + ARM + """&motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.05 /
 &mass node = 'tip', m = 0.1 /
 &modal /
 &dynamic t_end = 0.02, output_dt = 1e-3 /

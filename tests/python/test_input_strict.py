@@ -13,16 +13,10 @@ import h5py
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-BIN = os.environ.get("FLEXMOR_BIN", str(ROOT / "build-debug" / "bin" / "flexmor"))
-SWEEP_BIN = os.environ.get("FLEXMOR_SWEEP_BIN", str(ROOT / "build-debug" / "bin" / "flexmor-sweep"))
+from helpers import ARM, BIN, SWEEP_BIN
 
-PLAIN = """&node label = 'base', x = 0, y = 0, fixed = .true. /
-&node label = 'tip', x = 1, y = 0 /
-&link label = 'arm', from = 'base', to = 'tip', n_elements = 2,
-      E = 7.0e10, A = 1.0e-4, I = 1.0e-9, rho = 2700 /
-&hinge label = 'j1', node = 'base', link = 'arm', mode = 'prescribed', motion = 'm1' /
-&motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.02 /
+
+PLAIN = ARM + """&motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.02 /
 &mass node = 'tip', m = 3.0 /
 &modal n_modes = 2 /
 &dynamic t_end = 0.03, output_dt = 1e-3 /

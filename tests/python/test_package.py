@@ -16,9 +16,9 @@ import pytest
 
 import flexmor
 
-ROOT = Path(__file__).resolve().parents[2]
+from helpers import BIN, ROOT
+
 VERSION = (ROOT / "VERSION").read_text().strip()
-BIN = Path(os.environ.get("FLEXMOR_BIN", ROOT / "build-debug" / "bin" / "flexmor"))
 
 # A cantilever with a tip mass: &static (3 load steps), &modal and a short &dynamic run.
 SCENE = """&scene title = 'cantilever, all analyses' /

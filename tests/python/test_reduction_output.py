@@ -1,7 +1,5 @@
 """The /reduction group of a reduced run's result file (docs/output.md), end to end."""
-import os
 import subprocess
-from pathlib import Path
 
 import h5py
 import numpy as np
@@ -9,8 +7,7 @@ import pytest
 
 from test_cli_errors import GOOD
 
-ROOT = Path(__file__).resolve().parents[2]
-BIN = Path(os.environ.get("FLEXMOR_BIN", ROOT / "build-debug" / "bin" / "flexmor"))
+from helpers import BIN
 
 
 def run(tmp_path, text):

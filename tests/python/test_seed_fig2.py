@@ -1,16 +1,13 @@
 """flexmor-seed-fig2 (flexmor.seed_fig2) end to end: the seed paper's Fig. 2 case (full model,
 1 and 2 modes) and the accuracy the reduced models reach against the full 3-element run."""
-import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 from flexmor import seed_fig2
 
-ROOT = Path(__file__).resolve().parents[2]
-BIN = Path(os.environ.get("FLEXMOR_BIN", ROOT / "build-debug" / "bin" / "flexmor"))
+from helpers import BIN, ROOT
 
 
 @pytest.mark.skipif(not BIN.is_file(), reason="flexmor binary not built")

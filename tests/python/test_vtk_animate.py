@@ -1,12 +1,10 @@
 """flexmor-vtk (flexmor.to_vtk) and flexmor-animate (flexmor.animate): the drawn geometry on a
 synthetic model, then ParaView series and animations of real runs (FLEXMOR_BIN, set by CTest;
 those tests are skipped where the binary does not exist)."""
-import os
 import re
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import h5py
 import meshio
@@ -18,8 +16,8 @@ import flexmor
 from flexmor import animate, to_vtk
 from flexmor.model import ELEMENT_TYPE_IDS
 
-ROOT = Path(__file__).resolve().parents[2]
-BIN = Path(os.environ.get("FLEXMOR_BIN", ROOT / "build-debug" / "bin" / "flexmor"))
+from helpers import BIN, ROOT
+
 needs_bin = pytest.mark.skipif(not BIN.is_file(), reason=f"no flexmor binary at {BIN}")
 
 # The two-link benchmark, cut to 0.05 s with 6 output times: it starts at rest in its reference
