@@ -2,7 +2,7 @@
 !> then modal, then dynamic, each optional) and write one HDF5 result file. The layout is
 !> documented in docs/output.md. On any error nothing is left on disk.
 module analysis_run
-  use, intrinsic :: iso_fortran_env, only: error_unit
+  use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_INPUT
   use core_version, only: FLEXMOR_VERSION
@@ -172,12 +172,16 @@ contains
       call run_static(this, err)
       if (.not. err%ok()) return
     end if
+    ! Each summary line reaches a log before the next, long analysis: an interrupt ends the
+    ! program without flushing buffers.
+    flush(output_unit)
     if (this%scene%modal%active) then
       call modal_analysis(this%dyn, this%scene%modal%time, this%q_static, &
         this%scene%modal%n_modes, this%modal, err)
       if (.not. err%ok()) return
       if (this%verbose) write(*, '(a,*(f0.3,:,", "))') 'modal: frequencies [Hz]: ', &
         this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz)))
+      flush(output_unit)
     end if
     if (this%scene%dynamic%active) then
       call run_dynamic(this, err)
@@ -320,6 +324,7 @@ contains
     if (this%verbose) write(*, '(a,i0,a,*(f0.3,:,", "))') 'reduction: ', &
       this%red%basis%k(), ' modes (' // this%red%basis%reason // '), [Hz]: ', &
       this%red%basis%frequency_hz
+    flush(output_unit)
     call this%red%allocate_history(size(this%time))
     call integrate_reduced(this%red, update, opts, this%time, breaks, this%stats, &
       this%updates, err)
