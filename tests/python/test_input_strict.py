@@ -92,6 +92,12 @@ VARIANTS = {
     .replace("t_end = 0.03", "t_end = 3.0e-2").replace("m = 3.0", "m = 3."),
     "groups in another order": lambda t: "".join(reversed(t.splitlines(keepends=True)[8:]))
     + "".join(t.splitlines(keepends=True)[:8]),
+    "keyword values in upper case": lambda t: t.replace("'cubic'", "'CUBIC'")
+    .replace("'prescribed'", "'Prescribed'"),
+    "other logical forms": lambda t: t.replace(".true.", "T"),
+    "explicit plus signs": lambda t: t.replace("x = 1,", "x = +1,")
+    .replace("start = 0,", "start = +0.0,"),
+    "several groups on a line": lambda t: t.replace("/\n&", "/ &", 3),
     "comments everywhere": lambda t: t.replace(",\n", ", ! more\n").replace("/\n", "/ ! end\n"),
 }
 
