@@ -2,15 +2,15 @@
 !> then modal, then dynamic, each optional) and write one HDF5 result file. The layout is
 !> documented in docs/output.md. On any error nothing is left on disk.
 module analysis_run
-  use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+  use, intrinsic :: iso_fortran_env, only: output_unit
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_INPUT
   use core_version, only: FLEXMOR_VERSION
-  use io_namelist, only: nml_file_t
+  use io_namelist, only: nml_file_t, string_t
   use io_scene, only: read_scene
   use model_scene, only: scene_t, dynamic_rec_t
   use model_system, only: model_t
-  use model_build, only: build_model
+  use model_build, only: build_model, unused_motions
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: static_solve
   use reduction_modal, only: modal_result_t, modal_analysis
@@ -42,9 +42,10 @@ module analysis_run
     real(wp) :: wall_time_s = 0.0_wp
     !> Summary lines on stdout, and progress lines on stderr during long analyses.
     logical :: verbose = .true.
-    !> Warnings on stderr (e.g. an unstable static equilibrium). Off unless the caller asks:
-    !> the flexmor program does, with or without -q; a sweep's cases keep quiet.
-    logical :: warnings = .false.
+    !> Warnings of the run (an unused motion, an unstable static equilibrium), one per element,
+    !> without a program name: the flexmor program prints them once the run has succeeded (so
+    !> a failure stays one line), a sweep's cases keep them to themselves.
+    type(string_t), allocatable :: warnings(:)
     type(progress_t) :: progress
   contains
     procedure :: load => run_load
@@ -96,6 +97,7 @@ contains
     call read_scene(this%file, this%scene, err)
     if (.not. err%ok()) return
     call build_model(this%scene, model, err)
+    if (err%ok()) call warn_unused_motions(this)
     if (err%ok()) call check_output_nodes(this%scene, model, err)
     if (err%ok() .and. this%scene%dynamic%active) call check_history_size(this%scene%dynamic, &
       model, err)
@@ -127,6 +129,21 @@ contains
       end if
     end do
   end subroutine check_output_nodes
+
+  subroutine add_warning(this, text)
+    type(run_t), intent(inout) :: this
+    character(len=*), intent(in) :: text
+    if (.not. allocated(this%warnings)) allocate(this%warnings(0))
+    this%warnings = [this%warnings, string_t(text)]
+  end subroutine add_warning
+
+  subroutine warn_unused_motions(this)
+    type(run_t), intent(inout) :: this
+    character(len=:), allocatable :: labels
+    labels = unused_motions(this%scene)
+    if (len(labels) > 0) call add_warning(this, this%file%path // ': no &hinge uses the ' // &
+      '&motion ' // labels // ' (prescribe it with motion = ''...'')')
+  end subroutine warn_unused_motions
 
   !> Refuse, before the run, histories that would not fit in memory or steps that would not end
   !> (the limits are in docs/input.md).
@@ -200,19 +217,19 @@ contains
     if (.not. err%ok()) return
     if (this%verbose) write(*, '(a,i0,a,i0,a)') 'static: ', &
       this%scene%static%n_steps, ' load steps, ', this%static_iterations, ' Newton iterations'
-    if (this%warnings) call warn_unstable(this%static_stable)
+    call warn_unstable(this)
   end subroutine run_static
 
   !> One line naming the first load step whose equilibrium is unstable, if any.
-  subroutine warn_unstable(stable)
-    logical, intent(in) :: stable(:)
+  subroutine warn_unstable(this)
+    type(run_t), intent(inout) :: this
     integer :: k, n
-    if (all(stable)) return
-    n = size(stable)
-    k = findloc(stable, .false., dim=1)
-    write(error_unit, '(a)') 'flexmor: warning: static: equilibrium unstable from load step ' &
-      // int_str(k) // ' of ' // int_str(n) // ' (load factor ' // real_str(real(k, wp) / n) &
-      // '): the tangent stiffness is not positive definite (buckled? try a perturbation)'
+    if (all(this%static_stable)) return
+    n = size(this%static_stable)
+    k = findloc(this%static_stable, .false., dim=1)
+    call add_warning(this, 'static: equilibrium unstable from load step ' // int_str(k) // &
+      ' of ' // int_str(n) // ' (load factor ' // real_str(real(k, wp) / n) // '): the ' // &
+      'tangent stiffness is not positive definite (buckled? try a perturbation)')
   end subroutine warn_unstable
 
   subroutine run_dynamic(this, err)

@@ -15,6 +15,7 @@ program flexmor_main
   type(run_t) :: run
   type(error_t) :: err
   type(cli_args_t) :: args
+  integer :: i
 
   call single_thread_blas()
   call parse_cli('usage: flexmor FILE.nml [-o OUT.h5] [-q]', [character(len=80) :: &
@@ -23,7 +24,6 @@ program flexmor_main
     'flexmor ' // FLEXMOR_VERSION, .false., args, err)
   if (args%done) stop
   run%verbose = args%verbose
-  run%warnings = .true.
   call set_progress_interval(run)
   if (err%ok()) call install_interrupt_guard('flexmor', 'no result file written', err)
   if (err%ok()) call check_output_path(args%output, err)
@@ -40,6 +40,8 @@ program flexmor_main
     case default; stop 5, quiet=.true.
     end select
   end if
+  if (allocated(run%warnings)) write(error_unit, '(a)') &
+    ('flexmor: warning: ' // run%warnings(i)%s, i = 1, size(run%warnings))
   if (run%verbose) write(*, '(a,f0.3,a)') 'wrote ' // args%output // ' (', run%wall_time_s, ' s)'
 
 contains

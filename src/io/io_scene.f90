@@ -269,6 +269,14 @@ contains
     call rd_string(g, 'node', r%node, err)
     call rd_string(g, 'link', r%link, err)
     call rd_string(g, 'mode', r%mode, err, default='dynamic', lower=.true.)
+    if (err%ok() .and. all(r%mode /= [character(len=10) :: 'rigid', 'released', 'prescribed', &
+        'dynamic'])) call err%set(ERR_INPUT, g%where() // ': variable ''mode'': ''' // r%mode &
+        // ''' is not rigid, released, prescribed or dynamic')
+    if (err%ok()) then
+      call only_with(g, ['motion'], r%mode == 'prescribed', 'with mode = ''prescribed''', err)
+      call only_with(g, ['stiffness', 'damping  '], r%mode == 'dynamic', &
+        'with mode = ''dynamic''', err)
+    end if
     call rd_string(g, 'motion', r%motion, err, default='')
     call rd_real(g, 'stiffness', r%stiffness, err, default=0.0_wp)
     call rd_real(g, 'damping', r%damping, err, default=0.0_wp)

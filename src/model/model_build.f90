@@ -15,7 +15,7 @@ module model_build
   use model_scene, only: scene_t, link_rec_t
   implicit none
   private
-  public :: build_model, mode_class_from_name, MAX_COORDINATES
+  public :: build_model, mode_class_from_name, unused_motions, MAX_COORDINATES
 
   !> Largest model built: every analysis works on dense matrices of the coordinates, so memory
   !> grows as n^2 (about DENSE_BYTES_PER_N2 n^2 bytes: 13 GB at the limit) and a step's cost as
@@ -66,6 +66,21 @@ contains
     end do
     call model%finalize(err)
   end subroutine build_model
+
+  !> Labels of the motions no hinge refers to: a forgotten or misspelt reference, or a joint
+  !> released for a trial. Not an error, but the user hears of it (analysis_run warns).
+  function unused_motions(scene) result(labels)
+    type(scene_t), intent(in) :: scene
+    character(len=:), allocatable :: labels
+    integer :: i, h
+    labels = ''
+    do i = 1, size(scene%motions)
+      if (any([(scene%hinges(h)%motion == scene%motions(i)%label, h = 1, size(scene%hinges))])) &
+        cycle
+      if (len(labels) > 0) labels = labels // ', '
+      labels = labels // '''' // scene%motions(i)%label // ''''
+    end do
+  end function unused_motions
 
   !> Refuse a scene too large for dense linear algebra before anything is allocated. The count
   !> is an upper bound from the records (reals: n_elements may be near huge()).

@@ -167,6 +167,10 @@ CASES.update({
     "empty label": (GOOD.replace("label = 'arm'", "label = ''"), ["&link", "'label'", "empty"]),
     "label with a slash": (GOOD.replace("label = 'tip', x", "label = 'a/b', x"),
                            ["&node", "'label'", "'/'"]),
+    "motion on a dynamic hinge": (GOOD.replace("mode = 'prescribed'", "mode = 'dynamic'"),
+                                  ["&hinge", "'motion'", "prescribed"]),
+    "stiffness on a prescribed hinge": (GOOD.replace("motion = 'm1'", "motion = 'm1', stiffness = 5"),
+                                        ["&hinge", "'stiffness'", "dynamic"]),
     "dt with bdf": (GOOD.replace("t_end = 0.02", "t_end = 0.02, dt = 1e-4"),
                     ["&dynamic", "'dt'", "galpha"]),
     "max_order with erk": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'erk', "

@@ -309,3 +309,21 @@ def test_sweep_output_path_errors_say_why(tmp_path, out, fragment):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and fragment in lines[0], proc.stderr
     assert list((tmp_path / "res").iterdir()) == []
+
+
+def test_unused_motion_is_named_in_a_warning(tmp_path):
+    text = PLAIN + "&motion label = 'spare', law = 'cubic', end = 1, duration = 1 /\n"
+    proc, out = run(tmp_path, text, extra=("-q",))
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("flexmor: warning: "), proc.stderr
+    assert "scene.nml" in lines[0] and "'spare'" in lines[0]
+    assert out.exists()
+
+
+def test_warnings_never_join_an_error(tmp_path):
+    """A failing run says one line, even when it also had something to warn about."""
+    text = PLAIN.replace("&dynamic t_end = 0.03", "&dynamic t_end = -1")
+    proc, _ = run(tmp_path, text + "&motion label = 'spare', law = 'cubic', end = 1, "
+                  "duration = 1 /\n")
+    assert_one_line_error(proc, tmp_path, 1, "'t_end'")
