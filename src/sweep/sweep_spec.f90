@@ -202,9 +202,10 @@ contains
     select case (this%mode)
     case ('product', 'zip')
       ! The case count follows from the lists; a count given anyway would be ignored.
-      if (g%has('n_samples')) then
-        call err%set(ERR_INPUT, g%where() // ": variable 'n_samples' is for mode 'random' " // &
-          "or 'lhs'; mode '" // this%mode // "' takes its cases from the value lists")
+      if (g%has('n_samples') .or. g%has('seed')) then
+        call err%set(ERR_INPUT, g%where() // ": variable '" // trim(merge('n_samples', &
+          'seed     ', g%has('n_samples'))) // "' is for mode 'random' or 'lhs'; mode '" // &
+          this%mode // "' takes its cases from the value lists")
         return
       end if
     case ('random', 'lhs')

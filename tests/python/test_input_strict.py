@@ -327,3 +327,16 @@ def test_warnings_never_join_an_error(tmp_path):
     proc, _ = run(tmp_path, text + "&motion label = 'spare', law = 'cubic', end = 1, "
                   "duration = 1 /\n")
     assert_one_line_error(proc, tmp_path, 1, "'t_end'")
+
+
+@pytest.mark.skipif(not Path(SWEEP_BIN).is_file(), reason="flexmor-sweep not built")
+def test_sweep_option_that_does_not_apply_is_an_error(tmp_path):
+    (tmp_path / "base.nml").write_text(PLAIN)
+    (tmp_path / "sweep.nml").write_text(
+        "&sweep base = 'base.nml', mode = 'product', seed = 5 /\n"
+        "&parameter name = 'motion.m1.end', values = 0.3, 0.6 /\n")
+    proc = subprocess.run([SWEEP_BIN, "sweep.nml", "-o", "s.h5", "-q"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 1, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and "'seed'" in proc.stderr
+    assert not (tmp_path / "s.h5").exists()
