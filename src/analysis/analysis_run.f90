@@ -14,6 +14,7 @@ module analysis_run
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: static_solve
   use reduction_modal, only: modal_result_t, modal_analysis
+  use dynamics_buckling, only: buckling_result_t, buckling_analysis
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use core_progress, only: progress_t
   use integrators_driver, only: integrate
@@ -31,6 +32,7 @@ module analysis_run
     type(scene_t) :: scene
     type(dynamics_t) :: dyn
     type(modal_result_t) :: modal
+    type(buckling_result_t) :: buckling
     real(wp), allocatable :: q_static(:), x_static(:, :)
     logical, allocatable :: static_stable(:)  !< per load step (dynamics_static: stable_tangent)
     real(wp), allocatable :: time(:)
@@ -200,6 +202,11 @@ contains
         this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz)))
       flush(output_unit)
     end if
+    if (this%scene%buckling%active) then
+      call run_buckling(this, err)
+      if (.not. err%ok()) return
+      flush(output_unit)
+    end if
     if (this%scene%dynamic%active) then
       call run_dynamic(this, err)
     end if
@@ -219,6 +226,24 @@ contains
       this%scene%static%n_steps, ' load steps, ', this%static_iterations, ' Newton iterations'
     call warn_unstable(this)
   end subroutine run_static
+
+  !> Linearised buckling at the same state as &modal (the &static equilibrium, else the
+  !> reference), prescribed modes held at t = 0 as in &static. Loads that compress nothing
+  !> give an empty result and a warning, not an error.
+  subroutine run_buckling(this, err)
+    type(run_t), intent(inout) :: this
+    type(error_t), intent(out) :: err
+    call buckling_analysis(this%dyn, 0.0_wp, this%q_static, this%scene%buckling%n_modes, &
+      this%scene%buckling%load_factor, this%buckling, err)
+    if (.not. err%ok()) return
+    if (size(this%buckling%load_factor) == 0) then
+      call add_warning(this, 'buckling: no positive load multiplier: the loads compress ' // &
+        'nothing (tension only?); /buckling is empty')
+    else if (this%verbose) then
+      write(*, '(a,*(g0.6,:,", "))') 'buckling: load multipliers: ', &
+        this%buckling%load_factor(1:min(6, size(this%buckling%load_factor)))
+    end if
+  end subroutine run_buckling
 
   !> One line naming the first load step whose equilibrium is unstable, if any.
   subroutine warn_unstable(this)

@@ -17,6 +17,7 @@ contains
     if (err%ok()) call write_model(this%dyn%model, h5, err)
     if (err%ok() .and. this%scene%static%active) call write_static(this, h5, err)
     if (err%ok() .and. this%scene%modal%active) call write_modal(this, h5, err)
+    if (err%ok() .and. this%scene%buckling%active) call write_buckling(this, h5, err)
     if (err%ok() .and. this%scene%dynamic%active) call write_dynamic(this, h5, err)
     if (err%ok() .and. allocated(this%red)) call write_reduction(this, h5, err)
     if (err%ok()) call h5%commit(err)
@@ -182,6 +183,32 @@ contains
       deallocate(shape)
     end do
   end subroutine write_modal
+
+  !> Multipliers and shapes of the linearised buckling analysis (possibly none).
+  subroutine write_buckling(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    real(wp), allocatable :: shape(:, :)
+    integer :: i, in, ic(3)
+    associate (b => this%buckling)
+      call h5%write_real_1d('/buckling/load_factor', b%load_factor, err)
+      if (err%ok()) call h5%write_real_2d('/buckling/shapes', b%shapes, err)
+      if (err%ok()) call h5%write_real_attr('/buckling', 'reference_load_factor', &
+        this%scene%buckling%load_factor, err)
+      if (err%ok()) call h5%write_int_attr('/buckling', 'n_negative', b%n_negative, err)
+      allocate(shape(3, size(b%load_factor)))
+      do i = 1, size(this%scene%output_nodes)
+        in = this%dyn%model%find_node(this%scene%output_nodes(i)%s)
+        ic = this%dyn%model%node_coord(:, in)
+        shape(1, :) = b%node_shapes(ic(1), :)
+        shape(2, :) = b%node_shapes(ic(2), :)
+        shape(3, :) = 0.0_wp
+        if (err%ok()) call h5%write_real_2d('/buckling/nodes/' // &
+          this%scene%output_nodes(i)%s // '/shape', shape, err)
+      end do
+    end associate
+  end subroutine write_buckling
 
   subroutine write_dynamic(this, h5, err)
     type(run_t), intent(in) :: this

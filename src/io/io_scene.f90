@@ -9,13 +9,15 @@ module io_scene
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
     mass_rec_t, force_rec_t, motion_rec_t
+  use motion_law, only: law_from_name, table_problem
+  use io_table, only: read_table_csv, relative_to
   implicit none
   private
   public :: read_scene, load_scene, SCENE_GROUPS
 
-  character(len=9), parameter :: SCENE_GROUPS(13) = [character(len=9) :: 'scene', 'node', &
-    'link', 'hinge', 'truss', 'mass', 'force', 'motion', 'static', 'modal', 'dynamic', &
-    'reduction', 'output']
+  character(len=9), parameter :: SCENE_GROUPS(14) = [character(len=9) :: 'scene', 'node', &
+    'link', 'hinge', 'truss', 'mass', 'force', 'motion', 'static', 'modal', 'buckling', &
+    'dynamic', 'reduction', 'output']
 
 contains
 
@@ -37,8 +39,9 @@ contains
     call file%check_known_groups(SCENE_GROUPS, err)
     if (.not. err%ok()) return
     do i = 1, size(SCENE_GROUPS)
-      if (any(SCENE_GROUPS(i) == [character(len=9) :: 'scene', 'static', 'modal', 'dynamic', &
-                                  'reduction', 'output']) .and. file%count(trim(SCENE_GROUPS(i))) > 1) then
+      if (any(SCENE_GROUPS(i) == [character(len=9) :: 'scene', 'static', 'modal', 'buckling', &
+                                  'dynamic', 'reduction', 'output']) .and. &
+          file%count(trim(SCENE_GROUPS(i))) > 1) then
         call err%set(ERR_INPUT, file%path // ': group &' // trim(SCENE_GROUPS(i)) // &
           ' may appear only once')
         return
@@ -65,6 +68,7 @@ contains
         case ('motion'); call read_motion(g, scene%motions(g%occurrence), err)
         case ('static'); call read_static(g, scene, err)
         case ('modal'); call read_modal(g, scene, err)
+        case ('buckling'); call read_buckling(g, scene, err)
         case ('dynamic'); call read_dynamic(g, scene, err)
         case ('reduction'); call read_reduction(g, scene, err)
         case ('output'); call read_output(g, scene, err)
@@ -332,25 +336,104 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(motion_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
+    character(len=*), parameter :: REST = 'with law = ''constant'', ''cubic'', ''quintic'' or ' &
+      // '''cycloidal'''
+    type(string_t), allocatable :: terms(:)
+    type(error_t) :: e
+    logical :: rest_to_rest
+    integer :: i
     call rd_label(g, r%label, err)
     call rd_string(g, 'law', r%law, err, default='cubic', lower=.true.)
-    call rd_real(g, 'start', r%start, err, default=0.0_wp)
     if (.not. err%ok()) return
-    if (all(r%law /= [character(len=9) :: 'constant', 'cubic', 'quintic', 'cycloidal'])) then
+    if (law_from_name(r%law) < 0) then
       call err%set(ERR_INPUT, g%where() // ': variable ''law'': unknown law ''' // r%law // &
-        ''' (use constant, cubic, quintic or cycloidal)')
+        ''' (use constant, cubic, quintic, cycloidal, ramp, harmonic, spin_up, sum or table)')
       return
     end if
-    if (r%law == 'constant') then
+    ! Each law reads only its own variables: another law's would be ignored without a word.
+    rest_to_rest = any(r%law == [character(len=9) :: 'constant', 'cubic', 'quintic', 'cycloidal'])
+    call only_with(g, ['end'], rest_to_rest, REST, err)
+    call only_with(g, ['duration'], rest_to_rest .or. r%law == 'spin_up', REST // &
+      ' or ''spin_up''', err)
+    call only_with(g, ['start', 't0   '], r%law /= 'sum' .and. r%law /= 'table', &
+      'with laws other than ''sum'' and ''table''', err)
+    call only_with(g, ['rate'], r%law == 'ramp' .or. r%law == 'spin_up', &
+      'with law = ''ramp'' or ''spin_up''', err)
+    call only_with(g, ['amplitude', 'frequency', 'phase    '], r%law == 'harmonic', &
+      'with law = ''harmonic''', err)
+    call only_with(g, ['terms'], r%law == 'sum', 'with law = ''sum''', err)
+    call only_with(g, ['times ', 'values', 'file  '], r%law == 'table', 'with law = ''table''', err)
+    call rd_real(g, 'start', r%start, err, default=0.0_wp)
+    call rd_real(g, 't0', r%t0, err, default=0.0_wp)
+    select case (r%law)
+    case ('constant')
       call rd_real(g, 'end', r%end, err, default=r%start)
       call rd_real(g, 'duration', r%duration, err, default=0.0_wp)
-    else
+    case ('ramp')
+      call rd_real(g, 'rate', r%rate, err)
+    case ('spin_up')
+      call rd_real(g, 'rate', r%rate, err)
+      call rd_real(g, 'duration', r%duration, err)
+      call positive(g, 'duration', r%duration, err)
+    case ('harmonic')
+      call rd_real(g, 'amplitude', r%amplitude, err)
+      call rd_real(g, 'frequency', r%frequency, err)
+      call rd_real(g, 'phase', r%phase, err, default=0.0_wp)
+      call positive(g, 'frequency', r%frequency, err)
+    case ('sum')
+      if (.not. err%ok()) return
+      call g%get_string_array('terms', terms, e)
+      if (.not. e%ok()) then
+        err = e
+      else if (size(terms) == 0) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''terms'' needs at least one label')
+      else
+        allocate(r%terms(size(terms)))
+        do i = 1, size(terms)
+          r%terms(i)%s = terms(i)%s
+        end do
+      end if
+    case ('table')
+      call read_motion_table(g, r, err)
+    case default
       call rd_real(g, 'end', r%end, err)
       call rd_real(g, 'duration', r%duration, err)
       call positive(g, 'duration', r%duration, err)
-    end if
-    call rd_real(g, 't0', r%t0, err, default=0.0_wp)
+    end select
   end subroutine read_motion
+
+  !> A table's points, inline (`times`, `values`) or from `file` (relative to the scene file).
+  subroutine read_motion_table(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(motion_rec_t), intent(inout) :: r
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: path, var, msg
+    type(error_t) :: e
+    if (.not. err%ok()) return
+    if (g%has('file')) then
+      var = 'file'
+      if (g%has('times') .or. g%has('values')) then
+        call err%set(ERR_INPUT, g%where() // ': give either ''file'' or ''times'' and ' // &
+          '''values'', not both')
+        return
+      end if
+      call rd_string(g, 'file', path, err)
+      if (.not. err%ok()) return
+      call read_table_csv(relative_to(g%path, path), r%times, r%values, e)
+      if (.not. e%ok()) e%message = g%where() // ': variable ''file'': ' // e%message
+    else
+      var = 'times'', ''values'
+      call g%get_real_array('times', r%times, e)
+      if (e%ok()) call g%get_real_array('values', r%values, e)
+    end if
+    if (.not. e%ok()) then
+      err = e
+      return
+    end if
+    msg = table_problem(r%times, r%values)
+    if (var /= 'file' .and. size(r%times) == size(r%values)) var = 'times'
+    if (len(msg) > 0) call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''': ' // msg)
+  end subroutine read_motion_table
 
   subroutine read_static(g, scene, err)
     type(nml_group_t), intent(inout) :: g
@@ -375,6 +458,18 @@ contains
     if (err%ok() .and. scene%modal%n_modes < 0) call err%set(ERR_INPUT, g%where() // &
       ': variable ''n_modes'' must not be negative (0 means all)')
   end subroutine read_modal
+
+  subroutine read_buckling(g, scene, err)
+    type(nml_group_t), intent(inout) :: g
+    type(scene_t), intent(inout) :: scene
+    type(error_t), intent(inout) :: err
+    scene%buckling%active = .true.
+    call rd_int(g, 'n_modes', scene%buckling%n_modes, err, default=6)
+    call rd_real(g, 'load_factor', scene%buckling%load_factor, err, default=1.0_wp)
+    call positive(g, 'load_factor', scene%buckling%load_factor, err)
+    if (err%ok() .and. scene%buckling%n_modes < 1) call err%set(ERR_INPUT, g%where() // &
+      ': variable ''n_modes'' must be at least 1')
+  end subroutine read_buckling
 
   subroutine read_dynamic(g, scene, err)
     type(nml_group_t), intent(inout) :: g

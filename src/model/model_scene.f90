@@ -6,7 +6,8 @@ module model_scene
   implicit none
   private
   public :: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
-    force_rec_t, motion_rec_t, static_rec_t, modal_rec_t, dynamic_rec_t, reduction_rec_t, label_t
+    force_rec_t, motion_rec_t, static_rec_t, modal_rec_t, dynamic_rec_t, reduction_rec_t, label_t, &
+    buckling_rec_t
 
   type :: label_t
     character(len=:), allocatable :: s
@@ -52,9 +53,13 @@ module model_scene
     real(wp) :: fx = 0.0_wp, fy = 0.0_wp, moment = 0.0_wp
   end type force_rec_t
 
+  !> A &motion group; each law reads only its own variables (docs/input.md, &motion).
   type :: motion_rec_t
     character(len=:), allocatable :: label, law
     real(wp) :: start = 0.0_wp, end = 0.0_wp, t0 = 0.0_wp, duration = 0.0_wp
+    real(wp) :: rate = 0.0_wp, amplitude = 0.0_wp, frequency = 0.0_wp, phase = 0.0_wp
+    type(label_t), allocatable :: terms(:)            !< sum: labels of other motions
+    real(wp), allocatable :: times(:), values(:)      !< table (read from `file` if given)
   end type motion_rec_t
 
   type :: static_rec_t
@@ -69,6 +74,13 @@ module model_scene
     integer :: n_modes = 0          !< 0 = all
     real(wp) :: time = 0.0_wp       !< prescribed motions are evaluated (and locked) at this time
   end type modal_rec_t
+
+  !> Linearised buckling (docs/input.md, &buckling).
+  type :: buckling_rec_t
+    logical :: active = .false.
+    integer :: n_modes = 6             !< at most this many multipliers, lowest first
+    real(wp) :: load_factor = 1.0_wp   !< load factor at which K_G is differenced
+  end type buckling_rec_t
 
   type :: dynamic_rec_t
     logical :: active = .false.
@@ -107,6 +119,7 @@ module model_scene
     type(motion_rec_t), allocatable :: motions(:)
     type(static_rec_t) :: static
     type(modal_rec_t) :: modal
+    type(buckling_rec_t) :: buckling
     type(dynamic_rec_t) :: dynamic
     type(reduction_rec_t) :: reduction
     type(label_t), allocatable :: output_nodes(:)

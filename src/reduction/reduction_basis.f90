@@ -137,8 +137,16 @@ contains
     case ('auto')
       basis%bandwidth_hz = 0.0_wp
       do i = 1, dyn%model%n_motions
-        basis%bandwidth_hz = max(basis%bandwidth_hz, &
-          dyn%model%motions(i)%bandwidth_hz(BANDWIDTH_FRACTION))
+        associate (b => dyn%model%motions(i)%bandwidth_hz(BANDWIDTH_FRACTION))
+          if (b < 0) then
+            ! An unbounded spectrum (the velocity step of a ramp): no mode count follows.
+            call err%set(ERR_INPUT, 'group &reduction: auto_factor needs motions of finite ' // &
+              'bandwidth; motion ''' // dyn%model%motions(i)%label // ''' has none (a ' // &
+              'velocity step): give n_modes or cutoff_hz')
+            return
+          end if
+          basis%bandwidth_hz = max(basis%bandwidth_hz, b)
+        end associate
       end do
       if (.not. basis%bandwidth_hz > 0) then
         call err%set(ERR_INPUT, 'group &reduction: auto_factor needs a prescribed motion ' // &

@@ -63,8 +63,9 @@ contains
       end do
       metrics(1) = maxval(deflection)
       motion_end = 0.0_wp
+      ! The last change of any law (a ramp or harmonic law changes only at its start).
       do k = 1, model%n_motions
-        motion_end = max(motion_end, model%motions(k)%t0 + model%motions(k)%duration)
+        motion_end = max(motion_end, maxval([0.0_wp, model%motions(k)%breakpoints()]))
       end do
       if (any(run%time > motion_end)) metrics(2) = maxval(deflection, mask=run%time > motion_end)
       metrics(3) = real(run%stats%n_steps, wp)

@@ -185,6 +185,107 @@ CASES.update({
                   ["'erk_order'"]),
 })
 
+# Motion laws (docs/input.md, &motion): each bad input names the group and the variable.
+M1 = "&motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.05 /"
+RAMP_A = "\n&motion label = 'a', law = 'ramp', rate = 1 /"
+CASES.update({
+    "motion sum unknown term": (GOOD.replace(M1, "&motion label = 'm1', law = 'sum', "
+                                "terms = 'a', 'zz' /" + RAMP_A), ["&motion 'm1'", "'terms'", "'zz'"]),
+    "motion sum of itself": (GOOD.replace(M1, "&motion label = 'm1', law = 'sum', terms = 'm1' /"),
+                             ["&motion 'm1'", "'terms'", "itself"]),
+    "motion sum cycle": (GOOD.replace(M1, "&motion label = 'm1', law = 'sum', terms = 'a' /\n"
+                                      "&motion label = 'a', law = 'sum', terms = 'b' /\n"
+                                      "&motion label = 'b', law = 'sum', terms = 'a' /"),
+                         ["&motion", "'terms'", "'a' -> 'b' -> 'a'"]),
+    "motion sum without terms": (GOOD.replace(M1, "&motion label = 'm1', law = 'sum' /"),
+                                 ["&motion", "'terms'"]),
+    "motion table not increasing": (GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                                 "times = 0, 0.01, 0.01, values = 0, 1, 2 /"),
+                                    ["&motion", "'times'", "strictly increasing"]),
+    "motion table unequal lengths": (GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                                  "times = 0, 0.01, 0.02, values = 0, 1 /"),
+                                     ["&motion", "'values'", "3 times but 2 values"]),
+    "motion table one point": (GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                            "times = 0, values = 0 /"), ["&motion", "at least 2"]),
+    "motion table missing file": (GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                               "file = 'nope.csv' /"),
+                                  ["&motion", "'file'", "nope.csv", "No such file"]),
+    "motion table file and times": (GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                                 "file = 'a.csv', times = 0, 1 /"),
+                                    ["&motion", "'file'", "not both"]),
+    "motion harmonic zero frequency": (GOOD.replace(M1, "&motion label = 'm1', law = 'harmonic', "
+                                                    "amplitude = 0.1, frequency = 0 /"),
+                                       ["&motion", "'frequency'", "positive"]),
+    "motion spin_up zero duration": (GOOD.replace(M1, "&motion label = 'm1', law = 'spin_up', "
+                                                  "rate = 1, duration = 0 /"),
+                                     ["&motion", "'duration'", "positive"]),
+    "motion rate with cubic": (GOOD.replace("duration = 0.05", "duration = 0.05, rate = 2"),
+                               ["&motion", "'rate'", "'ramp' or 'spin_up'"]),
+    "motion end with ramp": (GOOD.replace(M1, "&motion label = 'm1', law = 'ramp', rate = 1, "
+                                          "end = 2 /"), ["&motion", "'end'", "'cubic'"]),
+    "motion start with sum": (GOOD.replace(M1, "&motion label = 'm1', law = 'sum', terms = 'a', "
+                                           "start = 1 /" + RAMP_A), ["&motion", "'start'", "'sum'"]),
+    "motion ramp with auto_factor": (RED.format("auto_factor = 2").replace(
+        M1, "&motion label = 'm1', law = 'sum', terms = 'a' /" + RAMP_A),
+        ["&motion 'm1'", "ramp", "auto_factor"]),
+})
+
+
+def test_motion_table_csv(tmp_path):
+    """A table from a CSV file next to the scene (not the working folder), with a header;
+    a bad line is named with its file and number."""
+    sub = tmp_path / "scene"
+    sub.mkdir()
+    (sub / "m.csv").write_text("t, angle\n0, 0\n0.005, 0.01\n0.01, 0.03\n0.02, 0.05\n")
+    text = GOOD.replace(M1, "&motion label = 'm1', law = 'table', file = 'm.csv' /")
+    (sub / "scene.nml").write_text(text)
+    out = tmp_path / "out.h5"
+    proc = subprocess.run([BIN, str(sub / "scene.nml"), "-o", str(out)], capture_output=True,
+                          text=True, timeout=120, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    out.unlink()
+    (sub / "m.csv").write_text("t, angle\n0, 0\n\n0.01, x\n")
+    proc = subprocess.run([BIN, str(sub / "scene.nml"), "-o", str(out)], capture_output=True,
+                          text=True, timeout=120, cwd=tmp_path)
+    assert_clean_error(proc, out, "&motion", "'file'", "m.csv' line 4", "0.01, x")
+
+# A column, fixed at the base, for &buckling (docs/input.md); {} takes the &buckling variables.
+COLUMN = """&node label = 'base', x = 0, y = 0, fixed = .true. /
+&node label = 'top', x = 0, y = 1 /
+&link label = 'col', from = 'base', to = 'top', n_elements = 4,
+      E = 7.0e10, A = 1.0e-4, I = 1.0e-9, rho = 2700 /
+&force node = 'top', fy = -70 /
+&buckling {} /
+"""
+
+CASES.update({
+    "buckling n_modes zero": (COLUMN.format("n_modes = 0"),
+                              ["&buckling", "'n_modes'", "at least 1"]),
+    "buckling load_factor zero": (COLUMN.format("load_factor = 0"),
+                                  ["&buckling", "'load_factor'", "positive"]),
+    "buckling twice": (COLUMN.format("") + "&buckling /\n", ["&buckling", "only once"]),
+    "buckling without load": (COLUMN.format("").replace("&force node = 'top', fy = -70 /", ""),
+                              ["&buckling", "no load"]),
+    "buckling without dynamic mode": (COLUMN.format("").replace("rho = 2700", "rho = 2700, "
+                                                                "bending = 'rigid'"),
+                                      ["no dynamic deformation mode"]),
+    "buckling on a mechanism": (COLUMN.format("") + "&hinge label = 'pin', node = 'base', "
+                                "link = 'col', mode = 'dynamic', stiffness = 0 /\n",
+                                ["buckling", "not positive definite"]),
+})
+
+
+def test_motion_sum_terms_are_used(tmp_path):
+    """The terms of a sum a hinge uses are used (no warning); a sum nobody uses is reported
+    with its terms."""
+    sums = ("&motion label = 'm1', law = 'sum', terms = 'a', 'b' /" + RAMP_A +
+            "\n&motion label = 'b', law = 'harmonic', amplitude = 0.01, frequency = 5 /")
+    proc, out = run(tmp_path, GOOD.replace(M1, sums))
+    assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr
+    out.unlink()
+    proc, out = run(tmp_path, GOOD + sums.replace("'m1'", "'s'").replace("'a'", "'c'") + "\n")
+    assert proc.returncode == 0 and "'s', 'c', 'b'" in proc.stderr, proc.stderr
+
 
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_bad_input(tmp_path, name):

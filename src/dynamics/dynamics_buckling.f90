@@ -1,0 +1,226 @@
+!> Linearised buckling (docs/theory.md, section 7): with the prescribed modes locked, the
+!> tangent stiffness at a fixed configuration is affine in the load factor,
+!>   K_T(lambda) = K0 + lambda K_G,   K_G = (K_T(lambda_ref) - K0) / lambda_ref,
+!> K0 the structural part and K_G the load (geometric) part per unit load factor, both from
+!> dynamics_static's tangent_stiffness (K_T at load factor 0 is K0 exactly: its load part is
+!> skipped). Buckling load multipliers mu and shapes v solve (K0 + mu K_G) v = 0. With K0
+!> positive definite this is the symmetric-definite problem
+!>   -K_G v = theta K0 v,   theta = 1 / mu,
+!> (LAPACK dsygvd through sym_gen_eig): every theta is real whatever the sign pattern of K_G,
+!> the largest positive theta is the lowest positive mu, a negative theta a multiplier of the
+!> reversed load, and a theta of zero (a direction the loads do not soften or stiffen, e.g.
+!> axial stretching) a multiplier at infinity. Only positive multipliers are reported, lowest
+!> first: a load that only pulls (tension everywhere) has none, and the result is then empty.
+!> Since the load part is linear in the load at a fixed configuration, lambda_ref matters only
+!> through the round-off of the difference tangent.
+!>
+!> Supports the model cannot carry (a statically indeterminate column: the formulation needs
+!> statically determinate structures, docs/theory.md section 12) can be added to the buckling
+!> problem alone as nodal coordinates held at zero in the shape (`held`): the problem is then
+!> solved on the null space of those rows of DF_dy. The pre-buckling reactions of such
+!> supports are zero (a straight column), so the load part is unchanged.
+module dynamics_buckling
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_INPUT, ERR_MODEL, ERR_NUMERIC
+  use core_linalg, only: sym_gen_eig, chol_factor
+  use core_strings, only: int_str
+  use dynamics_system, only: dynamics_t
+  use dynamics_static, only: tangent_stiffness
+  implicit none
+  private
+  public :: buckling_result_t, buckling_analysis, THETA_CUTOFF
+
+  !> theta = 1/mu below THETA_CUTOFF times the largest |theta| counts as zero (mu at infinity):
+  !> the round-off of the central-difference K_G is about 1e-11 of its largest entries, while
+  !> the k-th Euler multiplier of a column is k^2 times the first, so real multipliers stay
+  !> above the cutoff up to k = 1e4.
+  real(wp), parameter :: THETA_CUTOFF = 1.0e-8_wp
+
+  !> Result of one buckling analysis; n = the number of positive multipliers kept.
+  type :: buckling_result_t
+    real(wp), allocatable :: load_factor(:)     !< (n) multipliers mu of the loads, lowest first
+    real(wp), allocatable :: shapes(:, :)       !< (n_dy, n), unit largest nodal translation
+    real(wp), allocatable :: node_shapes(:, :)  !< (n_x, n) nodal: DF_dy v, same scaling
+    real(wp), allocatable :: k0(:, :), kg(:, :) !< K0 and K_G (per unit load factor)
+    integer :: n_negative = 0                   !< multipliers of the reversed load left out
+  end type buckling_result_t
+
+contains
+
+  !> Buckling multipliers at (t, q_dy) (the prescribed modes locked at t): at most n_modes
+  !> of them, lowest first, K_G differenced at load factor lambda_ref. dyn%load_factor is
+  !> restored on return.
+  !> `held`: nodal coordinate indices (model%node_coord) held at zero in the shapes.
+  subroutine buckling_analysis(dyn, t, q_dy, n_modes, lambda_ref, res, err, held)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:), lambda_ref
+    integer, intent(in) :: n_modes
+    type(buckling_result_t), intent(out) :: res
+    type(error_t), intent(out) :: err
+    integer, intent(in), optional :: held(:)
+    real(wp), allocatable :: kt(:, :), a(:, :), theta(:), v(:, :), z(:, :), k0z(:, :), kgz(:, :)
+    real(wp) :: saved, big
+    integer :: n, info, i, nk, nz
+    integer, allocatable :: keep(:)
+    n = dyn%model%n_dy
+    if (n_modes < 1) then
+      call err%set(ERR_INPUT, 'group &buckling: variable ''n_modes'' must be at least 1')
+      return
+    end if
+    if (lambda_ref <= 0) then
+      call err%set(ERR_INPUT, 'group &buckling: variable ''load_factor'' must be positive')
+      return
+    end if
+    if (n == 0) then
+      call err%set(ERR_INPUT, 'group &buckling: the model has no dynamic coordinate ' // &
+        '(everything is fixed or prescribed), so nothing can buckle')
+      return
+    end if
+    if (.not. (any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0))) then
+      call err%set(ERR_INPUT, 'group &buckling: the scene has no load (no &force and no ' // &
+        'gravity) to take the buckling multipliers of')
+      return
+    end if
+    allocate(res%k0(n, n), kt(n, n))
+    saved = dyn%load_factor
+    dyn%load_factor = 0.0_wp
+    call tangent_stiffness(dyn, t, q_dy, res%k0, err)
+    if (err%ok()) then
+      dyn%load_factor = lambda_ref
+      call tangent_stiffness(dyn, t, q_dy, kt, err)
+    end if
+    dyn%load_factor = saved
+    if (.not. err%ok()) then
+      call err%prefix('buckling analysis: ')
+      return
+    end if
+    res%kg = (kt - res%k0) / lambda_ref
+    z = identity(n)
+    if (present(held)) then
+      do i = 1, size(held)
+        call restrict(z, matmul(dyn%kin%df(held(i), dyn%model%n_rh + 1:), z), &
+          maxval(abs(dyn%kin%df(:, dyn%model%n_rh + 1:))))
+      end do
+    end if
+    nz = size(z, 2)
+    k0z = matmul(transpose(z), matmul(res%k0, z))
+    kgz = matmul(transpose(z), matmul(res%kg, z))
+    allocate(a, source=k0z)
+    call chol_factor(a, info)
+    if (info /= 0) then
+      call err%set(ERR_MODEL, 'buckling analysis: the structural stiffness K0 is not ' // &
+        'positive definite (a mechanism: a dynamic coordinate without stiffness, e.g. a ' // &
+        'released hinge or a free rigid-body motion)')
+      return
+    end if
+    allocate(theta(nz), v(nz, nz))
+    call sym_gen_eig(-kgz, k0z, theta, v, info)
+    if (info /= 0) then
+      call err%set(ERR_NUMERIC, 'buckling analysis: LAPACK dsygvd failed (info = ' // &
+        int_str(info) // ')')
+      return
+    end if
+    ! Rayleigh quotients of dsygvd's vectors: second-order accurate in the vector, free of the
+    ! rounding of dsygvd's reduction with the Cholesky factor of an ill-conditioned K0.
+    do i = 1, nz
+      theta(i) = -dot_product(v(:, i), matmul(kgz, v(:, i))) / &
+        dot_product(v(:, i), matmul(k0z, v(:, i)))
+    end do
+    big = maxval(abs(theta))
+    allocate(keep(0))
+    ! Largest theta first = lowest mu first (the polish may swap close neighbours: sort).
+    do i = 1, nz
+      if (theta(i) > THETA_CUTOFF * big) keep = [keep, i]
+    end do
+    res%n_negative = count(theta < -THETA_CUTOFF * big)
+    call sort_descending(theta, keep)
+    nk = min(n_modes, size(keep))
+    keep = keep(1:nk)
+    res%load_factor = 1 / theta(keep)
+    res%shapes = matmul(z, v(:, keep))
+    res%node_shapes = matmul(dyn%kin%df(:, dyn%model%n_rh + 1:), res%shapes)
+    call normalise(dyn, res)
+  end subroutine buckling_analysis
+
+  pure function identity(n) result(a)
+    integer, intent(in) :: n
+    real(wp) :: a(n, n)
+    integer :: i
+    a = 0
+    do i = 1, n
+      a(i, i) = 1
+    end do
+  end function identity
+
+  !> Restrict the basis z (columns) to c^T z y = 0 by eliminating the component of y with the
+  !> largest |c_j| (partial pivoting); a row already satisfied (c = 0 to round-off of `scale`,
+  !> the size of DF_dy) changes nothing.
+  subroutine restrict(z, c, scale)
+    real(wp), allocatable, intent(inout) :: z(:, :)
+    real(wp), intent(in) :: c(:), scale
+    real(wp), allocatable :: e(:, :)
+    integer :: m, j, k, col
+    m = size(c)
+    if (m == 0) return
+    j = maxloc(abs(c), dim=1)
+    if (abs(c(j)) <= 1.0e-12_wp * scale) return
+    allocate(e(m, m - 1), source=0.0_wp)
+    col = 0
+    do k = 1, m
+      if (k == j) cycle
+      col = col + 1
+      e(k, col) = 1
+      e(j, col) = -c(k) / c(j)
+    end do
+    z = matmul(z, e)
+  end subroutine restrict
+
+  !> Order the indices `idx` by decreasing value(idx) (insertion sort: a few entries).
+  subroutine sort_descending(value, idx)
+    real(wp), intent(in) :: value(:)
+    integer, intent(inout) :: idx(:)
+    integer :: i, j, tmp
+    do i = 2, size(idx)
+      tmp = idx(i)
+      j = i - 1
+      do while (j >= 1)
+        if (value(idx(j)) >= value(tmp)) exit
+        idx(j + 1) = idx(j)
+        j = j - 1
+      end do
+      idx(j + 1) = tmp
+    end do
+  end subroutine sort_descending
+
+  !> Scale each shape to a unit largest nodal translation, its largest translation component
+  !> positive (a shape that moves no node: unit largest component instead).
+  subroutine normalise(dyn, res)
+    type(dynamics_t), intent(in) :: dyn
+    type(buckling_result_t), intent(inout) :: res
+    real(wp) :: s, d, c
+    integer :: k, i, ix, iy
+    do k = 1, size(res%load_factor)
+      s = 0
+      c = 0
+      do i = 1, size(dyn%model%node_coord, 2)
+        ix = dyn%model%node_coord(1, i)
+        iy = dyn%model%node_coord(2, i)
+        if (ix <= 0 .or. iy <= 0) cycle
+        d = hypot(res%node_shapes(ix, k), res%node_shapes(iy, k))
+        if (d > s) then
+          s = d
+          c = res%node_shapes(ix, k)
+          if (abs(res%node_shapes(iy, k)) > abs(c)) c = res%node_shapes(iy, k)
+        end if
+      end do
+      if (s <= 0) then
+        s = maxval(abs(res%shapes(:, k)))
+        c = res%shapes(maxloc(abs(res%shapes(:, k)), dim=1), k)
+      end if
+      if (s <= 0) cycle
+      s = sign(1 / s, c)
+      res%shapes(:, k) = s * res%shapes(:, k)
+      res%node_shapes(:, k) = s * res%node_shapes(:, k)
+    end do
+  end subroutine normalise
+end module dynamics_buckling
