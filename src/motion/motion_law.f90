@@ -154,9 +154,10 @@ contains
     type(motion_t) :: m
     m%label = label
     m%law = LAW_TABLE
-    m%knots = times
-    m%values = values
-    m%curvature = spline_curvature(times, values)
+    ! allocate(source=): gfortran's -Wuninitialized misreads realloc on a function result.
+    allocate(m%knots, source=times)
+    allocate(m%values, source=values)
+    allocate(m%curvature, source=spline_curvature(times, values))
   end function motion_table
 
   !> Second derivatives at the knots of the not-a-knot spline. With M1 and Mn eliminated by
