@@ -28,10 +28,10 @@ def _version() -> str:
 __version__ = _version()
 
 from flexmor.model import Mesh, Model  # noqa: E402
-from flexmor.results import (Modal, NodePath, Result, ResultFileError, Static,  # noqa: E402
+from flexmor.results import (Buckling, Modal, NodePath, Result, ResultFileError, Static,  # noqa: E402
                              load_node_path, node_labels, read_result, run_attributes)
 from flexmor.sweep import Sweep, SweepFileError, read_sweep  # noqa: E402
 
-__all__ = ["Mesh", "Modal", "Model", "NodePath", "Result", "ResultFileError", "Static", "Sweep",
+__all__ = ["Buckling", "Mesh", "Modal", "Model", "NodePath", "Result", "ResultFileError", "Static", "Sweep",
            "SweepFileError", "__version__", "load_node_path", "node_labels", "read_result",
            "read_sweep", "run_attributes"]

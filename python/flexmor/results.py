@@ -131,6 +131,18 @@ class Modal:
 
 
 @dataclass
+class Buckling:
+    """``&buckling`` results: load multipliers (n,) lowest first, shapes (n, n_dy) and per
+    output node the (n, 3) shape (largest nodal translation 1); ``attrs`` holds
+    ``reference_load_factor`` and ``n_negative``."""
+
+    load_factor: np.ndarray
+    shapes: np.ndarray
+    nodes: dict[str, np.ndarray] = field(default_factory=dict)
+    attrs: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
 class Static:
     """``&static`` results: per load step the load factor, node paths, all coordinates ``x``
     (n_steps, n_x) and the ``stable`` flag (None where the file does not have them), and
@@ -147,7 +159,8 @@ class Static:
 class Result:
     """The contents of one flexmor result file (docs/output.md). Absent parts are None (or
     empty dicts): ``time``, ``nodes``, ``q``, ``qd``, ``energy`` and ``x`` come from
-    ``&dynamic``, ``static`` from ``&static``, ``modal`` from ``&modal``, ``reduction`` from
+    ``&dynamic``, ``static`` from ``&static``, ``modal`` from ``&modal``, ``buckling`` from
+    ``&buckling``, ``reduction`` from
     ``&reduction``, ``model`` from files that store the ``/model`` group."""
 
     path: str
@@ -160,6 +173,7 @@ class Result:
     x: np.ndarray | None = None
     static: Static | None = None
     modal: Modal | None = None
+    buckling: Buckling | None = None
     reduction: dict[str, Any] | None = None
     model: Model | None = None
 
@@ -254,27 +268,42 @@ def _read_static(path: str, f: h5py.File, model: Model | None) -> Static | None:
                   "static/nodes", n, against), x, stable)
 
 
-def _read_modal(path: str, f: h5py.File) -> Modal | None:
-    group = f.get("modal")
+def _read_shapes(path: str, f: h5py.File, name: str, values: str
+                 ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]] | None:
+    """Values (n,), shapes (n, n_dy) and per node the (n, 3) shape of /<name> (modal or
+    buckling), or None when the file has no such group."""
+    group = f.get(name)
     if not isinstance(group, h5py.Group):
         return None
-    freq = _float(path, f, "modal/frequency_hz")
-    shapes = _float(path, f, "modal/shapes")
-    if freq is None or shapes is None:
-        raise ResultFileError(f"{path}: /modal lacks frequency_hz or shapes")
-    if shapes.ndim != 2 or shapes.shape[0] != freq.shape[0]:
-        raise ResultFileError(f"{path}: /modal/shapes has shape {shapes.shape}, expected "
-                              f"({freq.shape[0]}, n_dy) to match /modal/frequency_hz")
+    vals = _float(path, f, f"{name}/{values}")
+    shapes = _float(path, f, f"{name}/shapes")
+    if vals is None or shapes is None:
+        raise ResultFileError(f"{path}: /{name} lacks {values} or shapes")
+    if shapes.ndim != 2 or shapes.shape[0] != vals.shape[0]:
+        raise ResultFileError(f"{path}: /{name}/shapes has shape {shapes.shape}, expected "
+                              f"({vals.shape[0]}, n_dy) to match /{name}/{values}")
     nodes = {}
     if isinstance(group.get("nodes"), h5py.Group):
         for label, node in group["nodes"].items():
             if isinstance(node, h5py.Group) and isinstance(node.get("shape"), h5py.Dataset):
                 shape = np.asarray(node["shape"][...], dtype=float)
-                _check_rows(path, f"/modal/nodes/{label}/shape", shape, freq.shape[0], (3,),
-                            "/modal/frequency_hz")
+                _check_rows(path, f"/{name}/nodes/{label}/shape", shape, vals.shape[0], (3,),
+                            f"/{name}/{values}")
                 nodes[label] = shape
-    time = group.attrs.get("time")
-    return Modal(freq, shapes, nodes, None if time is None else float(time))
+    return vals, shapes, nodes
+
+
+def _read_modal(path: str, f: h5py.File) -> Modal | None:
+    read = _read_shapes(path, f, "modal", "frequency_hz")
+    if read is None:
+        return None
+    time = f["modal"].attrs.get("time")
+    return Modal(*read, None if time is None else float(time))
+
+
+def _read_buckling(path: str, f: h5py.File) -> Buckling | None:
+    read = _read_shapes(path, f, "buckling", "load_factor")
+    return None if read is None else Buckling(*read, _attrs(f["buckling"]))
 
 
 def _read_group(group: h5py.Group) -> dict[str, Any]:
@@ -328,6 +357,7 @@ def read_result(path: str | os.PathLike) -> Result:
             raise ResultFileError(f"{path}: dataset /x without /time")
         result.static = _read_static(path, f, model)
         result.modal = _read_modal(path, f)
+        result.buckling = _read_buckling(path, f)
         if isinstance(f.get("reduction"), h5py.Group):
             result.reduction = _read_group(f["reduction"])
     return result

@@ -210,3 +210,30 @@ def test_pip_install_into_a_venv(tmp_path):
     proc = subprocess.run([str(venv / "bin" / "flexmor-vtk"), "--help"], capture_output=True,
                           text=True, timeout=120, env=env, cwd=tmp_path)
     assert proc.returncode == 0 and "usage: flexmor-vtk" in proc.stdout, proc.stderr
+
+
+COLUMN = """&node label = 'base', x = 0, y = 0, fixed = .true. /
+&node label = 'top', x = 0, y = 1 /
+&link label = 'col', from = 'base', to = 'top', n_elements = 4,
+      E = 7.0e10, A = 1.0e-4, I = 1.0e-9, rho = 2700 /
+&force node = 'top', fy = -70.0 /
+&buckling n_modes = 2 /
+&output nodes = 'top' /
+"""
+
+
+def test_read_result_buckling(tmp_path):
+    """A fixed-free column under EI/L^2 (70 N): the first multiplier is pi^2/4 (Euler); four
+    elements are within 1e-4 of it (docs: mesh convergence of the buckling analysis)."""
+    scene = tmp_path / "column.nml"
+    scene.write_text(COLUMN)
+    out = tmp_path / "column.h5"
+    proc = subprocess.run([str(BIN), str(scene), "-o", str(out), "-q"], capture_output=True,
+                          text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    b = flexmor.read_result(out).buckling
+    assert b is not None and b.load_factor.shape == (2,) and b.shapes.shape[0] == 2
+    assert abs(b.load_factor[0] / (np.pi ** 2 / 4) - 1) < 1e-3, b.load_factor
+    assert b.load_factor[1] > b.load_factor[0]
+    assert b.nodes["top"].shape == (2, 3)
+    np.testing.assert_allclose(np.abs(b.nodes["top"][0, 0]), 1.0, rtol=1e-12)
