@@ -16,13 +16,12 @@ program test_buckling
   use, intrinsic :: iso_c_binding, only: c_loc
   use core_kinds, only: wp
   use core_error, only: error_t
-  use io_namelist, only: nml_file_t
   use model_scene, only: scene_t
   use dynamics_system, only: dynamics_t
   use dynamics_buckling, only: buckling_result_t, buckling_analysis
   use analysis_run, only: run_t
   use testing, only: suite_t
-  use test_scenes, only: rtxt, itxt, make => make_dynamics
+  use test_scenes, only: rtxt, itxt, make => make_dynamics, run_to_file
   use h5_read, only: read_real, dataset_dims, read_dataset, scratch_dir, random_tag, msg
   implicit none
 
@@ -193,7 +192,6 @@ contains
 
   subroutine result_file()
     type(run_t) :: run
-    type(nml_file_t) :: f
     type(error_t) :: err
     integer(hid_t) :: fid
     integer :: hdferr, k
@@ -203,12 +201,8 @@ contains
     character(len=:), allocatable :: path
     logical :: ok
     path = scratch_dir() // '/test_buckling_' // random_tag() // '.h5'
-    call f%parse(column(8, ', fixed = .true.', '', -P_REF, "&buckling n_modes = 2 /" // NL // &
-      "&output nodes = 'top', 'col.4' /" // NL), 'buckling.nml', err)
-    run%verbose = .false.
-    if (err%ok()) call run%load_parsed(f, err)
-    if (err%ok()) call run%execute(err)
-    if (err%ok()) call run%write(path, err)
+    call run_to_file(column(8, ', fixed = .true.', '', -P_REF, "&buckling n_modes = 2 /" // NL // &
+      "&output nodes = 'top', 'col.4' /" // NL), 'buckling.nml', path, run, err)
     call suite%check(err%ok(), 'run with &buckling writes its file: ' // msg(err))
     if (.not. err%ok()) return
     call h5open_f(hdferr)
@@ -271,7 +265,6 @@ contains
   !> Pulled: the run succeeds with a warning and an empty /buckling/load_factor.
   subroutine pulled_run()
     type(run_t) :: run
-    type(nml_file_t) :: f
     type(error_t) :: err
     integer(hid_t) :: fid
     integer :: hdferr
@@ -280,12 +273,8 @@ contains
     logical :: has_warning
     character(len=:), allocatable :: path
     path = scratch_dir() // '/test_buckling_' // random_tag() // '.h5'
-    call f%parse(column(4, ', fixed = .true.', '', P_REF, "&buckling /" // NL), &
-      'pulled.nml', err)
-    run%verbose = .false.
-    if (err%ok()) call run%load_parsed(f, err)
-    if (err%ok()) call run%execute(err)
-    if (err%ok()) call run%write(path, err)
+    call run_to_file(column(4, ', fixed = .true.', '', P_REF, "&buckling /" // NL), &
+      'pulled.nml', path, run, err)
     call suite%check(err%ok(), 'pulled column: the run succeeds: ' // msg(err))
     if (.not. err%ok()) return
     call suite%check(allocated(run%warnings), 'pulled column: a warning')

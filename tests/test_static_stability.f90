@@ -10,13 +10,12 @@ program test_static_stability
   use core_kinds, only: wp
   use core_error, only: error_t
   use core_linalg, only: sym_gen_eig
-  use io_namelist, only: nml_file_t
   use model_scene, only: scene_t
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: tangent_stiffness, static_solve, stable_tangent, STABILITY_MARGIN
   use analysis_run, only: run_t
   use testing, only: suite_t
-  use test_scenes, only: rtxt, itxt, make => make_dynamics
+  use test_scenes, only: rtxt, itxt, make => make_dynamics, run_to_file
   use h5_read, only: read_int, scratch_dir, random_tag, msg
   implicit none
 
@@ -208,19 +207,14 @@ contains
   !> A run with &static writes /static/stable (n_steps) as 1/0, the same as static_solve.
   subroutine result_file()
     type(run_t) :: run
-    type(nml_file_t) :: f
     type(error_t) :: err
     integer(hid_t) :: fid
     integer :: hdferr, k
     integer, allocatable :: flags(:)
     character(len=:), allocatable :: path
     path = scratch_dir() // '/test_static_stability_' // random_tag() // '.h5'
-    call f%parse(cantilever(N_EL, -1.1_wp * P_EXACT, "&static n_steps = 20 /" // NL // &
-      "&output nodes = 'tip' /" // NL), 'stability.nml', err)
-    run%verbose = .false.
-    if (err%ok()) call run%load_parsed(f, err)
-    if (err%ok()) call run%execute(err)
-    if (err%ok()) call run%write(path, err)
+    call run_to_file(cantilever(N_EL, -1.1_wp * P_EXACT, "&static n_steps = 20 /" // NL // &
+      "&output nodes = 'tip' /" // NL), 'stability.nml', path, run, err)
     call suite%check(err%ok(), 'run with &static writes its file: ' // msg(err))
     if (.not. err%ok()) return
     call h5open_f(hdferr)

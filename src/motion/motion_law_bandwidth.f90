@@ -178,36 +178,39 @@ contains
   pure subroutine gauss_legendre(n, x, w)
     integer, intent(in) :: n
     real(wp), intent(out) :: x(n), w(n)
-    real(wp) :: z, z1, p0, p1, p2, dp
-    integer :: i, j, it
+    real(wp) :: z, z1, p0, dp
+    integer :: i, it
     do i = 1, (n + 1) / 2
       z = cos(PI * (i - 0.25_wp) / (n + 0.5_wp))
       do it = 1, 100
-        p0 = 1.0_wp
-        p1 = 0.0_wp
-        do j = 1, n
-          p2 = p1
-          p1 = p0
-          p0 = ((2 * j - 1) * z * p1 - (j - 1) * p2) / j
-        end do
-        dp = n * (z * p0 - p1) / (z**2 - 1)
+        call legendre(n, z, p0, dp)
         z1 = z
         z = z1 - p0 / dp
         if (abs(z - z1) <= 1.0e-15_wp) exit
       end do
-      ! Recompute the derivative at the converged root for the weight.
-      p0 = 1.0_wp
-      p1 = 0.0_wp
-      do j = 1, n
-        p2 = p1
-        p1 = p0
-        p0 = ((2 * j - 1) * z * p1 - (j - 1) * p2) / j
-      end do
-      dp = n * (z * p0 - p1) / (z**2 - 1)
+      ! The derivative at the converged root, for the weight.
+      call legendre(n, z, p0, dp)
       x(i) = 0.5_wp * (1 - z)
       x(n + 1 - i) = 0.5_wp * (1 + z)
       w(i) = 1 / ((1 - z**2) * dp**2)
       w(n + 1 - i) = w(i)
     end do
   end subroutine gauss_legendre
+
+  !> The Legendre polynomial P_n and its derivative at z, by the three-term recurrence.
+  pure subroutine legendre(n, z, p, dp)
+    integer, intent(in) :: n
+    real(wp), intent(in) :: z
+    real(wp), intent(out) :: p, dp
+    real(wp) :: p1, p2
+    integer :: j
+    p = 1.0_wp
+    p1 = 0.0_wp
+    do j = 1, n
+      p2 = p1
+      p1 = p
+      p = ((2 * j - 1) * z * p1 - (j - 1) * p2) / j
+    end do
+    dp = n * (z * p - p1) / (z**2 - 1)
+  end subroutine legendre
 end submodule motion_law_bandwidth

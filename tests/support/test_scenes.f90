@@ -10,9 +10,10 @@ module test_scenes
   use model_build, only: build_model
   use model_system, only: model_t
   use dynamics_system, only: dynamics_t
+  use analysis_run, only: run_t
   implicit none
   private
-  public :: rtxt, itxt, source_dir, make_dynamics, make_dynamics_from
+  public :: rtxt, itxt, source_dir, make_dynamics, make_dynamics_from, run_to_file
 
 contains
 
@@ -77,4 +78,15 @@ contains
     call f%parse(text, 'test', err)
     if (err%ok()) call make_dynamics_from(f, scene, dyn, err, q0)
   end subroutine make_dynamics
+
+  !> Run scene `text` (called `name` in messages) quietly and write its result file `path`.
+  subroutine run_to_file(text, name, path, run, err)
+    character(len=*), intent(in) :: text, name, path
+    type(run_t), intent(inout) :: run
+    type(error_t), intent(out) :: err
+    run%verbose = .false.
+    call run%load_text(text, name, err)
+    if (err%ok()) call run%execute(err)
+    if (err%ok()) call run%write(path, err)
+  end subroutine run_to_file
 end module test_scenes
