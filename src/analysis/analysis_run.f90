@@ -10,9 +10,11 @@ module analysis_run
   use io_scene, only: read_scene
   use model_scene, only: scene_t, dynamic_rec_t
   use model_system, only: model_t
+  use elements_base, only: MODE_DYNAMIC
   use model_build, only: build_model, unused_motions
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: static_solve
+  use dynamics_response, only: static_response_t
   use reduction_modal, only: modal_result_t, modal_analysis
   use dynamics_buckling, only: buckling_result_t, buckling_analysis
   use integrators_system, only: integrator_options_t, integrator_stats_t
@@ -35,6 +37,9 @@ module analysis_run
     type(buckling_result_t) :: buckling
     real(wp), allocatable :: q_static(:), x_static(:, :)
     logical, allocatable :: static_stable(:)  !< per load step (dynamics_static: stable_tangent)
+    real(wp), allocatable :: static_load_factor(:)  !< per load step
+    !> Reactions of the output nodes and compliances of &output compliance_nodes, per step.
+    type(static_response_t) :: static_response
     real(wp), allocatable :: time(:)
     type(integrator_stats_t) :: stats
     type(reduced_t), allocatable :: red       !< a reduced dynamic analysis
@@ -130,6 +135,22 @@ contains
         return
       end if
     end do
+    do i = 1, size(scene%compliance_nodes)
+      associate (label => scene%compliance_nodes(i)%s)
+        j = model%find_node(label)
+        if (j == 0) then
+          call err%set(ERR_INPUT, 'group &output: variable ''compliance_nodes'': node ''' // &
+            label // ''' is not defined')
+        else if (.not. any(pack(model%calc_index(max(1, model%node_coord(:, j))) > 0 .or. &
+            model%coord_input(max(1, model%node_coord(:, j))) == MODE_DYNAMIC, &
+            model%node_coord(:, j) > 0))) then
+          call err%set(ERR_INPUT, 'group &output: variable ''compliance_nodes'': node ''' // &
+            label // ''' has no free coordinate (all fixed or prescribed): its compliance ' // &
+            'would be zero')
+        end if
+        if (.not. err%ok()) return
+      end associate
+    end do
   end subroutine check_output_nodes
 
   subroutine add_warning(this, text)
@@ -215,17 +236,51 @@ contains
   subroutine run_static(this, err)
     type(run_t), intent(inout) :: this
     type(error_t), intent(out) :: err
+    real(wp), allocatable :: q_steps(:, :)
+    integer :: k
     associate (s => this%scene%static)
       allocate(this%x_static(this%dyn%model%n_x, s%n_steps), this%static_stable(s%n_steps))
+      allocate(q_steps(this%dyn%model%n_dy, s%n_steps))
+      this%static_load_factor = [(real(k, wp) / s%n_steps, k = 1, s%n_steps)]
       call this%progress%start('static', 0.0_wp, 1.0_wp)
       call static_solve(this%dyn, 0.0_wp, s%n_steps, s%tol, s%max_iter, this%q_static, &
-        this%x_static, this%static_iterations, err, this%static_stable, this%progress)
+        this%x_static, this%static_iterations, err, this%static_stable, this%progress, q_steps)
     end associate
+    if (err%ok()) call static_responses(this, q_steps, err)
     if (.not. err%ok()) return
     if (this%verbose) write(*, '(a,i0,a,i0,a)') 'static: ', &
       this%scene%static%n_steps, ' load steps, ', this%static_iterations, ' Newton iterations'
     call warn_unstable(this)
   end subroutine run_static
+
+  !> Reactions and compliances at each converged static step, from the tangent there (the
+  !> prescribed coordinates stepped with the load, as static_solve had them).
+  subroutine static_responses(this, q_steps, err)
+    type(run_t), intent(inout) :: this
+    real(wp), intent(in) :: q_steps(:, :)
+    type(error_t), intent(out) :: err
+    integer, allocatable :: out_coords(:, :), comp_coords(:, :)
+    integer :: i, k
+    associate (m => this%dyn%model, sc => this%scene)
+      allocate(out_coords(3, size(sc%output_nodes)), comp_coords(3, size(sc%compliance_nodes)))
+      do i = 1, size(sc%output_nodes)
+        out_coords(:, i) = m%node_coord(:, m%find_node(sc%output_nodes(i)%s))
+      end do
+      do i = 1, size(sc%compliance_nodes)
+        comp_coords(:, i) = m%node_coord(:, m%find_node(sc%compliance_nodes(i)%s))
+      end do
+      call this%static_response%init(out_coords, comp_coords, 0, size(q_steps, 2))
+      this%dyn%ramp_prescribed = .true.
+      do k = 1, size(q_steps, 2)
+        this%dyn%load_factor = this%static_load_factor(k)
+        call this%static_response%record(this%dyn, 0.0_wp, q_steps(:, k), k, err)
+        if (.not. err%ok()) exit
+      end do
+      this%dyn%ramp_prescribed = .false.
+      this%dyn%load_factor = 1.0_wp
+    end associate
+    if (.not. err%ok()) call err%prefix('static, load step ' // int_str(k) // ': ')
+  end subroutine static_responses
 
   !> Linearised buckling at the same state as &modal (the &static equilibrium, else the
   !> reference), prescribed modes held at t = 0 as in &static. Loads that compress nothing

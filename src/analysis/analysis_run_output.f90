@@ -103,6 +103,8 @@ contains
           k = k + 1
           el_nodes(k, i) = coord_node(e%dofs(j))
         end do
+        ! A one-node element (slider) names its node twice, like a hinge.
+        if (k == 1) el_nodes(2, i) = el_nodes(1, i)
       end associate
     end do
     allocate(pos(3, n_nodes))
@@ -153,13 +155,22 @@ contains
     type(run_t), intent(in) :: this
     type(h5_writer_t), intent(inout) :: h5
     type(error_t), intent(inout) :: err
-    integer :: k, n
-    n = this%scene%static%n_steps
-    call h5%write_real_1d('/static/load_factor', [(real(k, wp) / n, k=1, n)], err)
+    integer :: i
+    call h5%write_real_1d('/static/load_factor', this%static_load_factor, err)
     if (err%ok()) call h5%write_real_1d('/static/q', this%q_static, err)
     if (err%ok()) call h5%write_real_2d('/static/x', this%x_static, err)
     if (err%ok()) call h5%write_int_1d('/static/stable', merge(1, 0, this%static_stable), err)
     call write_nodes(this, h5, '/static', this%x_static, err)
+    associate (r => this%static_response, sc => this%scene)
+      do i = 1, size(sc%output_nodes)
+        if (err%ok()) call h5%write_real_2d('/static/nodes/' // sc%output_nodes(i)%s // &
+          '/reaction', r%reaction(:, i, :), err, units='N, N, N m')
+      end do
+      do i = 1, size(sc%compliance_nodes)
+        if (err%ok()) call h5%write_real_3d('/static/nodes/' // sc%compliance_nodes(i)%s // &
+          '/compliance', r%compliance(:, :, i, :), err, units='m/N, rad/(N m)')
+      end do
+    end associate
   end subroutine write_static
 
   subroutine write_modal(this, h5, err)

@@ -78,14 +78,21 @@ contains
     end if
   end subroutine lu_factor
 
-  subroutine lu_solve(a, ipiv, b)
+  !> Solve A X = B (or A^T X = B when `transposed`) with the factors of lu_factor.
+  subroutine lu_solve(a, ipiv, b, transposed)
     real(wp), intent(in) :: a(:, :)
     integer, intent(in) :: ipiv(:)
     real(wp), intent(inout) :: b(:, :)
+    logical, intent(in), optional :: transposed
     integer :: n, info
+    character :: trans
     n = size(a, 1)
     if (n == 0 .or. size(b, 2) == 0) return
-    call dgetrs('N', n, size(b, 2), a, n, ipiv, b, n, info)
+    trans = 'N'
+    if (present(transposed)) then
+      if (transposed) trans = 'T'
+    end if
+    call dgetrs(trans, n, size(b, 2), a, n, ipiv, b, n, info)
   end subroutine lu_solve
 
   subroutine lu_solve_vector(a, ipiv, b)

@@ -1,11 +1,22 @@
-!> Number-to-text helpers for messages.
+!> Number-to-text helpers for messages, and case folding of keywords.
 module core_strings
   use core_kinds, only: wp
   implicit none
   private
-  public :: int_str, real_str, approx_str
+  public :: int_str, real_str, approx_str, lower_case
 
 contains
+
+  !> ASCII lower case (keywords: mode classes, laws, coordinate names).
+  pure function lower_case(text) result(s)
+    character(len=*), intent(in) :: text
+    character(len=len(text)) :: s
+    integer :: i
+    s = text
+    do i = 1, len(s)
+      if (s(i:i) >= 'A' .and. s(i:i) <= 'Z') s(i:i) = achar(iachar(s(i:i)) + 32)
+    end do
+  end function lower_case
 
   pure function int_str(i) result(s)
     integer, intent(in) :: i

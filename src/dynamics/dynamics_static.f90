@@ -1,5 +1,6 @@
 !> Static equilibrium with load stepping, and the tangent stiffness used by statics and the
-!> modal analysis. With the prescribed modes locked and no velocity, the generalised force is
+!> modal analysis. Prescribed coordinates are stepped with the loads (displacement control:
+!> at load factor lambda they take lambda times their values). With the prescribed modes locked and no velocity, the generalised force is
 !>   F(q_dy) = DF_dy^T f(x(q)) - sigma_dy(q),   K_T = -dF/dq_dy = S_dd - d(DF_dy^T f)/dq_dy.
 !> S_dd is assembled exactly (sigma is linear in q); the load part, which holds the geometric
 !> stiffness of the loads and gravity, is differentiated numerically (central differences of
@@ -37,10 +38,12 @@ module dynamics_static
 
 contains
 
+  !> Whether the generalised force has a configuration-dependent part besides the constant
+  !> stiffness of the dynamic modes: loads, gravity or elastic modes.
   logical function has_loads(dyn)
     type(dynamics_t), intent(in) :: dyn
-    has_loads = dyn%load_factor /= 0 .and. (any(dyn%model%force /= 0) .or. &
-                                            any(dyn%model%gravity /= 0))
+    has_loads = dyn%model%n_elastic > 0 .or. (dyn%load_factor /= 0 .and. &
+      (any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0)))
   end function has_loads
 
   !> Load part of the generalised force, DF_dy^T f, at (t, q_dy) with the model locked.
@@ -108,7 +111,7 @@ contains
   !> stable(k) whether that equilibrium is stable (stable_tangent of the last Newton matrix,
   !> taken within the Newton tolerance of it). `progress` is polled once per Newton iteration.
   subroutine static_solve(dyn, t, n_steps, tol, max_iter, q_dy, x_steps, iterations, err, &
-      stable, progress)
+      stable, progress, q_steps)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, tol
     integer, intent(in) :: n_steps, max_iter
@@ -118,6 +121,7 @@ contains
     type(error_t), intent(out) :: err
     logical, intent(out), optional :: stable(:)
     type(progress_t), intent(inout), optional :: progress
+    real(wp), intent(out), optional :: q_steps(:, :)   !< q_dy after each step
     real(wp) :: k(size(q_dy), size(q_dy)), r(size(q_dy)), a(size(q_dy)), v0(size(q_dy))
     real(wp) :: lambda, scale, rcond
     integer :: step, it, info
@@ -130,6 +134,7 @@ contains
     iterations = 0
     if (present(stable)) stable = .true.
     dyn%locked = .true.
+    dyn%ramp_prescribed = .true.
     do step = 1, n_steps
       lambda = real(step, wp) / n_steps
       do it = 1, max_iter
@@ -163,8 +168,10 @@ contains
       call dyn%evaluate(t, q_dy, v0, a, err)
       if (.not. err%ok()) exit
       x_steps(:, step) = dyn%kin%x
+      if (present(q_steps)) q_steps(:, step) = q_dy
     end do
     dyn%locked = .false.
+    dyn%ramp_prescribed = .false.
     dyn%load_factor = 1.0_wp
   end subroutine static_solve
 end module dynamics_static

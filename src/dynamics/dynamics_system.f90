@@ -3,13 +3,16 @@
 !> sigma_dy are the stress resultants of the dynamic modes, sigma = S e + beta S e_dot, with the
 !> mode values taken from q itself (DF_e restricted to the dynamic columns is the identity on
 !> dynamic modes and zero elsewhere, so DF_e^T sigma reduces to sigma_dy).
+!> Elements with an elastic (calculable, stressed) mode instead have e = D(x) evaluated and
+!> their stresses applied as nodal forces -D_x^T sigma, which DF_dy^T projects to
+!> DF_e,dy^T sigma over all their stressed modes (docs/theory.md section 5.3).
 module dynamics_system
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use core_linalg, only: chol_factor, chol_solve
   use model_system, only: model_t, COORD_X, COORD_Y
   use model_kinematics, only: kinematics_t
-  use elements_base, only: MODE_DYNAMIC
+  use elements_base, only: MODE_DYNAMIC, mode_has_stress
   use integrators_system, only: ode2_system_t, system_fd_jacobian
   implicit none
   private
@@ -25,6 +28,12 @@ module dynamics_system
     real(wp), allocatable :: held_rh(:)
     real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last evaluation
     real(wp), allocatable :: gen_force(:)     !< right-hand side of the last evaluation
+    !> Nodal forces of the last evaluation before projection (n_x): loads, weight, inertia
+    !> terms and the stresses of elastic elements; reactions are computed from it.
+    real(wp), allocatable :: nodal_force(:)
+    !> Statics (displacement control): the prescribed coordinates take load_factor times their
+    !> values, so that they are stepped together with the loads.
+    logical :: ramp_prescribed = .false.
     !> Constant loads: nodal forces plus gravity on the lumped masses (consistent masses get
     !> their weight from the elements, as it depends on the configuration).
     real(wp), allocatable :: load(:)
@@ -32,6 +41,9 @@ module dynamics_system
     real(wp), allocatable :: k_dd(:, :)       !< structural stiffness dsigma_dy/dq_dy
     real(wp), allocatable :: d_dd(:, :)       !< structural damping dsigma_dy/dv_dy
     real(wp), allocatable :: k_dr(:, :), d_dr(:, :)  !< the same w.r.t. the prescribed q_rh
+    !> Stiffness and damping DF_e^T S DF_e of the elastic elements at the last evaluation
+    !> (configuration dependent; zero without elastic modes).
+    real(wp), allocatable :: k_el(:, :), d_el(:, :)
     !> Jacobian for implicit integrators: 'linearised' (-Mbar^-1 K0, -Mbar^-1 D0 at the current
     !> state: the stiff structural part, exact enough for Newton) or 'fd' (forward differences).
     character(len=16) :: jacobian_kind = 'linearised'
@@ -52,6 +64,8 @@ module dynamics_system
     procedure :: jacobian => dyn_jacobian
     procedure :: energy => dyn_energy
     procedure :: stresses => dyn_stresses
+    procedure :: structural_stiffness => dyn_structural_stiffness
+    procedure :: elastic_forces => dyn_elastic_forces
     procedure :: allocate_history => dyn_allocate_history
   end type dynamics_t
 
@@ -74,6 +88,9 @@ contains
     if (allocated(this%mbar)) deallocate(this%mbar, this%gen_force)
     this%n_evals = 0
     allocate(this%mbar(model%n_dy, model%n_dy), this%gen_force(model%n_dy))
+    allocate(this%k_el(model%n_dy, model%n_dy), this%d_el(model%n_dy, model%n_dy))
+    this%k_el = 0.0_wp
+    this%d_el = 0.0_wp
     block
       real(wp) :: k_q(model%n_dy, model%n_q), d_q(model%n_dy, model%n_q)
       zero = 0.0_wp
@@ -99,10 +116,10 @@ contains
     real(wp), intent(out) :: p(:), pd(:), pdd(:)
     integer :: i
     do i = 1, this%model%n_rh
-      call this%model%motions(this%model%modes(this%model%q_mode(i))%motion)%eval(t, p(i), &
-        pd(i), pdd(i))
+      call this%model%motions(this%model%q_motion(i))%eval(t, p(i), pd(i), pdd(i))
     end do
     if (allocated(this%held_rh)) p = this%held_rh
+    if (this%ramp_prescribed) p = this%load_factor * p
     if (this%locked .or. allocated(this%held_rh)) then
       pd = 0.0_wp
       pdd = 0.0_wp
@@ -140,6 +157,7 @@ contains
       sigma = 0.0_wp
       do iel = 1, m%n_elements
         nm = m%elements(iel)%e%n_modes()
+        if (m%elastic_element(iel)) cycle
         if (.not. any(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1)%class &
                       == MODE_DYNAMIC)) cycle
         allocate(e(nm), ed(nm), s(nm, nm))
@@ -198,9 +216,57 @@ contains
           deallocate(me, he, fe)
         end associate
       end do
+      if (m%n_elastic > 0) call this%elastic_forces(xd, rhs)
+      this%nodal_force = rhs
       this%gen_force = matmul(rhs, df(:, nr + 1:)) - this%stresses(q, qd)
     end associate
   end subroutine dyn_assemble
+
+  !> Stresses of the elements with elastic modes, from e = D(x) and e_dot = D_x x_dot at the
+  !> last kinematic solution, subtracted from the nodal forces f as -D_x^T sigma; also their
+  !> contribution to the structural stiffness and damping, k_el = DF_e^T S DF_e (the K0 part;
+  !> the geometric part sigma D2F is left to the difference tangent of statics).
+  subroutine dyn_elastic_forces(this, xd, f)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: xd(:)
+    real(wp), intent(inout) :: f(:)
+    real(wp), allocatable :: e(:), de(:, :), s(:, :), sigma(:), dfe(:, :), sdfe(:, :)
+    logical, allocatable :: stressed(:)
+    integer :: iel, nm, nr
+    this%k_el = 0.0_wp
+    this%d_el = 0.0_wp
+    nr = this%model%n_rh
+    associate (m => this%model)
+      do iel = 1, m%n_elements
+        if (.not. m%elastic_element(iel)) cycle
+        associate (el => m%elements(iel)%e)
+          nm = el%n_modes()
+          allocate(e(nm), de(nm, size(el%dofs)), s(nm, nm))
+          call el%evaluate(this%kin%x(el%dofs), e, de)
+          call el%stiffness(s)
+          stressed = mode_has_stress(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1)%class)
+          sigma = matmul(s, e + el%damping * matmul(de, xd(el%dofs)))
+          where (.not. stressed) sigma = 0.0_wp
+          f(el%dofs) = f(el%dofs) - matmul(sigma, de)
+          dfe = matmul(de, this%kin%df(el%dofs, nr + 1:))
+          where (spread(.not. stressed, 2, size(dfe, 2))) dfe = 0.0_wp
+          sdfe = matmul(s, dfe)
+          this%k_el = this%k_el + matmul(transpose(dfe), sdfe)
+          if (el%damping > 0) this%d_el = this%d_el + el%damping * matmul(transpose(dfe), sdfe)
+          deallocate(e, de, s)
+        end associate
+      end do
+    end associate
+  end subroutine dyn_elastic_forces
+
+  !> Structural stiffness and damping on the dynamic coordinates, K0 and D0: the constant
+  !> part of the dynamic modes plus that of the elastic elements at the last evaluation.
+  subroutine dyn_structural_stiffness(this, k0, d0)
+    class(dynamics_t), intent(in) :: this
+    real(wp), intent(out) :: k0(:, :), d0(:, :)
+    k0 = this%k_dd + this%k_el
+    d0 = this%d_dd + this%d_el
+  end subroutine dyn_structural_stiffness
 
   !> Accelerations of the dynamic coordinates; also leaves mbar and gen_force for callers.
   subroutine dyn_evaluate(this, t, q_dy, v_dy, a, err)
@@ -268,7 +334,7 @@ contains
     real(wp), intent(in) :: t, q(:), v(:)
     real(wp), intent(out) :: dadq(:, :), dadv(:, :)
     integer, intent(out) :: status
-    real(wp) :: a(size(q)), chol(size(q), size(q))
+    real(wp) :: a(size(q)), chol(size(q), size(q)), k0(size(q), size(q)), d0(size(q), size(q))
     integer :: j, info
     if (this%jacobian_kind == 'fd') then
       call system_fd_jacobian(this, t, q, v, dadq, dadv, status)
@@ -278,9 +344,10 @@ contains
     if (status /= 0) return
     chol = this%mbar
     call chol_factor(chol, info)
+    call this%structural_stiffness(k0, d0)
     do j = 1, size(q)
-      dadq(:, j) = -this%k_dd(:, j)
-      dadv(:, j) = -this%d_dd(:, j)
+      dadq(:, j) = -k0(:, j)
+      dadv(:, j) = -d0(:, j)
       call chol_solve(chol, dadq(:, j))
       call chol_solve(chol, dadv(:, j))
     end do
@@ -323,7 +390,7 @@ contains
     real(wp) :: en(2)
     real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
     real(wp) :: xd(this%model%n_x), x(this%model%n_x), pot
-    real(wp), allocatable :: me(:, :), he(:), fe(:), e(:), s(:, :)
+    real(wp), allocatable :: me(:, :), he(:), fe(:), e(:), s(:, :), de(:, :)
     integer :: iel, nm
     associate (m => this%model)
       call this%prescribed(t, q(1:m%n_rh), qd(1:m%n_rh), pdd)
@@ -336,11 +403,17 @@ contains
       do iel = 1, m%n_elements
         associate (el => m%elements(iel)%e)
           nm = el%n_modes()
-          allocate(e(nm), s(nm, nm))
-          call m%mode_values(iel, q, e)
+          allocate(e(nm), s(nm, nm), de(nm, size(el%dofs)))
+          if (m%elastic_element(iel)) then
+            call el%evaluate(x(el%dofs), e, de)
+            where (.not. mode_has_stress(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1) &
+                   %class)) e = 0.0_wp
+          else
+            call m%mode_values(iel, q, e)
+          end if
           call el%stiffness(s)
           en(2) = en(2) + 0.5_wp * dot_product(e, matmul(s, e))
-          deallocate(e, s)
+          deallocate(e, s, de)
           if (.not. el%has_inertia()) cycle
           allocate(me(size(el%dofs), size(el%dofs)), he(size(el%dofs)), fe(size(el%dofs)))
           call el%inertia(x(el%dofs), xd(el%dofs), me, he)

@@ -2,18 +2,23 @@
 !> first derivatives, second directional derivatives, stiffness and (optionally) inertia.
 !>
 !> Elements see only their own coordinates x_e (gathered by the model through `dofs`); every
-!> mode carries a class (rigid, released, prescribed, dynamic) chosen per mode by the user.
+!> mode carries a class (rigid, released, prescribed, dynamic, elastic) chosen per mode by the
+!> user.
 module elements_base
   use core_kinds, only: wp
   implicit none
   private
   public :: element_t, element_slot_t
-  public :: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC, mode_class_name
+  public :: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC, MODE_ELASTIC
+  public :: mode_class_name, mode_has_stress
 
   integer, parameter :: MODE_RIGID = 1      !< e = 0
   integer, parameter :: MODE_RELEASED = 2   !< free, no stiffness, follows from the others
   integer, parameter :: MODE_PRESCRIBED = 3 !< e = e(t), a driven input
   integer, parameter :: MODE_DYNAMIC = 4    !< a degree of freedom with stiffness
+  !> Calculable like a released mode (it follows from the others, e = D(x)) but with its
+  !> stiffness and damping: how statically indeterminate structures are closed.
+  integer, parameter :: MODE_ELASTIC = 5
 
   type, abstract :: element_t
     character(len=:), allocatable :: label
@@ -112,7 +117,15 @@ contains
     case (MODE_RELEASED); name = 'released'
     case (MODE_PRESCRIBED); name = 'prescribed'
     case (MODE_DYNAMIC); name = 'dynamic'
+    case (MODE_ELASTIC); name = 'elastic'
     case default; name = 'unknown'
     end select
   end function mode_class_name
+
+  !> Whether a mode of class c carries a stress S e (+ damping) into the equations: rigid and
+  !> prescribed modes carry reactions instead, released ones nothing.
+  elemental logical function mode_has_stress(c)
+    integer, intent(in) :: c
+    mode_has_stress = c == MODE_DYNAMIC .or. c == MODE_ELASTIC
+  end function mode_has_stress
 end module elements_base

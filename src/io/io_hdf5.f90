@@ -60,6 +60,8 @@ module io_hdf5
     procedure :: write_real_1d => h5w_write_real_1d
     !> `write_real_2d(name, data(:,:), err [, units])`: Fortran (ncol, nrow) reads as (nrow, ncol).
     procedure :: write_real_2d => h5w_write_real_2d
+    !> `write_real_3d(name, data(:,:,:), err [, units])`: Fortran (a, b, c) reads as (c, b, a).
+    procedure :: write_real_3d => h5w_write_real_3d
     procedure, private :: h5w_write_int_1d, h5w_write_int_1d_i8
     !> `write_int_1d(name, data(:), err [, units])`, data default integer or integer(i8).
     generic :: write_int_1d => h5w_write_int_1d, h5w_write_int_1d_i8
@@ -156,6 +158,21 @@ contains
     call write_dataset(this, name, shape(data, kind=hsize_t), &
                        h5kind_to_type(wp, H5_REAL_KIND), H5T_IEEE_F64LE, p, err, units)
   end subroutine h5w_write_real_2d
+
+  subroutine h5w_write_real_3d(this, name, data, err, units)
+    class(h5_writer_t), intent(inout) :: this
+    character(len=*), intent(in) :: name
+    real(wp), intent(in) :: data(:, :, :)
+    type(error_t), intent(out) :: err
+    character(len=*), intent(in), optional :: units
+    real(wp), allocatable, target :: buf(:, :, :)
+    type(c_ptr) :: p
+    allocate(buf, source=data)
+    p = c_null_ptr
+    if (size(buf) > 0) p = c_loc(buf)
+    call write_dataset(this, name, shape(data, kind=hsize_t), &
+                       h5kind_to_type(wp, H5_REAL_KIND), H5T_IEEE_F64LE, p, err, units)
+  end subroutine h5w_write_real_3d
 
   !> Write a rank-1 default-integer dataset (stored as 32-bit integers).
   subroutine h5w_write_int_1d(this, name, data, err, units)

@@ -7,17 +7,18 @@ module io_scene
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
   use io_namelist, only: nml_file_t, nml_group_t, string_t
+  use core_strings, only: lower_case, int_str
   use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
-    mass_rec_t, force_rec_t, motion_rec_t
+    mass_rec_t, force_rec_t, motion_rec_t, label_t, slider_rec_t
   use motion_law, only: law_from_name, table_problem
   use io_table, only: read_table_csv, relative_to
   implicit none
   private
   public :: read_scene, load_scene, SCENE_GROUPS
 
-  character(len=9), parameter :: SCENE_GROUPS(14) = [character(len=9) :: 'scene', 'node', &
+  character(len=9), parameter :: SCENE_GROUPS(15) = [character(len=9) :: 'scene', 'node', &
     'link', 'hinge', 'truss', 'mass', 'force', 'motion', 'static', 'modal', 'buckling', &
-    'dynamic', 'reduction', 'output']
+    'dynamic', 'reduction', 'output', 'slider']
 
 contains
 
@@ -54,7 +55,7 @@ contains
     allocate(scene%nodes(file%count('node')), scene%links(file%count('link')))
     allocate(scene%hinges(file%count('hinge')), scene%trusses(file%count('truss')))
     allocate(scene%masses(file%count('mass')), scene%forces(file%count('force')))
-    allocate(scene%motions(file%count('motion')))
+    allocate(scene%motions(file%count('motion')), scene%sliders(file%count('slider')))
     do i = 1, size(file%groups)
       associate (g => file%groups(i))
         select case (g%name)
@@ -63,6 +64,7 @@ contains
         case ('link'); call read_link(g, scene%links(g%occurrence), err)
         case ('hinge'); call read_hinge(g, scene%hinges(g%occurrence), err)
         case ('truss'); call read_truss(g, scene%trusses(g%occurrence), err)
+        case ('slider'); call read_slider(g, scene%sliders(g%occurrence), err)
         case ('mass'); call read_mass(g, scene%masses(g%occurrence), err)
         case ('force'); call read_force(g, scene%forces(g%occurrence), err)
         case ('motion'); call read_motion(g, scene%motions(g%occurrence), err)
@@ -84,6 +86,10 @@ contains
       end do
     end if
     if (.not. allocated(scene%title)) scene%title = ''
+    if (.not. allocated(scene%compliance_nodes)) allocate(scene%compliance_nodes(0))
+    if (size(scene%compliance_nodes) > 0 .and. .not. scene%static%active) call err%set( &
+      ERR_INPUT, file%path // ': group &output: variable ''compliance_nodes'' needs a ' // &
+      '&static group (the compliance is computed at its equilibria)')
     if (scene%reduction%active .and. .not. scene%dynamic%active) call err%set(ERR_INPUT, &
       file%path // ': group &reduction needs a &dynamic group (it reduces the dynamic analysis)')
   end subroutine read_scene
@@ -135,19 +141,49 @@ contains
     character(len=*), intent(in), optional :: default
     logical, intent(in), optional :: lower
     type(error_t) :: e
-    integer :: i
     if (.not. err%ok()) return
     call g%get_string(var, value, e, default)
     if (.not. e%ok()) then
       err = e
       return
     end if
-    if (present(lower)) then
-      do i = 1, len(value)
-        if (value(i:i) >= 'A' .and. value(i:i) <= 'Z') value(i:i) = achar(iachar(value(i:i)) + 32)
-      end do
-    end if
+    if (present(lower)) value = lower_case(value)
   end subroutine rd_string
+
+  !> Mode classes of a link: one keyword for every element, one per element (n of them) or,
+  !> for bending, one per bending mode (2 n: each element's `from` side, then its `to` side).
+  subroutine rd_classes(g, var, n, classes, err, default)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: var, default
+    integer, intent(in) :: n
+    type(label_t), allocatable, intent(out) :: classes(:)
+    type(error_t), intent(inout) :: err
+    type(string_t), allocatable :: values(:)
+    type(string_t) :: fallback(1)
+    type(error_t) :: e
+    integer :: i
+    allocate(classes(0))
+    if (.not. err%ok()) return
+    fallback(1)%s = default
+    call g%get_string_array(var, values, e, default=fallback)
+    if (.not. e%ok()) then
+      err = e
+      return
+    end if
+    if (size(values) /= 1 .and. size(values) /= n .and. &
+        .not. (var == 'bending' .and. size(values) == 2 * n)) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''' needs 1 value (all ' // &
+        'elements) or one per element (n_elements = ' // int_str(n) // ')' // &
+        trim(merge(' or one per bending mode (2 n_elements)', '                                       ', &
+        var == 'bending')) // ', got ' // int_str(size(values)))
+      return
+    end if
+    deallocate(classes)
+    allocate(classes(size(values)))
+    do i = 1, size(values)
+      classes(i)%s = lower_case(values(i)%s)
+    end do
+  end subroutine rd_classes
 
   !> A label names a node, link, ... in references and in the result file's paths: it must be
   !> non-empty and must not contain '/' (an HDF5 path separator) or leading/trailing blanks.
@@ -233,7 +269,51 @@ contains
     call rd_logical(g, 'fix_x', n%fix_x, err, default=fixed)
     call rd_logical(g, 'fix_y', n%fix_y, err, default=fixed)
     call rd_logical(g, 'fix_phi', n%fix_phi, err, default=fixed)
+    call read_node_inputs(g, n, err)
   end subroutine read_node
+
+  !> Coordinates of a node that are inputs: `dynamic = 'x', 'phi'` makes them degrees of
+  !> freedom, `motion_x = 'label'` (and _y, _phi) prescribes them. A coordinate that is fixed
+  !> cannot be either, nor both.
+  subroutine read_node_inputs(g, n, err)
+    type(nml_group_t), intent(inout) :: g
+    type(node_rec_t), intent(inout) :: n
+    type(error_t), intent(inout) :: err
+    character(len=3), parameter :: names(3) = ['x  ', 'y  ', 'phi']
+    type(string_t), allocatable :: dyn(:), none(:)
+    type(error_t) :: e
+    logical :: fixed(3)
+    integer :: i, k
+    if (.not. err%ok()) return
+    allocate(none(0))
+    call g%get_string_array('dynamic', dyn, e, default=none)
+    if (.not. e%ok()) then
+      err = e
+      return
+    end if
+    do i = 1, size(dyn)
+      k = findloc(names, lower_case(dyn(i)%s), 1)
+      if (k == 0) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''dynamic'': ''' // dyn(i)%s // &
+          ''' is not a coordinate (x, y or phi)')
+        return
+      end if
+      n%dynamic(k) = .true.
+    end do
+    fixed = [n%fix_x, n%fix_y, n%fix_phi]
+    do k = 1, 3
+      call rd_string(g, 'motion_' // trim(names(k)), n%motion(k)%s, err, default='')
+      if (.not. err%ok()) return
+      if (fixed(k) .and. (n%dynamic(k) .or. len(n%motion(k)%s) > 0)) then
+        call err%set(ERR_INPUT, g%where() // ': coordinate ' // trim(names(k)) // ' is fixed ' // &
+          'and cannot also be dynamic or prescribed (set fix_' // trim(names(k)) // ' = .false.)')
+      else if (n%dynamic(k) .and. len(n%motion(k)%s) > 0) then
+        call err%set(ERR_INPUT, g%where() // ': coordinate ' // trim(names(k)) // ' is both ' // &
+          'dynamic and prescribed (motion_' // trim(names(k)) // ')')
+      end if
+      if (.not. err%ok()) return
+    end do
+  end subroutine read_node_inputs
 
   subroutine read_link(g, r, err)
     type(nml_group_t), intent(inout) :: g
@@ -249,8 +329,8 @@ contains
     call rd_real(g, 'rho', r%density, err)
     call rd_real(g, 'G', r%shear_modulus, err, default=0.0_wp)
     call rd_real(g, 'shear_factor', r%shear_factor, err, default=5.0_wp / 6.0_wp)
-    call rd_string(g, 'elongation', r%elongation, err, default='rigid', lower=.true.)
-    call rd_string(g, 'bending', r%bending, err, default='dynamic', lower=.true.)
+    call rd_classes(g, 'elongation', r%n_elements, r%elongation, err, default='rigid')
+    call rd_classes(g, 'bending', r%n_elements, r%bending, err, default='dynamic')
     call rd_string(g, 'bending_form', r%bending_form, err, default='angle', lower=.true.)
     call rd_string(g, 'mass', r%mass, err, default='consistent', lower=.true.)
     call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
@@ -274,12 +354,12 @@ contains
     call rd_string(g, 'link', r%link, err)
     call rd_string(g, 'mode', r%mode, err, default='dynamic', lower=.true.)
     if (err%ok() .and. all(r%mode /= [character(len=10) :: 'rigid', 'released', 'prescribed', &
-        'dynamic'])) call err%set(ERR_INPUT, g%where() // ': variable ''mode'': ''' // r%mode &
-        // ''' is not rigid, released, prescribed or dynamic')
+        'dynamic', 'elastic'])) call err%set(ERR_INPUT, g%where() // ': variable ''mode'': ''' &
+        // r%mode // ''' is not rigid, released, prescribed, dynamic or elastic')
     if (err%ok()) then
       call only_with(g, ['motion'], r%mode == 'prescribed', 'with mode = ''prescribed''', err)
-      call only_with(g, ['stiffness', 'damping  '], r%mode == 'dynamic', &
-        'with mode = ''dynamic''', err)
+      call only_with(g, ['stiffness', 'damping  '], r%mode == 'dynamic' .or. &
+        r%mode == 'elastic', 'with mode = ''dynamic'' or ''elastic''', err)
     end if
     call rd_string(g, 'motion', r%motion, err, default='')
     call rd_real(g, 'stiffness', r%stiffness, err, default=0.0_wp)
@@ -310,6 +390,39 @@ contains
     call positive(g, 'rho', r%density, err, zero_ok=.true.)
     call positive(g, 'damping', r%damping, err, zero_ok=.true.)
   end subroutine read_truss
+
+  !> A slider; the node and the guide's length are checked by model_build (add_sliders).
+  subroutine read_slider(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(slider_rec_t), intent(out) :: r
+    type(error_t), intent(inout) :: err
+    real(wp), allocatable :: direction(:)
+    type(error_t) :: e
+    call rd_label(g, r%label, err)
+    call rd_string(g, 'node', r%node, err)
+    call rd_string(g, 'mode', r%mode, err, default='rigid', lower=.true.)
+    if (err%ok() .and. all(r%mode /= [character(len=8) :: 'rigid', 'released', 'dynamic', &
+        'elastic'])) call err%set(ERR_INPUT, g%where() // ': variable ''mode'': ''' // r%mode &
+        // ''' is not rigid, released, dynamic or elastic')
+    call only_with(g, ['stiffness', 'damping  '], r%mode == 'dynamic' .or. r%mode == 'elastic', &
+      'with mode = ''dynamic'' or ''elastic''', err)
+    call rd_real(g, 'stiffness', r%stiffness, err, default=0.0_wp)
+    call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
+    call positive(g, 'stiffness', r%stiffness, err, zero_ok=.true.)
+    call positive(g, 'damping', r%damping, err, zero_ok=.true.)
+    if (.not. err%ok()) return
+    call g%get_real_array('direction', direction, e)
+    if (.not. e%ok()) then
+      err = e
+    else if (size(direction) /= 2) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''direction'' needs 2 values (dx, dy)')
+    else if (norm2(direction) == 0) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''direction'' is the zero vector: ' // &
+        'give the guide''s direction (dx, dy), e.g. 1, 0 for a guide along x')
+    else
+      r%direction = direction
+    end if
+  end subroutine read_slider
 
   subroutine read_mass(g, r, err)
     type(nml_group_t), intent(inout) :: g
@@ -586,18 +699,30 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(scene_t), intent(inout) :: scene
     type(error_t), intent(inout) :: err
-    type(string_t), allocatable :: labels(:)
+    type(string_t), allocatable :: labels(:), none(:)
     type(error_t) :: e
     integer :: i
     if (.not. err%ok()) return
-    call g%get_string_array('nodes', labels, e)
+    if (g%has('nodes')) then
+      call g%get_string_array('nodes', labels, e)
+      if (.not. e%ok()) then
+        err = e
+        return
+      end if
+      allocate(scene%output_nodes(size(labels)))
+      do i = 1, size(labels)
+        scene%output_nodes(i)%s = labels(i)%s
+      end do
+    end if
+    allocate(none(0))
+    call g%get_string_array('compliance_nodes', labels, e, default=none)
     if (.not. e%ok()) then
       err = e
       return
     end if
-    allocate(scene%output_nodes(size(labels)))
+    allocate(scene%compliance_nodes(size(labels)))
     do i = 1, size(labels)
-      scene%output_nodes(i)%s = labels(i)%s
+      scene%compliance_nodes(i)%s = labels(i)%s
     end do
   end subroutine read_output
 end module io_scene

@@ -6,14 +6,16 @@ module model_build
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT, ERR_MODEL
   use core_strings, only: int_str, approx_str
-  use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC
+  use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC, &
+    MODE_ELASTIC
   use elements_beam, only: beam_t, BENDING_ANGLE, BENDING_SINE
   use elements_hinge, only: hinge_t
   use elements_truss, only: truss_t
+  use elements_slider, only: slider_t
   use motion_law, only: motion_t, law_from_name, motion_sum, motion_table, table_problem, &
     LAW_CONSTANT, LAW_RAMP, LAW_HARMONIC, LAW_SUM, LAW_TABLE, BANDWIDTH_UNBOUNDED
   use model_system, only: model_t, COORD_X, COORD_Y, COORD_PHI
-  use model_scene, only: scene_t, link_rec_t
+  use model_scene, only: scene_t, link_rec_t, label_t, node_rec_t
   implicit none
   private
   public :: build_model, mode_class_from_name, unused_motions, MAX_COORDINATES
@@ -40,6 +42,7 @@ contains
     case ('released'); c = MODE_RELEASED
     case ('prescribed'); c = MODE_PRESCRIBED
     case ('dynamic'); c = MODE_DYNAMIC
+    case ('elastic'); c = MODE_ELASTIC
     case default; c = 0
     end select
   end function mode_class_from_name
@@ -59,7 +62,9 @@ contains
     call add_links(scene, model, b, err); if (.not. err%ok()) return
     call add_hinges(scene, model, b, err); if (.not. err%ok()) return
     call add_trusses(scene, model, b, err); if (.not. err%ok()) return
+    call add_sliders(scene, model, b, err); if (.not. err%ok()) return
     call add_masses_and_loads(scene, model, b, err); if (.not. err%ok()) return
+    call add_node_inputs(scene, model, b, err); if (.not. err%ok()) return
     call check_connected(model, err); if (.not. err%ok()) return
     do i = 1, size(scene%nodes)
       call model%add_node_label(scene%nodes(i)%label, [b%node_xy(i), b%node_xy(i) + 1, &
@@ -78,6 +83,10 @@ contains
     integer :: i, h, k, j
     do i = 1, size(scene%motions)
       used(i) = any([(scene%hinges(h)%motion == scene%motions(i)%label, h = 1, size(scene%hinges))])
+      do h = 1, size(scene%nodes)
+        used(i) = used(i) .or. any([(node_motion(scene%nodes(h), k) == scene%motions(i)%label, &
+          k = 1, 3)])
+      end do
     end do
     grew = .true.
     do while (grew)
@@ -394,6 +403,8 @@ contains
           beam%l0 = norm2(xb - xa) / r%n_elements
           beam%alpha0 = atan2(xb(2) - xa(2), xb(1) - xa(1))
           beam%phi0 = model%x0([p(3), q(3)])
+          beam%mode_class = [class_of(r%elongation, r%n_elements, k, 1), &
+            class_of(r%bending, r%n_elements, k, 1), class_of(r%bending, r%n_elements, k, 2)]
           if (r%shear_modulus > 0) beam%shear_p = 12 * beam%ei / (r%shear_factor * &
             r%shear_modulus * r%area * beam%l0**2)
           idx = model%add_element(beam, [0, 0, 0])
@@ -409,7 +420,6 @@ contains
     character(len=*), intent(in) :: where
     type(beam_t), intent(out) :: beam
     type(error_t), intent(inout) :: err
-    integer :: c_el, c_bend
     call require_positive(r%e_modulus, where, 'E', err)
     call require_positive(r%area, where, 'A', err)
     call require_positive(r%inertia, where, 'I', err)
@@ -419,16 +429,8 @@ contains
     if (r%damping < 0) call err%set(ERR_INPUT, where // ': variable ''damping'' must not be negative')
     if (r%shear_modulus < 0) call err%set(ERR_INPUT, where // ': variable ''G'' must not be negative')
     if (.not. err%ok()) return
-    c_el = mode_class_from_name(r%elongation)
-    c_bend = mode_class_from_name(r%bending)
-    if (c_el == 0 .or. c_el == MODE_PRESCRIBED) then
-      call err%set(ERR_INPUT, where // ': variable ''elongation'': ''' // r%elongation // &
-        ''' is not rigid, released or dynamic')
-    else if (c_bend == 0 .or. c_bend == MODE_PRESCRIBED) then
-      call err%set(ERR_INPUT, where // ': variable ''bending'': ''' // r%bending // &
-        ''' is not rigid, released or dynamic')
-    end if
-    beam%mode_class = [c_el, c_bend, c_bend]
+    call check_classes(r%elongation, r%n_elements, where, 'elongation', err)
+    call check_classes(r%bending, r%n_elements, where, 'bending', err)
     beam%ea = r%e_modulus * r%area
     beam%ei = r%e_modulus * r%inertia
     beam%rho_a = r%density * r%area
@@ -450,6 +452,43 @@ contains
     beam%shear_p = 0.0_wp
   end subroutine link_beam
 
+  !> A link's mode classes: 1 or n_elements keywords, each rigid, released, dynamic or
+  !> elastic (a beam mode cannot be driven).
+  subroutine check_classes(classes, n, where, var, err)
+    type(label_t), intent(in) :: classes(:)
+    integer, intent(in) :: n
+    character(len=*), intent(in) :: where, var
+    type(error_t), intent(inout) :: err
+    integer :: k, c
+    if (.not. err%ok()) return
+    if (size(classes) /= 1 .and. size(classes) /= n .and. &
+        .not. (var == 'bending' .and. size(classes) == 2 * n)) then
+      call err%set(ERR_INPUT, where // ': variable ''' // var // ''' needs 1 value or one ' // &
+        'per element')
+      return
+    end if
+    do k = 1, size(classes)
+      c = mode_class_from_name(classes(k)%s)
+      if (c == 0 .or. c == MODE_PRESCRIBED) then
+        call err%set(ERR_INPUT, where // ': variable ''' // var // ''': ''' // classes(k)%s // &
+          ''' is not rigid, released, dynamic or elastic')
+        return
+      end if
+    end do
+  end subroutine check_classes
+
+  !> Class of mode j (1 or 2: a bending pair's side) of element k of n from a list of 1, n or
+  !> 2 n class keywords (checked by check_classes).
+  integer function class_of(classes, n, k, j)
+    type(label_t), intent(in) :: classes(:)
+    integer, intent(in) :: n, k, j
+    integer :: i
+    i = 1
+    if (size(classes) == n) i = k
+    if (size(classes) == 2 * n) i = 2 * (k - 1) + j
+    class_of = mode_class_from_name(classes(i)%s)
+  end function class_of
+
   subroutine add_hinges(scene, model, b, err)
     type(scene_t), intent(in) :: scene
     type(model_t), intent(inout) :: model
@@ -463,7 +502,7 @@ contains
         c = mode_class_from_name(r%mode)
         if (c == 0) then
           call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
-            ''' is not rigid, released, prescribed or dynamic')
+            ''' is not rigid, released, prescribed, dynamic or elastic')
           return
         end if
         im = 0
@@ -481,9 +520,10 @@ contains
         end if
         ! Damping is stiffness-proportional (sigma = k (e + damping e_dot)): on a free hinge
         ! it would silently do nothing.
-        if (r%damping > 0 .and. (r%stiffness == 0 .or. c /= MODE_DYNAMIC)) then
+        if (r%damping > 0 .and. (r%stiffness == 0 .or. (c /= MODE_DYNAMIC .and. &
+            c /= MODE_ELASTIC))) then
           call err%set(ERR_INPUT, where // ': variable ''damping'' (a time constant, ' // &
-            'sigma = k (e + damping de/dt)) needs a dynamic hinge with stiffness > 0')
+            'sigma = k (e + damping de/dt)) needs a dynamic or elastic hinge with stiffness > 0')
           return
         end if
         hinge%label = r%label
@@ -514,7 +554,7 @@ contains
         c = mode_class_from_name(r%mode)
         if (c == 0 .or. c == MODE_PRESCRIBED) then
           call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
-            ''' is not rigid, released or dynamic')
+            ''' is not rigid, released, dynamic or elastic')
           return
         end if
         truss%label = r%label
@@ -534,6 +574,51 @@ contains
       end associate
     end do
   end subroutine add_trusses
+
+  !> Sliders, after the trusses (element order: docs/input.md). A scene made by a program may
+  !> leave `sliders` unallocated: no sliders.
+  subroutine add_sliders(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(in) :: b
+    type(error_t), intent(inout) :: err
+    type(slider_t) :: slider
+    integer :: i, in, idx, c
+    if (.not. allocated(scene%sliders)) return
+    do i = 1, size(scene%sliders)
+      associate (r => scene%sliders(i), where => 'group &slider ''' // scene%sliders(i)%label // '''')
+        call require_node(scene, r%node, where, 'node', in, err)
+        if (.not. err%ok()) return
+        c = mode_class_from_name(r%mode)
+        if (c == 0 .or. c == MODE_PRESCRIBED) then
+          call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
+            ''' is not rigid, released, dynamic or elastic')
+        else if (norm2(r%direction) == 0) then
+          call err%set(ERR_INPUT, where // ': variable ''direction'' is the zero vector')
+        else if (r%stiffness < 0 .or. r%damping < 0) then
+          call err%set(ERR_INPUT, where // ': stiffness and damping must not be negative')
+        else if ((r%stiffness > 0 .or. r%damping > 0) .and. c /= MODE_DYNAMIC .and. &
+            c /= MODE_ELASTIC) then
+          call err%set(ERR_INPUT, where // ': variable ''stiffness'' and ''damping'' apply ' // &
+            'only with mode = ''dynamic'' or ''elastic''')
+        else if (r%damping > 0 .and. r%stiffness == 0) then
+          ! Stiffness-proportional damping (sigma = k (e + damping de/dt)) of a guide without
+          ! a spring would silently do nothing.
+          call err%set(ERR_INPUT, where // ': variable ''damping'' (a time constant, ' // &
+            'sigma = k (e + damping de/dt)) needs stiffness > 0')
+        end if
+        if (.not. err%ok()) return
+        slider%label = r%label
+        slider%dofs = [b%node_xy(in), b%node_xy(in) + 1]
+        slider%x_ref = model%x0(slider%dofs)
+        call slider%set_direction(r%direction)
+        slider%mode_class = [c]
+        slider%k = r%stiffness
+        slider%damping = r%damping
+        idx = model%add_element(slider, [0])
+      end associate
+    end do
+  end subroutine add_sliders
 
   subroutine add_masses_and_loads(scene, model, b, err)
     type(scene_t), intent(in) :: scene
@@ -589,13 +674,59 @@ contains
     model%newton_tol = 1.0e-11_wp * max(1.0e-3_wp, maxval(abs(model%x0)))
   end subroutine add_masses_and_loads
 
+  !> Label of the motion prescribing coordinate k (x, y, phi) of a node, '' if none.
+  pure function node_motion(n, k) result(label)
+    type(node_rec_t), intent(in) :: n
+    integer, intent(in) :: k
+    character(len=:), allocatable :: label
+    label = ''
+    if (allocated(n%motion(k)%s)) label = n%motion(k)%s
+  end function node_motion
+
+  !> Nodal coordinates that are inputs (`dynamic`, `motion_*` of &node). A rotation exists
+  !> only when an element uses it, so this runs after all elements are added.
+  subroutine add_node_inputs(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(in) :: b
+    type(error_t), intent(inout) :: err
+    character(len=3), parameter :: names(3) = ['x  ', 'y  ', 'phi']
+    integer :: i, k, idx, im
+    do i = 1, size(scene%nodes)
+      associate (n => scene%nodes(i), where => 'group &node ''' // scene%nodes(i)%label // '''')
+        do k = 1, 3
+          if (.not. n%dynamic(k) .and. len(node_motion(n, k)) == 0) cycle
+          idx = b%node_xy(i) + k - 1
+          if (k == 3) idx = b%node_rot(i)
+          if (idx == 0) then
+            call err%set(ERR_INPUT, where // ': coordinate phi is dynamic or prescribed but ' // &
+              'the node has no rotation (no link end without a hinge and no hinge there)')
+            return
+          end if
+          if (n%dynamic(k)) then
+            call model%set_coord_input(idx, MODE_DYNAMIC, 0)
+            cycle
+          end if
+          im = motion_index(scene, node_motion(n, k))
+          if (im == 0) then
+            call err%set(ERR_INPUT, where // ': variable ''motion_' // trim(names(k)) // &
+              ''': motion ''' // node_motion(n, k) // ''' is not defined (no &motion with ' // &
+              'that label)')
+            return
+          end if
+          call model%set_coord_input(idx, MODE_PRESCRIBED, im)
+        end do
+      end associate
+    end do
+  end subroutine add_node_inputs
+
   !> A free coordinate that no element uses cannot be solved for.
   subroutine check_connected(model, err)
     type(model_t), intent(in) :: model
     type(error_t), intent(inout) :: err
     logical :: used(model%n_x)
     integer :: i
-    used = model%fixed
+    used = model%fixed .or. model%coord_input /= 0
     do i = 1, model%n_elements
       used(model%elements(i)%e%dofs) = .true.
     end do

@@ -18,6 +18,8 @@ module model_kinematics
     real(wp), allocatable :: x(:)        !< nodal coordinates at the last solution
     real(wp), allocatable :: q(:)        !< generalised coordinates of that solution
     real(wp), allocatable :: lu(:, :)    !< LU factors of the kinematic Jacobian at x
+    !> d(residual)/d(q) through the nodal coordinates that are inputs, at x (n_c, n_q)
+    real(wp), allocatable :: jac_in(:, :)
     integer, allocatable :: ipiv(:)
     real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q); rows of fixed coordinates are 0
     logical :: has_df = .false.
@@ -35,9 +37,11 @@ contains
   subroutine kin_init(this, model)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
-    if (allocated(this%q)) deallocate(this%q, this%lu, this%ipiv, this%df)
+    if (allocated(this%q)) deallocate(this%q, this%lu, this%ipiv, this%df, this%jac_in)
     this%x = model%x0
     allocate(this%q(model%n_q), this%lu(model%n_c, model%n_c), this%ipiv(model%n_c))
+    allocate(this%jac_in(model%n_c, model%n_q))
+    this%jac_in = 0.0_wp
     allocate(this%df(model%n_x, model%n_q))
     this%q = 0.0_wp
     this%df = 0.0_wp
@@ -45,17 +49,18 @@ contains
   end subroutine kin_init
 
   !> Residual r (n_c) of the kinematic equations at this%x and, if asked, their Jacobian with
-  !> respect to the calculable coordinates.
-  subroutine kin_residual(this, model, q, r, jac)
+  !> respect to the calculable coordinates and (jac_in) to q through the input coordinates.
+  subroutine kin_residual(this, model, q, r, jac, jac_in)
     class(kinematics_t), intent(in) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: q(:)
     real(wp), intent(out) :: r(:)
-    real(wp), intent(out), optional :: jac(:, :)
+    real(wp), intent(out), optional :: jac(:, :), jac_in(:, :)
     real(wp), allocatable :: e(:), de(:, :)
     integer :: iel, j, k, row, col, nm
     r = 0.0_wp
     if (present(jac)) jac = 0.0_wp
+    if (present(jac_in)) jac_in = 0.0_wp
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
         nm = el%n_modes()
@@ -70,6 +75,9 @@ contains
           do k = 1, size(el%dofs)
             col = model%calc_index(el%dofs(k))
             if (col > 0) jac(row, col) = jac(row, col) + de(j, k)
+            if (.not. present(jac_in)) cycle
+            col = model%input_q(el%dofs(k))
+            if (col > 0) jac_in(row, col) = jac_in(row, col) + de(j, k)
           end do
         end do
         deallocate(e, de)
@@ -91,10 +99,13 @@ contains
     character(len=200) :: msg
     this%n_solves = this%n_solves + 1
     if (this%has_df) this%x = this%x + matmul(this%df, q - this%q)
+    do it = 1, model%n_q
+      if (model%q_coord(it) > 0) this%x(model%q_coord(it)) = model%x0(model%q_coord(it)) + q(it)
+    end do
     x_start = this%x
     rprev = huge(1.0_wp)
     do it = 1, MAX_NEWTON
-      call this%residual(model, q, r, this%lu)
+      call this%residual(model, q, r, this%lu, this%jac_in)
       rmax = 0.0_wp
       if (model%n_c > 0) rmax = maxval(abs(r))
       if (rmax /= rmax) exit
@@ -102,7 +113,8 @@ contains
       if (info /= 0 .or. rcond < SINGULAR_PIVOT) then
         call err%set(ERR_MODEL, 'the kinematic Jacobian is singular: coordinate ' // &
           trim(model%coord_name(model%calc_coord(worst))) // ' is not determined by ' // &
-          'the rigid, prescribed and dynamic modes (check the mode classes and supports)')
+          'the rigid, prescribed and dynamic modes (check the mode classes and supports; ' // &
+          'elastic and released modes follow from the others and determine nothing)')
         this%x = x_start
         return
       end if
@@ -129,14 +141,17 @@ contains
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     real(wp) :: b(model%n_c, model%n_q)
-    integer :: row
-    b = 0.0_wp
+    integer :: row, iq
+    b = -this%jac_in
     do row = 1, model%n_c
       if (model%row_q(row) > 0) b(row, model%row_q(row)) = 1.0_wp
     end do
     call lu_solve(this%lu, this%ipiv, b)
     this%df = 0.0_wp
     this%df(model%calc_coord, :) = b
+    do iq = 1, model%n_q
+      if (model%q_coord(iq) > 0) this%df(model%q_coord(iq), iq) = 1.0_wp
+    end do
     this%has_df = .true.
   end subroutine kin_transfer
 

@@ -7,7 +7,7 @@ module model_scene
   private
   public :: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
     force_rec_t, motion_rec_t, static_rec_t, modal_rec_t, dynamic_rec_t, reduction_rec_t, label_t, &
-    buckling_rec_t
+    buckling_rec_t, slider_rec_t
 
   type :: label_t
     character(len=:), allocatable :: s
@@ -17,6 +17,11 @@ module model_scene
     character(len=:), allocatable :: label
     real(wp) :: x = 0.0_wp, y = 0.0_wp
     logical :: fix_x = .false., fix_y = .false., fix_phi = .false.
+    !> Coordinates that are inputs themselves: degrees of freedom (x, y, phi) ...
+    logical :: dynamic(3) = .false.
+    !> ... or prescribed by the motion of that label (not allocated or '': not prescribed),
+    !> x = x0 + p(t).
+    type(label_t) :: motion(3)
   end type node_rec_t
 
   !> A straight link from node `from` to node `to`, meshed into n_elements beams.
@@ -26,7 +31,8 @@ module model_scene
     real(wp) :: e_modulus = 0.0_wp, area = 0.0_wp, inertia = 0.0_wp, density = 0.0_wp
     real(wp) :: shear_modulus = 0.0_wp    !< > 0 makes the beams shear-flexible (Timoshenko)
     real(wp) :: shear_factor = 5.0_wp / 6.0_wp
-    character(len=:), allocatable :: elongation, bending   !< mode classes
+    !> Mode classes: one value for every element, or one per element.
+    type(label_t), allocatable :: elongation(:), bending(:)
     character(len=:), allocatable :: bending_form          !< 'angle' or 'sine'
     character(len=:), allocatable :: mass                  !< 'consistent' or 'lumped'
     real(wp) :: damping = 0.0_wp                           !< stiffness-proportional [s]
@@ -42,6 +48,13 @@ module model_scene
     character(len=:), allocatable :: label, from, to, mode, mass
     real(wp) :: e_modulus = 0.0_wp, area = 0.0_wp, density = 0.0_wp, damping = 0.0_wp
   end type truss_rec_t
+
+  !> A slider: `node` moves along the line through its reference position along `direction`.
+  type :: slider_rec_t
+    character(len=:), allocatable :: label, node, mode
+    real(wp) :: direction(2) = 0.0_wp
+    real(wp) :: stiffness = 0.0_wp, damping = 0.0_wp
+  end type slider_rec_t
 
   type :: mass_rec_t
     character(len=:), allocatable :: node
@@ -114,6 +127,7 @@ module model_scene
     type(link_rec_t), allocatable :: links(:)
     type(hinge_rec_t), allocatable :: hinges(:)
     type(truss_rec_t), allocatable :: trusses(:)
+    type(slider_rec_t), allocatable :: sliders(:)
     type(mass_rec_t), allocatable :: masses(:)
     type(force_rec_t), allocatable :: forces(:)
     type(motion_rec_t), allocatable :: motions(:)
@@ -123,5 +137,7 @@ module model_scene
     type(dynamic_rec_t) :: dynamic
     type(reduction_rec_t) :: reduction
     type(label_t), allocatable :: output_nodes(:)
+    !> Nodes whose tangent compliance the static analysis writes (&output compliance_nodes).
+    type(label_t), allocatable :: compliance_nodes(:)
   end type scene_t
 end module model_scene

@@ -1,7 +1,9 @@
 !> A planar multibody model: nodal coordinates with their classes, elements with their mode
 !> classes, masses, loads and prescribed motions, plus the bookkeeping that maps deformation
 !> modes to rows of the kinematic equations and to the generalised coordinates
-!> q = (q_rh, q_dy) (prescribed first, then dynamic).
+!> q = (q_rh, q_dy) (prescribed first, then dynamic). Within each part the modes come first
+!> (element order), then nodal coordinates that are inputs themselves (a shuttle translation
+!> as a degree of freedom, a prescribed body rotation): those are x = x0 + q exactly.
 !>
 !> A model is built with the add_* procedures and then `finalize`d, which checks the counting
 !> condition for solvability. Every model owns all its data: many live in one process.
@@ -9,7 +11,7 @@ module model_system
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_MODEL, ERR_INPUT
   use elements_base, only: element_t, element_slot_t, MODE_RIGID, MODE_RELEASED, &
-    MODE_PRESCRIBED, MODE_DYNAMIC
+    MODE_PRESCRIBED, MODE_DYNAMIC, MODE_ELASTIC
   use motion_law, only: motion_t
   implicit none
   private
@@ -31,6 +33,9 @@ module model_system
     integer :: n_x = 0
     real(wp), allocatable :: x0(:)            !< reference coordinates
     logical, allocatable :: fixed(:)
+    !> MODE_PRESCRIBED or MODE_DYNAMIC for a coordinate that is itself an input, else 0;
+    !> coord_motion the motion of a prescribed one.
+    integer, allocatable :: coord_input(:), coord_motion(:)
     integer, allocatable :: coord_kind(:)     !< COORD_X, COORD_Y or COORD_PHI
     character(len=64), allocatable :: coord_name(:)
     type(element_slot_t), allocatable :: elements(:)
@@ -46,22 +51,29 @@ module model_system
     character(len=64), allocatable :: node_label(:)
     integer, allocatable :: node_coord(:, :)
     ! Derived by finalize:
-    integer :: n_c = 0, n_rigid = 0, n_rh = 0, n_dy = 0, n_q = 0
-    integer, allocatable :: calc_index(:)     !< coordinate -> calculable index (0 if fixed)
+    integer :: n_c = 0, n_rigid = 0, n_rh = 0, n_dy = 0, n_q = 0, n_elastic = 0
+    integer, allocatable :: calc_index(:)     !< coordinate -> calculable index (0 if not)
     integer, allocatable :: calc_coord(:)     !< calculable index -> coordinate
     integer, allocatable :: row_q(:)          !< kinematic row -> q index (0 for rigid rows)
-    integer, allocatable :: q_mode(:)         !< q index -> mode index
+    integer, allocatable :: q_mode(:)         !< q index -> mode index (0 for a coordinate)
+    integer, allocatable :: q_coord(:)        !< q index -> coordinate (0 for a mode)
+    integer, allocatable :: q_motion(:)       !< prescribed q index -> motion index
+    integer, allocatable :: input_q(:)        !< coordinate -> q index if an input, else 0
+    !> Elements with an elastic mode: their stresses depend on x, not on q alone.
+    logical, allocatable :: elastic_element(:)
     integer, allocatable :: lumped_rows(:)    !< coordinates that carry a lumped mass
     real(wp) :: newton_tol = 1.0e-11_wp       !< kinematic residual tolerance [m or rad]
     logical :: finalized = .false.
   contains
     procedure :: init => model_init
     procedure :: add_coord => model_add_coord
+    procedure :: set_coord_input => model_set_coord_input
     procedure :: add_element => model_add_element
     procedure :: add_motion => model_add_motion
     procedure :: add_node_label => model_add_node_label
     procedure :: find_node => model_find_node
     procedure :: finalize => model_finalize
+    procedure :: count_message => model_count_message
     procedure :: mode_name => model_mode_name
     procedure :: q_name => model_q_name
     procedure :: mode_values => model_mode_values
@@ -75,6 +87,7 @@ contains
     this%n_elements = 0
     this%n_motions = 0
     allocate(this%x0(0), this%fixed(0), this%coord_kind(0), this%coord_name(0))
+    allocate(this%coord_input(0), this%coord_motion(0))
     allocate(this%lumped(0), this%force(0), this%elements(0), this%motions(0))
     allocate(this%node_label(0), this%node_coord(3, 0))
     this%finalized = .false.
@@ -91,11 +104,22 @@ contains
     idx = this%n_x
     this%x0 = [this%x0, value]
     this%fixed = [this%fixed, fixed]
+    this%coord_input = [this%coord_input, 0]
+    this%coord_motion = [this%coord_motion, 0]
     this%coord_kind = [this%coord_kind, kind]
     this%coord_name = [character(len=64) :: this%coord_name, name]
     this%lumped = [this%lumped, 0.0_wp]
     this%force = [this%force, 0.0_wp]
   end function model_add_coord
+
+  !> Make coordinate idx an input: MODE_DYNAMIC (a degree of freedom) or MODE_PRESCRIBED
+  !> (following motion `motion`).
+  subroutine model_set_coord_input(this, idx, class, motion)
+    class(model_t), intent(inout) :: this
+    integer, intent(in) :: idx, class, motion
+    this%coord_input(idx) = class
+    this%coord_motion(idx) = motion
+  end subroutine model_set_coord_input
 
   !> Add an element (dofs, mode classes set); `motion` gives the motion index of each
   !> prescribed mode (0 elsewhere). Returns the element index.
@@ -158,50 +182,47 @@ contains
   subroutine model_finalize(this, err)
     class(model_t), intent(inout) :: this
     type(error_t), intent(out) :: err
-    integer :: i, m, n_rel, n_rows, iq_rh, iq_dy
-    character(len=300) :: msg
+    integer :: i, m, n_rows, iq_rh, iq_dy
+    logical :: calculable(this%n_x)
     if (.not. allocated(this%modes)) allocate(this%modes(0), this%mode_first(0))
+    calculable = .not. this%fixed .and. this%coord_input == 0
     allocate(this%calc_index(this%n_x))
     this%calc_index = 0
     this%n_c = 0
     do i = 1, this%n_x
-      if (.not. this%fixed(i)) then
+      if (calculable(i)) then
         this%n_c = this%n_c + 1
         this%calc_index(i) = this%n_c
       end if
     end do
-    this%calc_coord = pack([(i, i=1, this%n_x)], .not. this%fixed)
+    this%calc_coord = pack([(i, i=1, this%n_x)], calculable)
     this%lumped_rows = pack([(i, i=1, this%n_x)], this%lumped > 0)
     this%n_rigid = count(this%modes%class == MODE_RIGID)
-    this%n_rh = count(this%modes%class == MODE_PRESCRIBED)
-    this%n_dy = count(this%modes%class == MODE_DYNAMIC)
-    n_rel = count(this%modes%class == MODE_RELEASED)
+    this%n_elastic = count(this%modes%class == MODE_ELASTIC)
+    this%n_rh = count(this%modes%class == MODE_PRESCRIBED) + count(this%coord_input == MODE_PRESCRIBED)
+    this%n_dy = count(this%modes%class == MODE_DYNAMIC) + count(this%coord_input == MODE_DYNAMIC)
     this%n_q = this%n_rh + this%n_dy
-    n_rows = this%n_rigid + this%n_q
     if (this%n_dy == 0) then
-      call err%set(ERR_MODEL, 'the model has no dynamic deformation mode: nothing to compute')
+      call err%set(ERR_MODEL, 'the model has no dynamic deformation mode or coordinate: ' // &
+        'nothing to compute')
       return
     end if
+    n_rows = count(this%modes%class /= MODE_RELEASED .and. this%modes%class /= MODE_ELASTIC)
     if (n_rows /= this%n_c) then
-      write(msg, '(a,i0,a,i0,a,i0,a,i0,a,i0,a)') 'the coordinate classes do not solve: ', &
-        this%n_c, ' free nodal coordinates but ', n_rows, ' kinematic conditions (', &
-        this%n_rigid, ' rigid + ', this%n_rh, ' prescribed + ', this%n_dy, ' dynamic modes)'
-      if (n_rows < this%n_c) then
-        call err%set(ERR_MODEL, trim(msg) // '; the model is a mechanism: make more modes ' // &
-          'rigid, dynamic or prescribed, or fix more coordinates')
-      else
-        call err%set(ERR_MODEL, trim(msg) // '; the model is over-constrained: release ' // &
-          'modes or free coordinates')
-      end if
+      call err%set(ERR_MODEL, this%count_message(n_rows))
       return
     end if
-    allocate(this%row_q(n_rows), this%q_mode(this%n_q))
+    allocate(this%row_q(n_rows), this%q_mode(this%n_q), this%q_coord(this%n_q))
+    allocate(this%q_motion(this%n_rh), this%input_q(this%n_x))
+    this%q_mode = 0
+    this%q_coord = 0
+    this%input_q = 0
     n_rows = 0
     iq_rh = 0
     iq_dy = this%n_rh
     do m = 1, size(this%modes)
       associate (mode => this%modes(m))
-        if (mode%class == MODE_RELEASED) cycle
+        if (mode%class == MODE_RELEASED .or. mode%class == MODE_ELASTIC) cycle
         n_rows = n_rows + 1
         mode%row = n_rows
         this%row_q(n_rows) = 0
@@ -212,6 +233,7 @@ contains
           end if
           iq_rh = iq_rh + 1
           mode%q = iq_rh
+          this%q_motion(iq_rh) = mode%motion
         else if (mode%class == MODE_DYNAMIC) then
           iq_dy = iq_dy + 1
           mode%q = iq_dy
@@ -222,8 +244,51 @@ contains
         end if
       end associate
     end do
+    do i = 1, this%n_x
+      if (this%coord_input(i) == MODE_PRESCRIBED) then
+        iq_rh = iq_rh + 1
+        this%input_q(i) = iq_rh
+        this%q_motion(iq_rh) = this%coord_motion(i)
+      else if (this%coord_input(i) == MODE_DYNAMIC) then
+        iq_dy = iq_dy + 1
+        this%input_q(i) = iq_dy
+      end if
+      if (this%input_q(i) > 0) this%q_coord(this%input_q(i)) = i
+    end do
+    allocate(this%elastic_element(this%n_elements))
+    do i = 1, this%n_elements
+      this%elastic_element(i) = any(this%modes(this%mode_first(i):this%mode_first(i) + &
+        this%elements(i)%e%n_modes() - 1)%class == MODE_ELASTIC)
+    end do
     this%finalized = .true.
   end subroutine model_finalize
+
+  !> Why the classes do not solve and what to change: the counting condition of
+  !> docs/input.md, with the numbers of each class.
+  function model_count_message(this, n_rows) result(msg)
+    class(model_t), intent(in) :: this
+    integer, intent(in) :: n_rows
+    character(len=:), allocatable :: msg
+    character(len=400) :: buf
+    integer :: n_rh_modes, n_dy_modes
+    n_rh_modes = count(this%modes%class == MODE_PRESCRIBED)
+    n_dy_modes = count(this%modes%class == MODE_DYNAMIC)
+    write(buf, '(a,i0,a,i0,a,i0,a,i0,a,i0,a,i0,a)') 'the coordinate classes do not solve: ', &
+      this%n_c, ' free nodal coordinates but ', n_rows, ' kinematic conditions (', &
+      this%n_rigid, ' rigid + ', n_rh_modes, ' prescribed + ', n_dy_modes, &
+      ' dynamic modes; ', this%n_elastic, ' elastic modes do not count)'
+    msg = trim(buf)
+    if (n_rows < this%n_c) then
+      write(buf, '(a,i0,a)') '; the model is a mechanism: make ', this%n_c - n_rows, &
+        ' more modes rigid, dynamic or prescribed (e.g. elastic -> dynamic), or fix or ' // &
+        'drive that many nodal coordinates'
+    else
+      write(buf, '(a,i0,a)') '; the model is over-constrained (statically indeterminate): make ', &
+        n_rows - this%n_c, ' dynamic modes elastic (calculable with stiffness), or ' // &
+        'release modes, or free coordinates'
+    end if
+    msg = msg // trim(buf)
+  end function model_count_message
 
   !> "mode 2 of element 'link1.3'" for messages.
   function model_mode_name(this, m) result(name)
@@ -240,12 +305,17 @@ contains
     class(model_t), intent(in) :: this
     integer, intent(in) :: iq
     character(len=:), allocatable :: name
-    name = this%mode_name(this%q_mode(iq))
+    if (this%q_coord(iq) > 0) then
+      name = 'coordinate ''' // trim(this%coord_name(this%q_coord(iq))) // ''''
+    else
+      name = this%mode_name(this%q_mode(iq))
+    end if
   end function model_q_name
 
   !> Values of an element's modes from the generalised coordinates: rigid 0, prescribed and
   !> dynamic from q (exactly, not recomputed from x: see docs/theory.md section 5); released
-  !> modes carry no stress and are returned as 0.
+  !> and elastic modes are calculable and returned as 0 (elastic ones are evaluated from x
+  !> where their stress is needed).
   pure subroutine model_mode_values(this, iel, q, e)
     class(model_t), intent(in) :: this
     integer, intent(in) :: iel

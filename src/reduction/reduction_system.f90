@@ -108,6 +108,7 @@ contains
     real(wp), intent(out) :: dadq(:, :), dadv(:, :)
     integer, intent(out) :: status
     real(wp) :: a(size(q)), mr(size(q), size(q))
+    real(wp), allocatable :: k0(:, :), d0(:, :)
     integer :: j, info
     if (this%dyn%jacobian_kind == 'fd') then
       call system_fd_jacobian(this, t, q, v, dadq, dadv, status)
@@ -117,8 +118,10 @@ contains
     if (status /= 0) return
     associate (b => this%basis%v)
       mr = matmul(transpose(b), matmul(this%dyn%mbar, b))
-      dadq = -matmul(transpose(b), matmul(this%dyn%k_dd, b))
-      dadv = -matmul(transpose(b), matmul(this%dyn%d_dd, b))
+      allocate(k0, d0, mold=this%dyn%mbar)
+      call this%dyn%structural_stiffness(k0, d0)
+      dadq = -matmul(transpose(b), matmul(k0, b))
+      dadv = -matmul(transpose(b), matmul(d0, b))
     end associate
     call chol_factor(mr, info)
     do j = 1, size(q)

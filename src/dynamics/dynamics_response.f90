@@ -1,0 +1,164 @@
+!> What flexure designers read off a static equilibrium (docs/theory.md section 6.2): the
+!> reactions at fixed and prescribed coordinates, the tangent compliance of chosen nodes and
+!> the natural frequencies, at each converged step.
+!>
+!> Reactions: at rest the nodal forces f (loads, weight, minus the stresses of elastic
+!> elements) balance the stresses of the kinematic rows (rigid, prescribed, dynamic modes) at
+!> the calculable coordinates, J_c^T sigma = f_c, which the LU factors of the kinematic
+!> solution give at the cost of one transposed solve. The reaction at any other coordinate is
+!> what the internal forces leave unbalanced there, R = D_x^T sigma - f.
+!>
+!> Compliance: a force df on the node's coordinates does work DF_n^T df on q_dy, so
+!> dx_n = DF_n K_T^-1 DF_n^T df; rows of held coordinates of DF_n are zero, hence those rows
+!> and columns of the compliance are zero.
+module dynamics_response
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_NUMERIC
+  use core_linalg, only: lu_factor, lu_solve, sym_gen_eig
+  use dynamics_system, only: dynamics_t
+  use dynamics_static, only: tangent_stiffness
+  implicit none
+  private
+  public :: static_response_t
+
+  real(wp), parameter :: PI = 4 * atan(1.0_wp)
+
+  type :: static_response_t
+    !> Coordinates (x, y, phi; 0 if none) of the nodes whose reactions and compliances are kept.
+    integer, allocatable :: reaction_coords(:, :), compliance_coords(:, :)
+    integer :: n_frequencies = 0
+    real(wp), allocatable :: reaction(:, :, :)       !< (3, node, step): fx, fy, mz [N, N m]
+    real(wp), allocatable :: compliance(:, :, :, :)  !< (3, 3, node, step)
+    real(wp), allocatable :: frequency_hz(:, :)      !< (n_frequencies, step)
+  contains
+    procedure :: init => response_init
+    procedure :: record => response_record
+  end type static_response_t
+
+contains
+
+  subroutine response_init(this, reaction_coords, compliance_coords, n_frequencies, n_steps)
+    class(static_response_t), intent(inout) :: this
+    integer, intent(in) :: reaction_coords(:, :), compliance_coords(:, :)
+    integer, intent(in) :: n_frequencies, n_steps
+    this%reaction_coords = reaction_coords
+    this%compliance_coords = compliance_coords
+    this%n_frequencies = n_frequencies
+    allocate(this%reaction(3, size(reaction_coords, 2), n_steps))
+    allocate(this%compliance(3, 3, size(compliance_coords, 2), n_steps))
+    allocate(this%frequency_hz(n_frequencies, n_steps))
+    this%reaction = 0.0_wp
+    this%compliance = 0.0_wp
+    this%frequency_hz = 0.0_wp
+  end subroutine response_init
+
+  !> Step `step` at the equilibrium q_dy (dyn%load_factor and the prescribed values as the
+  !> static analysis left them at that step).
+  subroutine response_record(this, dyn, t, q_dy, step, err)
+    class(static_response_t), intent(inout) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    integer, intent(in) :: step
+    type(error_t), intent(out) :: err
+    real(wp) :: k(size(q_dy), size(q_dy)), r(dyn%model%n_x)
+    logical :: was_locked
+    was_locked = dyn%locked
+    dyn%locked = .true.
+    call tangent_stiffness(dyn, t, q_dy, k, err)
+    if (err%ok()) then
+      r = reactions(dyn)
+      this%reaction(:, :, step) = gather(r, this%reaction_coords)
+      if (size(this%compliance_coords, 2) > 0) call compliance(dyn, k, &
+        this%compliance_coords, this%compliance(:, :, :, step), err)
+    end if
+    if (err%ok() .and. this%n_frequencies > 0) &
+      call lowest_frequencies(k, dyn%mbar, this%frequency_hz(:, step), err)
+    dyn%locked = was_locked
+  end subroutine response_record
+
+  !> Reaction at every coordinate that is not calculable (0 at calculable ones) at the last
+  !> evaluation of dyn, which must be at rest.
+  function reactions(dyn) result(r)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp) :: r(dyn%model%n_x)
+    real(wp) :: sigma(dyn%model%n_c, 1)
+    real(wp), allocatable :: e(:), de(:, :)
+    integer :: iel, j, row, nm
+    associate (m => dyn%model)
+      sigma(:, 1) = dyn%nodal_force(m%calc_coord)
+      call lu_solve(dyn%kin%lu, dyn%kin%ipiv, sigma, transposed=.true.)
+      r = -dyn%nodal_force
+      do iel = 1, m%n_elements
+        associate (el => m%elements(iel)%e)
+          nm = el%n_modes()
+          allocate(e(nm), de(nm, size(el%dofs)))
+          call el%evaluate(dyn%kin%x(el%dofs), e, de)
+          do j = 1, nm
+            row = m%modes(m%mode_first(iel) + j - 1)%row
+            if (row > 0) r(el%dofs) = r(el%dofs) + de(j, :) * sigma(row, 1)
+          end do
+          deallocate(e, de)
+        end associate
+      end do
+      r(m%calc_coord) = 0.0_wp
+    end associate
+  end function reactions
+
+  !> Values of a per-coordinate vector at the nodes' (x, y, phi); 0 where a node has none.
+  pure function gather(v, coords) result(g)
+    real(wp), intent(in) :: v(:)
+    integer, intent(in) :: coords(:, :)
+    real(wp) :: g(3, size(coords, 2))
+    integer :: i, a
+    g = 0.0_wp
+    do i = 1, size(coords, 2)
+      do a = 1, 3
+        if (coords(a, i) > 0) g(a, i) = v(coords(a, i))
+      end do
+    end do
+  end function gather
+
+  subroutine compliance(dyn, k, coords, c, err)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: k(:, :)
+    integer, intent(in) :: coords(:, :)
+    real(wp), intent(out) :: c(:, :, :)
+    type(error_t), intent(inout) :: err
+    real(wp) :: dfn(3, size(k, 1)), y(size(k, 1), 3), kf(size(k, 1), size(k, 1)), rcond
+    integer :: i, a, info, nr, ipiv(size(k, 1)), worst
+    nr = dyn%model%n_rh
+    kf = k
+    call lu_factor(kf, ipiv, info, rcond, worst)
+    if (info /= 0 .or. rcond < 1.0e-13_wp) then
+      call err%set(ERR_NUMERIC, 'static compliance: the tangent stiffness is singular ' // &
+        '(a mechanism or a critical load): the compliance is unbounded')
+      return
+    end if
+    do i = 1, size(coords, 2)
+      dfn = 0.0_wp
+      do a = 1, 3
+        if (coords(a, i) > 0) dfn(a, :) = dyn%kin%df(coords(a, i), nr + 1:)
+      end do
+      y = transpose(dfn)
+      call lu_solve(kf, ipiv, y)
+      c(:, :, i) = matmul(dfn, y)
+    end do
+  end subroutine compliance
+
+  !> Lowest natural frequencies of K_T v = omega^2 Mbar v [Hz]; a negative omega^2 (an unstable
+  !> equilibrium) is reported as a negative frequency, -sqrt(-omega^2)/(2 pi).
+  subroutine lowest_frequencies(k, mbar, f, err)
+    real(wp), intent(in) :: k(:, :), mbar(:, :)
+    real(wp), intent(out) :: f(:)
+    type(error_t), intent(inout) :: err
+    real(wp) :: lambda(size(k, 1)), v(size(k, 1), size(k, 1))
+    integer :: info
+    call sym_gen_eig(k, mbar, lambda, v, info)
+    if (info /= 0) then
+      call err%set(ERR_NUMERIC, 'static frequencies: the eigenvalue problem failed (is the ' // &
+        'mass matrix positive definite?)')
+      return
+    end if
+    f = sign(sqrt(abs(lambda(1:size(f)))), lambda(1:size(f))) / (2 * PI)
+  end subroutine lowest_frequencies
+end module dynamics_response
