@@ -64,7 +64,7 @@ contains
     logical :: was_locked
     was_locked = dyn%locked
     dyn%locked = .true.
-    call tangent_stiffness(dyn, t, q_dy, k, err)
+    call tangent_stiffness(dyn, t, q_dy, k, err, accurate=.true.)
     if (err%ok()) then
       r = reactions(dyn)
       this%reaction(:, :, step) = gather(r, this%reaction_coords)

@@ -119,6 +119,12 @@ contains
         return
       end if
       if (rmax <= model%newton_tol) then
+        ! One more correction with these factors takes the error from rmax to about rmax^2:
+        ! the stress of a stiff elastic mode is EA/l0 times its error, and statics
+        ! differences such stresses.
+        dx(:, 1) = -r
+        call lu_solve(this%lu, this%ipiv, dx)
+        this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
         this%q = q
         this%has_df = .false.
         this%n_iterations = this%n_iterations + it - 1

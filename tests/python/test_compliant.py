@@ -1,0 +1,242 @@
+"""Statically indeterminate compliant mechanisms (elastic modes, nodal inputs, reactions,
+compliance) against closed forms. Each bound is derived in its test: the Newton tolerance of
+&static (1e-10 of the largest reference coordinate) and the model error of the closed form
+(small-deflection limits), with a margin of 10 or more over what is observed."""
+import math
+import subprocess
+
+import h5py
+import numpy as np
+import pytest
+
+from helpers import BIN, ROOT
+
+E = 2.1e11
+
+
+def run(tmp_path, text, name="scene"):
+    nml = tmp_path / f"{name}.nml"
+    nml.write_text(text)
+    out = tmp_path / f"{name}.h5"
+    proc = subprocess.run([BIN, str(nml), "-o", str(out), "-q"], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return h5py.File(out, "r")
+
+
+def guided_leaf(n, fx, length=0.1, area=6e-6, inertia=4.5e-14):
+    """One leaf clamped at the base, its top guided (no rotation): the last bending mode is
+    elastic, which closes the count (3n modes, 3n - 1 free coordinates)."""
+    return f"""&node label = 'base', x = 0, y = 0, fixed = .true. /
+&node label = 'top', x = 0, y = {length}, fix_phi = .true. /
+&link label = 'leaf', from = 'base', to = 'top', n_elements = {n}, E = {E}, A = {area},
+      I = {inertia}, rho = 7800, elongation = 'dynamic', bending = {2 * n - 1}*'dynamic', 'elastic' /
+&force node = 'top', fx = {fx} /
+&static n_steps = 1 /
+&output nodes = 'top', compliance_nodes = 'top' /
+"""
+
+
+def test_guided_leaf_lateral_stiffness_and_shortening(tmp_path):
+    """Clamped-guided leaf: lateral stiffness 12 EI/L^3 and parasitic shortening 3 u^2/(5 L).
+    Cubic (Hermite) beams are exact for the linear clamped-guided leaf; the tangent at a
+    deflection u differs from the linear one by O((u/L)^2) = 1e-6 here and the shortening
+    formula is the leading term of a series in (u/L)^2: bounds 1e-5 (observed 8e-7 and 2e-4
+    of the shortening at u/L = 1e-3, where the next term is about (u/L)^2 / 10 smaller, plus
+    the axial strain of the leaf, fx^2 terms... measured)."""
+    ei, length = E * 4.5e-14, 0.1
+    k = 12 * ei / length**3
+    fx = 1e-3 * length * k  # u = L / 1000
+    with run(tmp_path, guided_leaf(6, fx)) as f:
+        pos = f["static/nodes/top/position"][-1]
+        c = f["static/nodes/top/compliance"][-1]
+    u = pos[0]
+    assert abs(u * k / fx - 1) < 1e-5
+    assert abs(1 / c[0, 0] / k - 1) < 1e-5
+    shortening = length - pos[1]
+    assert abs(shortening / (3 * u**2 / (5 * length)) - 1) < 1e-3
+    # The guided top cannot rotate: its row and column of the compliance are zero.
+    assert np.all(c[2, :] == 0) and np.all(c[:, 2] == 0)
+
+
+@pytest.fixture(scope="module")
+def guide(tmp_path_factory):
+    text = (ROOT / "input" / "leaf_spring_guide.nml").read_text()
+    return run(tmp_path_factory.mktemp("guide"), text, "guide")
+
+
+def test_guide_example_stroke_and_support_stiffness(guide, tmp_path):
+    """The example: 2.2 N give 9.62 mm (two leaves of 12 EI/L^3 would give 9.70 mm linearly;
+    the stiffening by the shortening and the tilt take off 0.8 %); the support stiffness
+    (1/C_yy) falls monotonically with the deflection."""
+    x = guide["static/nodes/shuttle/position"][:, 0] - 0.025
+    c = guide["static/nodes/shuttle/compliance"][:]
+    assert np.all(np.diff(x) > 0)
+    assert 9.5e-3 < x[-1] < 9.7e-3
+    support = 1 / c[:, 1, 1]
+    assert np.all(np.diff(support) < 0)
+    # At zero deflection the support stiffness is the two leaves in tension: 2 EA/L. The
+    # tangent at a load of 1e-9 N is the linear one to 1e-12; bound 1e-8.
+    text = (ROOT / "input" / "leaf_spring_guide.nml").read_text()
+    text = text.replace("fx = 2.2", "fx = 1e-9").replace("n_steps = 11", "n_steps = 1")
+    with run(tmp_path, text) as f:
+        c0 = f["static/nodes/shuttle/compliance"][0]
+    assert abs(1 / c0[1, 1] / (2 * E * 6e-6 / 0.1) - 1) < 1e-8
+
+
+def test_guide_reactions_balance_the_load(guide):
+    """Ground reactions plus the applied force: zero resultant force and moment about the
+    origin, to the Newton tolerance (forces 1e-8 N of 2.2 N, far above round-off)."""
+    fx = 2.2 * guide["static/load_factor"][:]
+    shuttle = guide["static/nodes/shuttle/position"][:]
+    total = np.zeros((len(fx), 3))
+    for node, x0 in (("ground1", 0.0), ("ground2", 0.05)):
+        r = guide[f"static/nodes/{node}/reaction"][:]
+        total[:, 0] += r[:, 0]
+        total[:, 1] += r[:, 1]
+        total[:, 2] += r[:, 2] + x0 * r[:, 1]
+    total[:, 0] += fx
+    total[:, 2] += -shuttle[:, 1] * fx
+    assert np.max(np.abs(total[:, :2])) < 1e-8
+    assert np.max(np.abs(total[:, 2])) < 1e-9
+    # The free shuttle carries no reaction.
+    assert np.all(guide["static/nodes/shuttle/reaction"][:] == 0)
+
+
+def test_guide_compliance_is_the_derivative_of_the_static_solution(tmp_path, guide):
+    """Tangent compliance at 2.2 N against central differences of the static solution with
+    fx and fy perturbed by d: difference error O(d^2 C'') ~ 1e-7 relative and Newton error
+    1e-11 m / d; bound 1e-4 relative to the largest entry of each column."""
+    text = (ROOT / "input" / "leaf_spring_guide.nml").read_text()
+    c = guide["static/nodes/shuttle/compliance"][-1]
+    cols = []
+    for extra, d in (("fx = 2.2", 1e-3), ("fx = 2.2, fy = 0", 1e-2)):
+        pos = []
+        for sign in (1, -1):
+            if extra == "fx = 2.2":
+                mod = text.replace("fx = 2.2", f"fx = {2.2 + sign * d!r}")
+            else:
+                mod = text.replace("fx = 2.2", f"fx = 2.2, fy = {sign * d!r}")
+            with run(tmp_path, mod, f"p{len(cols)}{sign}") as f:
+                p = f["static/nodes/shuttle/position"][-1]
+                rot = f["static/nodes/shuttle/rotation"][-1]
+            pos.append(np.array([p[0], p[1], rot]))
+        cols.append((pos[0] - pos[1]) / (2 * d))
+    for j, col in enumerate(cols):
+        assert np.max(np.abs(col - c[:, j])) < 1e-4 * np.max(np.abs(c[:, j])), (col, c[:, j])
+
+
+def pivot(lam, rotation, n_steps=1, n=4, length=0.05):
+    """Cross-spring pivot crossing at the origin, a fraction lam of L from the body end; the
+    body rotation prescribed (displacement control)."""
+    s = math.sin(math.pi / 4)
+    g, b = (1 - lam) * length * s, lam * length * s
+    return f"""&node label = 'ground1', x = {-g!r}, y = {-g!r}, fixed = .true. /
+&node label = 'ground2', x = {g!r}, y = {-g!r}, fixed = .true. /
+&node label = 'end1', x = {b!r}, y = {b!r} /
+&node label = 'end2', x = {-b!r}, y = {b!r} /
+&node label = 'body', x = 0, y = 0, motion_phi = 'rot' /
+&link label = 'leaf1', from = 'ground1', to = 'end1', n_elements = {n}, E = {E}, A = 2e-6,
+      I = 6.6666667e-15, rho = 7800, elongation = 'dynamic', bending = {2 * n - 1}*'dynamic', 'elastic' /
+&link label = 'leaf2', from = 'ground2', to = 'end2', n_elements = {n}, E = {E}, A = 2e-6,
+      I = 6.6666667e-15, rho = 7800, elongation = {n - 1}*'dynamic', 'elastic',
+      bending = {2 * n - 2}*'dynamic', 2*'elastic' /
+&link label = 'arm1', from = 'body', to = 'end1', E = {E}, A = 1e-4, I = 1e-8, rho = 7800,
+      elongation = 'rigid', bending = 'rigid' /
+&link label = 'arm2', from = 'body', to = 'end2', E = {E}, A = 1e-4, I = 1e-8, rho = 7800,
+      elongation = 'rigid', bending = 'rigid' /
+&motion label = 'rot', law = 'constant', start = {rotation!r} /
+&static n_steps = {n_steps} /
+&output nodes = 'body', compliance_nodes = 'body' /
+"""
+
+
+@pytest.mark.parametrize("lam", [0.5, 0.25])
+def test_pivot_rotational_stiffness(tmp_path, lam):
+    """Rotational stiffness at zero rotation 2 (EI/L) (4 - 12 lam + 12 lam^2): the reaction
+    moment at 1e-3 rad (non-linear terms O(phi^2): 2e-7 relative at mid-length, observed at
+    1e-2 rad: 1.7e-5; the shift of the rotation centre for lam /= 1/2 adds O(phi)); bound 1e-4
+    for lam = 1/2 and 1e-2 otherwise."""
+    ei, length = E * 6.6666667e-15, 0.05
+    k = 2 * ei / length * (4 - 12 * lam + 12 * lam**2)
+    with run(tmp_path, pivot(lam, 1e-3)) as f:
+        m = f["static/nodes/body/reaction"][-1, 2]
+        phi = f["static/nodes/body/rotation"][-1]
+    assert phi == pytest.approx(1e-3, rel=1e-12)
+    assert abs(m / phi / k - 1) < (1e-4 if lam == 0.5 else 1e-2)
+
+
+def test_pivot_translational_stiffness(tmp_path):
+    """At zero rotation the body is held in the direction of each leaf by that leaf's tension
+    (EA/L) and the other leaf's guided bending (12 EI/L^3): compliance d_i^T C d_i = 1/(EA/L +
+    12 EI/L^3), observed to 1e-8; bound 1e-6. The held rotation has zero row and column."""
+    ei, ea, length = E * 6.6666667e-15, E * 2e-6, 0.05
+    with run(tmp_path, pivot(0.5, 1e-9)) as f:
+        c = f["static/nodes/body/compliance"][-1]
+    k = ea / length + 12 * ei / length**3
+    s = math.sin(math.pi / 4)
+    for d in (np.array([s, s]), np.array([-s, s])):
+        assert abs(1 / (d @ c[:2, :2] @ d) / k - 1) < 1e-6
+    assert np.all(c[2, :] == 0) and np.all(c[:, 2] == 0)
+
+
+def test_pivot_example(tmp_path):
+    """The example to 0.3 rad: moment rising slightly faster than linear (stiffening by the
+    leaves' tension), centre shift growing as phi^2."""
+    with run(tmp_path, (ROOT / "input" / "cross_spring_pivot.nml").read_text()) as f:
+        m = f["static/nodes/body/reaction"][:, 2]
+        phi = f["static/nodes/body/rotation"][:]
+        shift = np.linalg.norm(f["static/nodes/body/position"][:, :2], axis=1)
+    assert np.allclose(phi, 0.01 * np.arange(1, 31), rtol=1e-12)
+    assert np.all(np.diff(m) > 0)
+    ratio = shift[9::10] / phi[9::10] ** 2
+    assert np.all(ratio > 0) and np.max(ratio) / np.min(ratio) < 1.2
+
+
+# Bad inputs of the new classes; each is a one-line error naming group and variable.
+GUIDED = guided_leaf(2, 1e-3)
+BAD = {
+    "count": (GUIDED.replace("3*'dynamic', 'elastic'", "'dynamic'"),
+              ["do not solve", "over-constrained", "make 1 dynamic modes elastic"]),
+    "count mechanism": (GUIDED.replace("3*'dynamic', 'elastic'", "2*'dynamic', 2*'elastic'"),
+                        ["mechanism", "make 1 more modes"]),
+    "bending list length": (GUIDED.replace("3*'dynamic', 'elastic'", "3*'dynamic'"),
+                            ["&link", "'bending'", "one per bending mode", "got 3"]),
+    "elastic prescribed link": (GUIDED.replace("elongation = 'dynamic'", "elongation = 'prescribed'"),
+                                ["&link", "'elongation'", "not rigid, released, dynamic or elastic"]),
+    "singular choice": (GUIDED.replace("elongation = 'dynamic', bending = 3*'dynamic', 'elastic'",
+                                       "elongation = 'dynamic', 'elastic', bending = 4*'dynamic'"),
+                        ["not determined"]),
+    "node dynamic unknown": (GUIDED.replace("fix_phi = .true.", "fix_phi = .true., dynamic = 'z'"),
+                             ["&node", "'dynamic'", "'z'"]),
+    "node fixed and dynamic": (GUIDED.replace("fix_phi = .true.", "fix_phi = .true., dynamic = 'phi'"),
+                               ["&node", "fixed"]),
+    "node motion undefined": (GUIDED.replace("fix_phi = .true.", "motion_x = 'nope'"),
+                              ["&node", "'motion_x'", "'nope'"]),
+    "node dynamic and prescribed": (GUIDED.replace("fix_phi = .true.",
+                                                   "dynamic = 'x', motion_x = 'm' /\n&motion "
+                                                   "label = 'm', law = 'constant', start = 0"),
+                                    ["&node", "both"]),
+    "compliance undefined": (GUIDED.replace("compliance_nodes = 'top'", "compliance_nodes = 'nope'"),
+                             ["&output", "'compliance_nodes'", "'nope'"]),
+    "compliance held": (GUIDED.replace("compliance_nodes = 'top'", "compliance_nodes = 'base'"),
+                        ["&output", "'base'", "no free coordinate"]),
+    "compliance without static": (GUIDED.replace("&static n_steps = 1 /", ""),
+                                  ["&output", "'compliance_nodes'", "&static"]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD))
+def test_bad_input(tmp_path, name):
+    text, fragments = BAD[name]
+    nml = tmp_path / "scene.nml"
+    nml.write_text(text)
+    out = tmp_path / "out.h5"
+    proc = subprocess.run([BIN, str(nml), "-o", str(out)], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode != 0
+    err = proc.stderr.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("flexmor: error: "), err
+    for fragment in fragments:
+        assert fragment in err, f"{fragment!r} not in {err!r}"
+    assert not out.exists()
