@@ -64,6 +64,7 @@ module dynamics_system
     procedure :: jacobian => dyn_jacobian
     procedure :: energy => dyn_energy
     procedure :: stresses => dyn_stresses
+    procedure :: loads_at => dyn_loads_at
     procedure :: structural_stiffness => dyn_structural_stiffness
     procedure :: elastic_forces => dyn_elastic_forces
     procedure :: allocate_history => dyn_allocate_history
@@ -135,6 +136,15 @@ contains
     q(this%model%n_rh + 1:) = q_dy
   end function dyn_full_q
 
+  !> Nodal loads and the weight of lumped masses at time t (load_factor not applied).
+  pure function dyn_loads_at(this, t) result(f)
+    class(dynamics_t), intent(in) :: this
+    real(wp), intent(in) :: t
+    real(wp) :: f(this%model%n_x)
+    f = this%load
+    if (size(this%model%load_motion) > 0) f = f + this%model%loads_at(t) - this%model%force
+  end function dyn_loads_at
+
   !> Stress resultants of the dynamic modes, in q_dy order, for full q = (q_rh, q_dy).
   pure function dyn_stresses(this, q, qd) result(sigma)
     class(dynamics_t), intent(in) :: this
@@ -199,7 +209,7 @@ contains
       call this%kin%second(m, qd, conv)
       if (nr > 0) conv = conv + matmul(df(:, 1:nr), pdd)
       xd = matmul(df, qd)
-      rhs = this%load_factor * this%load - m%lumped * conv
+      rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
       associate (rows => m%lumped_rows)
         this%mbar = matmul(transpose(df(rows, nr + 1:)), &
                            spread(m%lumped(rows), 2, nd) * df(rows, nr + 1:))
@@ -399,7 +409,7 @@ contains
       x = this%kin%x
       xd = matmul(this%kin%df, qd)
       en(1) = 0.5_wp * sum(m%lumped * xd**2)
-      en(2) = -this%load_factor * dot_product(this%load, x)
+      en(2) = -this%load_factor * dot_product(this%loads_at(t), x)
       do iel = 1, m%n_elements
         associate (el => m%elements(iel)%e)
           nm = el%n_modes()

@@ -443,6 +443,7 @@ contains
     call rd_real(g, 'fx', r%fx, err, default=0.0_wp)
     call rd_real(g, 'fy', r%fy, err, default=0.0_wp)
     call rd_real(g, 'moment', r%moment, err, default=0.0_wp)
+    call rd_string(g, 'time_law', r%time_law, err, default='')
   end subroutine read_force
 
   subroutine read_motion(g, r, err)

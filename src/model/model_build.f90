@@ -87,6 +87,10 @@ contains
         used(i) = used(i) .or. any([(node_motion(scene%nodes(h), k) == scene%motions(i)%label, &
           k = 1, 3)])
       end do
+      do h = 1, size(scene%forces)
+        if (allocated(scene%forces(h)%time_law)) used(i) = used(i) .or. &
+          scene%forces(h)%time_law == scene%motions(i)%label
+      end do
     end do
     grew = .true.
     do while (grew)
@@ -625,8 +629,9 @@ contains
     type(model_t), intent(inout) :: model
     type(builder_t), intent(inout) :: b
     type(error_t), intent(inout) :: err
-    integer :: i, in, ix, ir
+    integer :: i, in, ix, ir, im
     real(wp), allocatable :: diag(:)
+    real(wp) :: shape(model%n_x)
     do i = 1, size(scene%masses)
       associate (r => scene%masses(i))
         call require_node(scene, r%node, 'group &mass #' // int_str(i), 'node', in, err)
@@ -653,15 +658,33 @@ contains
       associate (r => scene%forces(i))
         call require_node(scene, r%node, 'group &force #' // int_str(i), 'node', in, err)
         if (.not. err%ok()) return
+        shape = 0.0_wp
         ix = b%node_xy(in)
-        model%force(ix:ix + 1) = model%force(ix:ix + 1) + [r%fx, r%fy]
+        shape(ix:ix + 1) = [r%fx, r%fy]
         if (r%moment /= 0) then
           if (b%node_rot(in) == 0) then
             call err%set(ERR_INPUT, 'group &force #' // int_str(i) // ': node ''' // r%node // &
               ''' has no rotation, so a moment cannot be applied')
             return
           end if
-          model%force(b%node_rot(in)) = model%force(b%node_rot(in)) + r%moment
+          shape(b%node_rot(in)) = r%moment
+        end if
+        im = 0
+        if (allocated(r%time_law)) then
+          if (len(r%time_law) > 0) then
+            im = motion_index(scene, r%time_law)
+            if (im == 0) then
+              call err%set(ERR_INPUT, 'group &force #' // int_str(i) // ': variable ' // &
+                '''time_law'': motion ''' // r%time_law // ''' is not defined (no &motion ' // &
+                'with that label)')
+              return
+            end if
+          end if
+        end if
+        if (im == 0) then
+          model%force = model%force + shape
+        else
+          call model%add_timed_load(shape, im)
         end if
       end associate
     end do

@@ -64,6 +64,8 @@ module model_scene
   type :: force_rec_t
     character(len=:), allocatable :: node
     real(wp) :: fx = 0.0_wp, fy = 0.0_wp, moment = 0.0_wp
+    !> Label of a &motion whose value multiplies the load in time ('' or not allocated: constant).
+    character(len=:), allocatable :: time_law
   end type force_rec_t
 
   !> A &motion group; each law reads only its own variables (docs/input.md, &motion).

@@ -44,6 +44,10 @@ module model_system
     type(mode_ref_t), allocatable :: modes(:)
     real(wp), allocatable :: lumped(:)        !< constant diagonal mass per coordinate
     real(wp), allocatable :: force(:)         !< constant nodal loads [N, N m]
+    !> Loads that follow a time law: load_shape(:, k) [N, N m] times the value of motion
+    !> load_motion(k).
+    real(wp), allocatable :: load_shape(:, :)
+    integer, allocatable :: load_motion(:)
     real(wp) :: gravity(2) = 0.0_wp           !< [m/s^2]
     type(motion_t), allocatable :: motions(:)
     integer :: n_motions = 0
@@ -70,6 +74,8 @@ module model_system
     procedure :: set_coord_input => model_set_coord_input
     procedure :: add_element => model_add_element
     procedure :: add_motion => model_add_motion
+    procedure :: add_timed_load => model_add_timed_load
+    procedure :: loads_at => model_loads_at
     procedure :: add_node_label => model_add_node_label
     procedure :: find_node => model_find_node
     procedure :: finalize => model_finalize
@@ -90,6 +96,7 @@ contains
     allocate(this%coord_input(0), this%coord_motion(0))
     allocate(this%lumped(0), this%force(0), this%elements(0), this%motions(0))
     allocate(this%node_label(0), this%node_coord(3, 0))
+    allocate(this%load_shape(0, 0), this%load_motion(0))
     this%finalized = .false.
   end subroutine model_init
 
@@ -146,6 +153,35 @@ contains
     end do
     this%modes = [this%modes, modes]
   end function model_add_element
+
+  !> A nodal load `shape` (n_x) that follows motion `motion` in time.
+  subroutine model_add_timed_load(this, shape, motion)
+    class(model_t), intent(inout) :: this
+    real(wp), intent(in) :: shape(:)
+    integer, intent(in) :: motion
+    real(wp), allocatable :: grown(:, :)
+    integer :: n
+    n = size(this%load_motion)
+    allocate(grown(this%n_x, n + 1))
+    grown = 0.0_wp
+    if (n > 0) grown(1:size(this%load_shape, 1), 1:n) = this%load_shape
+    grown(:, n + 1) = shape
+    call move_alloc(grown, this%load_shape)
+    this%load_motion = [this%load_motion, motion]
+  end subroutine model_add_timed_load
+
+  !> Nodal loads at time t: the constant ones plus those that follow time laws.
+  pure function model_loads_at(this, t) result(f)
+    class(model_t), intent(in) :: this
+    real(wp), intent(in) :: t
+    real(wp) :: f(this%n_x), p, pd, pdd
+    integer :: k
+    f = this%force
+    do k = 1, size(this%load_motion)
+      call this%motions(this%load_motion(k))%eval(t, p, pd, pdd)
+      f = f + p * this%load_shape(:, k)
+    end do
+  end function model_loads_at
 
   integer function model_add_motion(this, motion) result(idx)
     class(model_t), intent(inout) :: this
