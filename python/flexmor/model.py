@@ -14,7 +14,7 @@ import numpy as np
 __all__ = ["ELEMENT_TYPE_IDS", "Mesh", "Model", "read_model"]
 
 #: Cell data ``element_type`` of the VTK files and the colour key of the animation.
-ELEMENT_TYPE_IDS = {"beam": 1, "truss": 2, "hinge": 3}
+ELEMENT_TYPE_IDS = {"beam": 1, "truss": 2, "hinge": 3, "slider": 4}
 #: Coordinate kinds of ``/model/coordinates/kind``.
 KIND_X, KIND_Y, KIND_ROTATION = 1, 2, 3
 
@@ -119,11 +119,11 @@ def _check(model: Model) -> None:
         if ix < 0 or iy < 0 or model.kind[ix] != KIND_X or model.kind[iy] != KIND_Y:
             raise ValueError(f"/model/nodes/coordinates: node '{label}' has no x and y "
                              f"coordinates")
-    used = {"beam": 6, "truss": 4, "hinge": 2}
+    used = {"beam": 6, "truss": 4, "hinge": 2, "slider": 2}
     for e, (label, kind) in enumerate(zip(model.element_labels, model.element_types)):
         if kind not in used:
             raise ValueError(f"/model/elements/type: element '{label}' has unknown type "
-                             f"'{kind}' (beam, truss or hinge)")
+                             f"'{kind}' (beam, truss, hinge or slider)")
         coords = model.element_coordinates[e]
         if (coords[:used[kind]] < 0).any():
             raise ValueError(f"/model/elements/coordinates: {kind} '{label}' lacks coordinates")
@@ -131,6 +131,8 @@ def _check(model: Model) -> None:
             raise ValueError(f"/model/elements/nodes: element '{label}' lacks nodes")
         if kind != "hinge":
             ends = (coords[[0, 1]], coords[[3, 4]] if kind == "beam" else coords[[2, 3]])
+            if kind == "slider":  # one node, named twice
+                ends = (coords[[0, 1]],) * 2
             for end, node in zip(ends, model.element_nodes[e]):
                 if not np.array_equal(end, model.node_coordinates[node, :2]):
                     raise ValueError(f"/model/elements/coordinates: {kind} '{label}' does not "
