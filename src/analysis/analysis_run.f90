@@ -269,7 +269,14 @@ contains
       do i = 1, size(sc%compliance_nodes)
         comp_coords(:, i) = m%node_coord(:, m%find_node(sc%compliance_nodes(i)%s))
       end do
-      call this%static_response%init(out_coords, comp_coords, 0, size(q_steps, 2))
+      if (sc%static%n_frequencies > m%n_dy) then
+        call err%set(ERR_INPUT, 'group &static: variable ''n_frequencies'' = ' // &
+          int_str(sc%static%n_frequencies) // ' exceeds the ' // int_str(m%n_dy) // &
+          ' dynamic coordinates')
+        return
+      end if
+      call this%static_response%init(out_coords, comp_coords, sc%static%n_frequencies, &
+        size(q_steps, 2))
       this%dyn%ramp_prescribed = .true.
       do k = 1, size(q_steps, 2)
         this%dyn%load_factor = this%static_load_factor(k)

@@ -557,6 +557,9 @@ contains
     call rd_int(g, 'n_steps', scene%static%n_steps, err, default=10)
     call rd_real(g, 'tol', scene%static%tol, err, default=1.0e-10_wp)
     call rd_int(g, 'max_iter', scene%static%max_iter, err, default=30)
+    call rd_int(g, 'n_frequencies', scene%static%n_frequencies, err, default=0)
+    if (err%ok() .and. scene%static%n_frequencies < 0) call err%set(ERR_INPUT, g%where() // &
+      ': variable ''n_frequencies'' must not be negative')
     call positive(g, 'tol', scene%static%tol, err)
     if (err%ok() .and. (scene%static%n_steps < 1 .or. scene%static%max_iter < 1)) &
       call err%set(ERR_INPUT, g%where() // ': n_steps and max_iter must be at least 1')

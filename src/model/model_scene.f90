@@ -82,6 +82,7 @@ module model_scene
     integer :: n_steps = 10
     real(wp) :: tol = 1.0e-10_wp
     integer :: max_iter = 30
+    integer :: n_frequencies = 0    !< lowest natural frequencies written at each step
   end type static_rec_t
 
   type :: modal_rec_t

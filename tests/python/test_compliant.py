@@ -296,3 +296,21 @@ def test_euler_buckling_four_supports(tmp_path, support, k_factor, top, bending)
         mu = f["buckling/load_factor"][0]
     exact = math.pi**2 * 7.0e10 * 1.0e-9 / k_factor**2
     assert abs(mu / exact - 1) < 5e-3, (mu, exact)
+
+
+def test_guide_frequencies_along_the_path(tmp_path):
+    """&static n_frequencies: the lowest frequency of the guide at each step. At small
+    deflection, Rayleigh's estimate with the static (clamped-guided) shape: stiffness the
+    measured lateral 1/C_xx, mass the shuttle plus 13/35 of each leaf: 3.6e-4 above it
+    (Rayleigh is an upper bound only for the exact shape; the leaves' rotary and axial inertia
+    are left out): bound 3e-3. The frequency rises slightly along the path."""
+    text = (ROOT / "input" / "leaf_spring_guide.nml").read_text().replace(
+        "&static n_steps = 11 /", "&static n_steps = 11, n_frequencies = 2 /")
+    with run(tmp_path, text) as f:
+        freq = f["static/frequency_hz"][:]
+        c = f["static/nodes/shuttle/compliance"][:]
+    assert freq.shape == (11, 2)
+    mass = 7800 * 1e-4 * 0.05 + 2 * 13 / 35 * 7800 * 6e-6 * 0.1
+    rayleigh = math.sqrt(1 / c[0, 0, 0] / mass) / (2 * math.pi)
+    assert abs(freq[0, 0] / rayleigh - 1) < 3e-3
+    assert np.all(np.diff(freq[:, 0]) > 0) and np.all(freq[:, 1] > 10 * freq[:, 0])
