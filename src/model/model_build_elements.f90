@@ -1,0 +1,297 @@
+!> Elements of a scene: links meshed into beams (mode classes per element or per bending
+!> mode), hinges, trusses and sliders, in that order (the order of the generalised coordinates).
+submodule (model_build) model_build_elements
+  use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC, &
+    MODE_ELASTIC
+  use elements_beam, only: beam_t, BENDING_ANGLE, BENDING_SINE
+  use elements_hinge, only: hinge_t
+  use elements_truss, only: truss_t
+  use elements_slider, only: slider_t
+  use model_scene, only: link_rec_t, label_t
+  implicit none
+
+contains
+
+  module subroutine add_links(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(inout) :: b
+    type(error_t), intent(inout) :: err
+    integer :: i, k, ia, ib, p(3), q(3), idx, first_rot, last_rot
+    real(wp) :: xa(2), xb(2), xk(2)
+    type(beam_t) :: beam
+    character(len=12) :: num
+    do i = 1, size(scene%links)
+      associate (r => scene%links(i), where => 'group &link ''' // scene%links(i)%label // '''')
+        if (link_index(scene, r%label) /= i) then
+          call err%set(ERR_INPUT, 'group &link: label ''' // r%label // ''' is defined twice')
+          return
+        end if
+        call require_node(scene, r%from, where, 'from', ia, err)
+        if (err%ok()) call require_node(scene, r%to, where, 'to', ib, err)
+        if (err%ok()) call link_beam(r, where, beam, err)
+        if (.not. err%ok()) return
+        xa = [scene%nodes(ia)%x, scene%nodes(ia)%y]
+        xb = [scene%nodes(ib)%x, scene%nodes(ib)%y]
+        if (norm2(xb - xa) <= 1.0e-12_wp * max(1.0_wp, norm2(xa))) then
+          call err%set(ERR_INPUT, where // ': nodes ''' // r%from // ''' and ''' // r%to // &
+            ''' are at the same place: a link needs a positive length')
+          return
+        end if
+        first_rot = link_end_rotation(scene, model, b, r%label, ia)
+        last_rot = link_end_rotation(scene, model, b, r%label, ib)
+        p = [b%node_xy(ia), b%node_xy(ia) + 1, first_rot]
+        do k = 1, r%n_elements
+          if (k < r%n_elements) then
+            write(num, '(i0)') k
+            xk = xa + (xb - xa) * real(k, wp) / r%n_elements
+            q(1) = model%add_coord(xk(1), COORD_X, .false., r%label // '.' // trim(num) // ' x')
+            q(2) = model%add_coord(xk(2), COORD_Y, .false., r%label // '.' // trim(num) // ' y')
+            q(3) = model%add_coord(0.0_wp, COORD_PHI, .false., r%label // '.' // trim(num) // ' phi')
+            call model%add_node_label(r%label // '.' // trim(num), q)
+          else
+            q = [b%node_xy(ib), b%node_xy(ib) + 1, last_rot]
+          end if
+          write(num, '(i0)') k
+          beam%label = r%label // '#' // trim(num)
+          beam%dofs = [p, q]
+          beam%l0 = norm2(xb - xa) / r%n_elements
+          beam%alpha0 = atan2(xb(2) - xa(2), xb(1) - xa(1))
+          beam%phi0 = model%x0([p(3), q(3)])
+          beam%mode_class = [class_of(r%elongation, r%n_elements, k, 1), &
+            class_of(r%bending, r%n_elements, k, 1), class_of(r%bending, r%n_elements, k, 2)]
+          if (r%shear_modulus > 0) beam%shear_p = 12 * beam%ei / (r%shear_factor * &
+            r%shear_modulus * r%area * beam%l0**2)
+          idx = model%add_element(beam, [0, 0, 0])
+          p = q
+        end do
+      end associate
+    end do
+  end subroutine add_links
+
+  !> Beam properties and mode classes shared by all elements of a link.
+  subroutine link_beam(r, where, beam, err)
+    type(link_rec_t), intent(in) :: r
+    character(len=*), intent(in) :: where
+    type(beam_t), intent(out) :: beam
+    type(error_t), intent(inout) :: err
+    call require_positive(r%e_modulus, where, 'E', err)
+    call require_positive(r%area, where, 'A', err)
+    call require_positive(r%inertia, where, 'I', err)
+    call require_positive(r%density, where, 'rho', err)
+    if (r%n_elements < 1) call err%set(ERR_INPUT, where // ': variable ''n_elements'' must ' // &
+      'be at least 1')
+    if (r%damping < 0) call err%set(ERR_INPUT, where // ': variable ''damping'' must not be negative')
+    if (r%shear_modulus < 0) call err%set(ERR_INPUT, where // ': variable ''G'' must not be negative')
+    if (.not. err%ok()) return
+    call check_classes(r%elongation, r%n_elements, where, 'elongation', err)
+    call check_classes(r%bending, r%n_elements, where, 'bending', err)
+    beam%ea = r%e_modulus * r%area
+    beam%ei = r%e_modulus * r%inertia
+    beam%rho_a = r%density * r%area
+    beam%damping = r%damping
+    select case (r%bending_form)
+    case ('angle'); beam%bending = BENDING_ANGLE
+    case ('sine'); beam%bending = BENDING_SINE
+    case default
+      call err%set(ERR_INPUT, where // ': variable ''bending_form'': ''' // r%bending_form // &
+        ''' is neither angle nor sine')
+    end select
+    select case (r%mass)
+    case ('consistent'); beam%consistent = .true.
+    case ('lumped'); beam%consistent = .false.
+    case default
+      call err%set(ERR_INPUT, where // ': variable ''mass'': ''' // r%mass // &
+        ''' is neither consistent nor lumped')
+    end select
+    beam%shear_p = 0.0_wp
+  end subroutine link_beam
+
+  !> A link's mode classes: 1 or n_elements keywords, each rigid, released, dynamic or
+  !> elastic (a beam mode cannot be driven).
+  subroutine check_classes(classes, n, where, var, err)
+    type(label_t), intent(in) :: classes(:)
+    integer, intent(in) :: n
+    character(len=*), intent(in) :: where, var
+    type(error_t), intent(inout) :: err
+    integer :: k, c
+    if (.not. err%ok()) return
+    if (size(classes) /= 1 .and. size(classes) /= n .and. &
+        .not. (var == 'bending' .and. size(classes) == 2 * n)) then
+      call err%set(ERR_INPUT, where // ': variable ''' // var // ''' needs 1 value or one ' // &
+        'per element')
+      return
+    end if
+    do k = 1, size(classes)
+      c = mode_class_from_name(classes(k)%s)
+      if (c == 0 .or. c == MODE_PRESCRIBED) then
+        call err%set(ERR_INPUT, where // ': variable ''' // var // ''': ''' // classes(k)%s // &
+          ''' is not rigid, released, dynamic or elastic')
+        return
+      end if
+    end do
+  end subroutine check_classes
+
+  !> Class of mode j (1 or 2: a bending pair's side) of element k of n from a list of 1, n or
+  !> 2 n class keywords (checked by check_classes).
+  integer function class_of(classes, n, k, j)
+    type(label_t), intent(in) :: classes(:)
+    integer, intent(in) :: n, k, j
+    integer :: i
+    i = 1
+    if (size(classes) == n) i = k
+    if (size(classes) == 2 * n) i = 2 * (k - 1) + j
+    class_of = mode_class_from_name(classes(i)%s)
+  end function class_of
+
+  module subroutine add_hinges(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(inout) :: b
+    type(error_t), intent(inout) :: err
+    type(hinge_t) :: hinge
+    integer :: h, in, im, idx, c
+    do h = 1, size(scene%hinges)
+      associate (r => scene%hinges(h), where => 'group &hinge ''' // scene%hinges(h)%label // '''')
+        in = node_index(scene, r%node)
+        c = mode_class_from_name(r%mode)
+        if (c == 0) then
+          call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
+            ''' is not rigid, released, prescribed, dynamic or elastic')
+          return
+        end if
+        im = 0
+        if (c == MODE_PRESCRIBED) then
+          im = motion_index(scene, r%motion)
+          if (im == 0) then
+            call err%set(ERR_INPUT, where // ': variable ''motion'': motion ''' // r%motion // &
+              ''' is not defined (no &motion with that label)')
+            return
+          end if
+        end if
+        if (r%stiffness < 0 .or. r%damping < 0) then
+          call err%set(ERR_INPUT, where // ': stiffness and damping must not be negative')
+          return
+        end if
+        ! Damping is stiffness-proportional (sigma = k (e + damping e_dot)): on a free hinge
+        ! it would silently do nothing.
+        if (r%damping > 0 .and. (r%stiffness == 0 .or. (c /= MODE_DYNAMIC .and. &
+            c /= MODE_ELASTIC))) then
+          call err%set(ERR_INPUT, where // ': variable ''damping'' (a time constant, ' // &
+            'sigma = k (e + damping de/dt)) needs a dynamic or elastic hinge with stiffness > 0')
+          return
+        end if
+        hinge%label = r%label
+        hinge%dofs = [node_rotation(scene, model, b, in), b%hinge_rot(h)]
+        hinge%phi0 = model%x0(hinge%dofs)
+        hinge%mode_class = [c]
+        hinge%k = r%stiffness
+        hinge%damping = r%damping
+        idx = model%add_element(hinge, [im])
+      end associate
+    end do
+  end subroutine add_hinges
+
+  module subroutine add_trusses(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(in) :: b
+    type(error_t), intent(inout) :: err
+    type(truss_t) :: truss
+    integer :: i, ia, ib, idx, c
+    do i = 1, size(scene%trusses)
+      associate (r => scene%trusses(i), where => 'group &truss ''' // scene%trusses(i)%label // '''')
+        call require_node(scene, r%from, where, 'from', ia, err)
+        if (err%ok()) call require_node(scene, r%to, where, 'to', ib, err)
+        if (err%ok()) call require_positive(r%e_modulus, where, 'E', err)
+        if (err%ok()) call require_positive(r%area, where, 'A', err)
+        if (.not. err%ok()) return
+        c = mode_class_from_name(r%mode)
+        if (c == 0 .or. c == MODE_PRESCRIBED) then
+          call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
+            ''' is not rigid, released, dynamic or elastic')
+          return
+        end if
+        truss%label = r%label
+        truss%dofs = [b%node_xy(ia), b%node_xy(ia) + 1, b%node_xy(ib), b%node_xy(ib) + 1]
+        truss%l0 = norm2(model%x0(truss%dofs(3:4)) - model%x0(truss%dofs(1:2)))
+        if (truss%l0 <= 0) then
+          call err%set(ERR_INPUT, where // ': nodes ''' // r%from // ''' and ''' // r%to // &
+            ''' are at the same place: a truss needs a positive length')
+          return
+        end if
+        truss%ea = r%e_modulus * r%area
+        truss%rho_a = r%density * r%area
+        truss%consistent = r%mass /= 'lumped'
+        truss%damping = r%damping
+        truss%mode_class = [c]
+        idx = model%add_element(truss, [0])
+      end associate
+    end do
+  end subroutine add_trusses
+
+  !> Sliders, after the trusses (element order: docs/input.md). A scene made by a program may
+  !> leave `sliders` unallocated: no sliders.
+  module subroutine add_sliders(scene, model, b, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(in) :: b
+    type(error_t), intent(inout) :: err
+    type(slider_t) :: slider
+    integer :: i, in, idx, c
+    if (.not. allocated(scene%sliders)) return
+    do i = 1, size(scene%sliders)
+      associate (r => scene%sliders(i), where => 'group &slider ''' // scene%sliders(i)%label // '''')
+        call require_node(scene, r%node, where, 'node', in, err)
+        if (.not. err%ok()) return
+        c = mode_class_from_name(r%mode)
+        if (c == 0 .or. c == MODE_PRESCRIBED) then
+          call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
+            ''' is not rigid, released, dynamic or elastic')
+        else if (norm2(r%direction) == 0) then
+          call err%set(ERR_INPUT, where // ': variable ''direction'' is the zero vector')
+        else if (r%stiffness < 0 .or. r%damping < 0) then
+          call err%set(ERR_INPUT, where // ': stiffness and damping must not be negative')
+        else if ((r%stiffness > 0 .or. r%damping > 0) .and. c /= MODE_DYNAMIC .and. &
+            c /= MODE_ELASTIC) then
+          call err%set(ERR_INPUT, where // ': variable ''stiffness'' and ''damping'' apply ' // &
+            'only with mode = ''dynamic'' or ''elastic''')
+        else if (r%damping > 0 .and. r%stiffness == 0) then
+          ! Stiffness-proportional damping (sigma = k (e + damping de/dt)) of a guide without
+          ! a spring would silently do nothing.
+          call err%set(ERR_INPUT, where // ': variable ''damping'' (a time constant, ' // &
+            'sigma = k (e + damping de/dt)) needs stiffness > 0')
+        end if
+        if (.not. err%ok()) return
+        slider%label = r%label
+        slider%dofs = [b%node_xy(in), b%node_xy(in) + 1]
+        slider%x_ref = model%x0(slider%dofs)
+        call slider%set_direction(r%direction)
+        slider%mode_class = [c]
+        slider%k = r%stiffness
+        slider%damping = r%damping
+        idx = model%add_element(slider, [0])
+      end associate
+    end do
+  end subroutine add_sliders
+
+  !> Rotation coordinate a link uses at one of its end nodes.
+  integer function link_end_rotation(scene, model, b, link, node) result(idx)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    type(builder_t), intent(inout) :: b
+    character(len=*), intent(in) :: link
+    integer, intent(in) :: node
+    integer :: h
+    do h = 1, size(scene%hinges)
+      if (scene%hinges(h)%link == link .and. scene%hinges(h)%node == scene%nodes(node)%label) then
+        if (b%hinge_rot(h) == 0) b%hinge_rot(h) = model%add_coord(0.0_wp, COORD_PHI, .false., &
+          'link ''' // link // ''' phi at node ''' // scene%nodes(node)%label // '''')
+        idx = b%hinge_rot(h)
+        return
+      end if
+    end do
+    idx = node_rotation(scene, model, b, node)
+  end function link_end_rotation
+
+end submodule model_build_elements
