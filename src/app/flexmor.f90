@@ -20,7 +20,8 @@ program flexmor_main
   call single_thread_blas()
   call parse_cli('usage: flexmor FILE.nml [-o OUT.h5] [-q]', [character(len=80) :: &
     '  runs the static, modal and dynamic analyses FILE.nml asks for and writes one', &
-    '  HDF5 file (default: FILE.h5 in the current directory). See README.md.'], &
+    '  HDF5 file (default: FILE.h5 in the current directory). See README.md.', &
+    '  --schema prints every scene variable (group, name, type, unit, default, ...).'], &
     'flexmor ' // FLEXMOR_VERSION, .false., args, err)
   if (args%done) stop
   run%verbose = args%verbose

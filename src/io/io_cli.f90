@@ -1,7 +1,9 @@
 !> Command lines of the flexmor executables: `PROGRAM INPUT [-o OUTPUT] [-q] [options]`.
 !> The output defaults to the input's base name with .h5, in the current directory.
 module io_cli
+  use, intrinsic :: iso_fortran_env, only: output_unit
   use core_error, only: error_t, ERR_INPUT
+  use io_schema, only: write_schema
   implicit none
   private
   public :: cli_args_t, parse_cli
@@ -15,7 +17,8 @@ module io_cli
 
 contains
 
-  !> `help` lines follow the usage line for -h; `version` is printed for --version; with
+  !> `help` lines follow the usage line for -h; `version` is printed for --version, the scene
+  !> schema (every input variable, tab-separated: docs/input.md) for --schema; with
   !> `allow_check`, --check is accepted. Output goes only where `args%verbose` is set on entry
   !> (e.g. rank 0 of an MPI job).
   subroutine parse_cli(usage, help, version, allow_check, args, err)
@@ -39,6 +42,10 @@ contains
         return
       case ('--version')
         if (talk) write(*, '(a)') version
+        args%done = .true.
+        return
+      case ('--schema')
+        if (talk) call write_schema(output_unit)
         args%done = .true.
         return
       case ('-q', '--quiet')

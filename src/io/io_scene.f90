@@ -5,20 +5,18 @@
 !> the check needs no other record; cross-references are checked by model_build.
 module io_scene
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_INPUT
+  use core_error, only: error_t, ERR_INPUT, ERR_INTERNAL
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use core_strings, only: lower_case, int_str
+  use io_schema, only: var_spec_t, SCHEMA, SCENE_GROUPS, find_spec, bound_problem, choice_list, &
+    has_choice, SINGLE_GROUPS
   use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
     mass_rec_t, force_rec_t, motion_rec_t, label_t, slider_rec_t
-  use motion_law, only: law_from_name, table_problem
+  use motion_law, only: table_problem
   use io_table, only: read_table_csv, relative_to
   implicit none
   private
   public :: read_scene, load_scene, SCENE_GROUPS
-
-  character(len=9), parameter :: SCENE_GROUPS(15) = [character(len=9) :: 'scene', 'node', &
-    'link', 'hinge', 'truss', 'mass', 'force', 'motion', 'static', 'modal', 'buckling', &
-    'dynamic', 'reduction', 'output', 'slider']
 
 contains
 
@@ -40,8 +38,7 @@ contains
     call file%check_known_groups(SCENE_GROUPS, err)
     if (.not. err%ok()) return
     do i = 1, size(SCENE_GROUPS)
-      if (any(SCENE_GROUPS(i) == [character(len=9) :: 'scene', 'static', 'modal', 'buckling', &
-                                  'dynamic', 'reduction', 'output']) .and. &
+      if (any(SCENE_GROUPS(i) == SINGLE_GROUPS) .and. &
           file%count(trim(SCENE_GROUPS(i))) > 1) then
         call err%set(ERR_INPUT, file%path // ': group &' // trim(SCENE_GROUPS(i)) // &
           ' may appear only once')
@@ -94,7 +91,35 @@ contains
       file%path // ': group &reduction needs a &dynamic group (it reduces the dynamic analysis)')
   end subroutine read_scene
 
-  ! Getter wrappers that keep the first error and skip work after it.
+  ! Getter wrappers that keep the first error and skip work after it. Each takes the variable's
+  ! default, range and choices from the scene schema (io_schema); `default` overrides the
+  ! schema's where it depends on other variables (fix_x on fixed, a motion's end on start).
+
+  !> The schema entry of a variable of g's group; reading an undeclared one is a bug.
+  function spec_of(g, var, err) result(spec)
+    type(nml_group_t), intent(in) :: g
+    character(len=*), intent(in) :: var
+    type(error_t), intent(inout) :: err
+    type(var_spec_t) :: spec
+    integer :: k
+    k = find_spec(g%name, var)
+    spec = SCHEMA(max(k, 1))
+    if (k == 0) call err%set(ERR_INTERNAL, 'variable ''' // var // ''' of &' // g%name // &
+      ' is not declared in the scene schema (io_schema)')
+  end function spec_of
+
+  !> Range check of a number read for `spec`.
+  subroutine check_bounds(g, spec, x, err)
+    type(nml_group_t), intent(in) :: g
+    type(var_spec_t), intent(in) :: spec
+    real(wp), intent(in) :: x
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: msg
+    if (.not. err%ok()) return
+    msg = bound_problem(spec, x)
+    if (len(msg) > 0) call err%set(ERR_INPUT, g%where() // ': variable ''' // &
+      trim(spec%name) // ''' ' // msg)
+  end subroutine check_bounds
 
   subroutine rd_real(g, var, value, err, default)
     type(nml_group_t), intent(inout) :: g
@@ -102,10 +127,23 @@ contains
     real(wp), intent(inout) :: value
     type(error_t), intent(inout) :: err
     real(wp), intent(in), optional :: default
+    type(var_spec_t) :: spec
     type(error_t) :: e
+    real(wp) :: fallback
+    integer :: ios
     if (.not. err%ok()) return
-    call g%get_real(var, value, e, default)
+    spec = spec_of(g, var, err)
+    if (.not. err%ok()) return
+    read(spec%default, *, iostat=ios) fallback
+    if (present(default)) then
+      call g%get_real(var, value, e, default)
+    else if (spec%required .or. ios /= 0) then
+      call g%get_real(var, value, e)
+    else
+      call g%get_real(var, value, e, fallback)
+    end if
     if (.not. e%ok()) err = e
+    call check_bounds(g, spec, value, err)
   end subroutine rd_real
 
   subroutine rd_int(g, var, value, err, default)
@@ -114,10 +152,27 @@ contains
     integer, intent(inout) :: value
     type(error_t), intent(inout) :: err
     integer, intent(in), optional :: default
+    type(var_spec_t) :: spec
     type(error_t) :: e
+    integer :: fallback, ios
     if (.not. err%ok()) return
-    call g%get_int(var, value, e, default)
+    spec = spec_of(g, var, err)
+    if (.not. err%ok()) return
+    read(spec%default, *, iostat=ios) fallback
+    if (present(default)) then
+      call g%get_int(var, value, e, default)
+    else if (spec%required .or. ios /= 0) then
+      call g%get_int(var, value, e)
+    else
+      call g%get_int(var, value, e, fallback)
+    end if
     if (.not. e%ok()) err = e
+    call check_bounds(g, spec, real(value, wp), err)
+    if (err%ok() .and. len_trim(spec%choices) > 0) then
+      if (.not. has_choice(spec, int_str(value))) call err%set(ERR_INPUT, g%where() // &
+        ': variable ''' // var // ''' must be ' // choice_list(spec) // ', got ' // &
+        int_str(value))
+    end if
   end subroutine rd_int
 
   subroutine rd_logical(g, var, value, err, default)
@@ -126,50 +181,109 @@ contains
     logical, intent(inout) :: value
     type(error_t), intent(inout) :: err
     logical, intent(in), optional :: default
+    type(var_spec_t) :: spec
     type(error_t) :: e
     if (.not. err%ok()) return
-    call g%get_logical(var, value, e, default)
+    spec = spec_of(g, var, err)
+    if (.not. err%ok()) return
+    if (present(default)) then
+      call g%get_logical(var, value, e, default)
+    else if (spec%required) then
+      call g%get_logical(var, value, e)
+    else
+      call g%get_logical(var, value, e, spec%default == '.true.')
+    end if
     if (.not. e%ok()) err = e
   end subroutine rd_logical
 
-  !> Strings; `lower` folds keywords (mode classes, laws) to lower case.
-  subroutine rd_string(g, var, value, err, default, lower)
+  !> A string: free text, a label or a file name ('' by default unless required).
+  subroutine rd_string(g, var, value, err, default)
     type(nml_group_t), intent(inout) :: g
     character(len=*), intent(in) :: var
     character(len=:), allocatable, intent(inout) :: value
     type(error_t), intent(inout) :: err
     character(len=*), intent(in), optional :: default
-    logical, intent(in), optional :: lower
+    type(var_spec_t) :: spec
     type(error_t) :: e
     if (.not. err%ok()) return
-    call g%get_string(var, value, e, default)
+    spec = spec_of(g, var, err)
+    if (.not. err%ok()) return
+    if (present(default)) then
+      call g%get_string(var, value, e, default)
+    else if (spec%required) then
+      call g%get_string(var, value, e)
+    else
+      call g%get_string(var, value, e, trim(spec%default))
+    end if
+    if (.not. e%ok()) err = e
+  end subroutine rd_string
+
+  !> A keyword (mode class, law, integrator, ...): folded to lower case and checked against
+  !> the schema's choices.
+  subroutine rd_choice(g, var, value, err)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: var
+    character(len=:), allocatable, intent(inout) :: value
+    type(error_t), intent(inout) :: err
+    type(var_spec_t) :: spec
+    type(error_t) :: e
+    if (.not. err%ok()) return
+    spec = spec_of(g, var, err)
+    if (.not. err%ok()) return
+    call g%get_string(var, value, e, trim(spec%default))
     if (.not. e%ok()) then
       err = e
       return
     end if
-    if (present(lower)) value = lower_case(value)
-  end subroutine rd_string
+    value = lower_case(value)
+    if (.not. has_choice(spec, value)) call err%set(ERR_INPUT, g%where() // ': variable ''' // &
+      var // ''': ''' // value // ''' is not ' // choice_list(spec))
+  end subroutine rd_choice
 
-  !> Mode classes of a link: one keyword for every element, one per element (n of them) or,
-  !> for bending, one per bending mode (2 n: each element's `from` side, then its `to` side).
-  subroutine rd_classes(g, var, n, classes, err, default)
+  !> Keywords, each checked against the schema's choices (default: the schema's, if any).
+  subroutine rd_choices(g, var, values, err)
     type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: var, default
-    integer, intent(in) :: n
-    type(label_t), allocatable, intent(out) :: classes(:)
+    character(len=*), intent(in) :: var
+    type(string_t), allocatable, intent(out) :: values(:)
     type(error_t), intent(inout) :: err
-    type(string_t), allocatable :: values(:)
-    type(string_t) :: fallback(1)
+    type(var_spec_t) :: spec
+    type(string_t), allocatable :: fallback(:)
     type(error_t) :: e
     integer :: i
-    allocate(classes(0))
+    allocate(values(0))
     if (.not. err%ok()) return
-    fallback(1)%s = default
+    spec = spec_of(g, var, err)
+    if (.not. err%ok()) return
+    allocate(fallback(merge(1, 0, len_trim(spec%default) > 0)))
+    if (size(fallback) > 0) fallback(1)%s = trim(spec%default)
     call g%get_string_array(var, values, e, default=fallback)
     if (.not. e%ok()) then
       err = e
       return
     end if
+    do i = 1, size(values)
+      values(i)%s = lower_case(values(i)%s)
+      if (.not. has_choice(spec, values(i)%s)) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''': ''' // &
+          values(i)%s // ''' is not ' // choice_list(spec))
+        return
+      end if
+    end do
+  end subroutine rd_choices
+
+  !> Mode classes of a link: one keyword for every element, one per element (n of them) or,
+  !> for bending, one per bending mode (2 n: each element's `from` side, then its `to` side).
+  subroutine rd_classes(g, var, n, classes, err)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: var
+    integer, intent(in) :: n
+    type(label_t), allocatable, intent(out) :: classes(:)
+    type(error_t), intent(inout) :: err
+    type(string_t), allocatable :: values(:)
+    integer :: i
+    allocate(classes(0))
+    call rd_choices(g, var, values, err)
+    if (.not. err%ok()) return
     if (size(values) /= 1 .and. size(values) /= n .and. &
         .not. (var == 'bending' .and. size(values) == 2 * n)) then
       call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''' needs 1 value (all ' // &
@@ -181,7 +295,7 @@ contains
     deallocate(classes)
     allocate(classes(size(values)))
     do i = 1, size(values)
-      classes(i)%s = lower_case(values(i)%s)
+      classes(i)%s = values(i)%s
     end do
   end subroutine rd_classes
 
@@ -200,26 +314,6 @@ contains
         ''' may not contain ''/'' or start or end with a blank')
     end if
   end subroutine rd_label
-
-  !> Error unless value > 0 (or >= 0 when zero is allowed).
-  subroutine positive(g, var, value, err, zero_ok)
-    type(nml_group_t), intent(in) :: g
-    character(len=*), intent(in) :: var
-    real(wp), intent(in) :: value
-    type(error_t), intent(inout) :: err
-    logical, intent(in), optional :: zero_ok
-    character(len=32) :: buf
-    if (.not. err%ok()) return
-    if (value > 0 .or. (present(zero_ok) .and. value == 0)) return
-    write(buf, '(g0)') value
-    if (present(zero_ok)) then
-      call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''' must not be ' // &
-        'negative, got ' // trim(buf))
-    else
-      call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''' must be positive, got ' &
-        // trim(buf))
-    end if
-  end subroutine positive
 
   !> An option of one setting that is given with another (`dt` with integrator = 'bdf') would be
   !> ignored without a word: refuse it, saying when it applies.
@@ -245,7 +339,7 @@ contains
     type(error_t), intent(inout) :: err
     real(wp), allocatable :: gravity(:)
     type(error_t) :: e
-    call rd_string(g, 'title', scene%title, err, default='')
+    call rd_string(g, 'title', scene%title, err)
     if (.not. err%ok()) return
     call g%get_real_array('gravity', gravity, e, default=[0.0_wp, 0.0_wp])
     if (.not. e%ok()) then
@@ -265,7 +359,7 @@ contains
     call rd_label(g, n%label, err)
     call rd_real(g, 'x', n%x, err)
     call rd_real(g, 'y', n%y, err)
-    call rd_logical(g, 'fixed', fixed, err, default=.false.)
+    call rd_logical(g, 'fixed', fixed, err)
     call rd_logical(g, 'fix_x', n%fix_x, err, default=fixed)
     call rd_logical(g, 'fix_y', n%fix_y, err, default=fixed)
     call rd_logical(g, 'fix_phi', n%fix_phi, err, default=fixed)
@@ -322,27 +416,18 @@ contains
     call rd_label(g, r%label, err)
     call rd_string(g, 'from', r%from, err)
     call rd_string(g, 'to', r%to, err)
-    call rd_int(g, 'n_elements', r%n_elements, err, default=1)
+    call rd_int(g, 'n_elements', r%n_elements, err)
     call rd_real(g, 'E', r%e_modulus, err)
     call rd_real(g, 'A', r%area, err)
     call rd_real(g, 'I', r%inertia, err)
     call rd_real(g, 'rho', r%density, err)
-    call rd_real(g, 'G', r%shear_modulus, err, default=0.0_wp)
+    call rd_real(g, 'G', r%shear_modulus, err)
     call rd_real(g, 'shear_factor', r%shear_factor, err, default=5.0_wp / 6.0_wp)
-    call rd_classes(g, 'elongation', r%n_elements, r%elongation, err, default='rigid')
-    call rd_classes(g, 'bending', r%n_elements, r%bending, err, default='dynamic')
-    call rd_string(g, 'bending_form', r%bending_form, err, default='angle', lower=.true.)
-    call rd_string(g, 'mass', r%mass, err, default='consistent', lower=.true.)
-    call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
-    if (err%ok() .and. r%n_elements < 1) call err%set(ERR_INPUT, g%where() // &
-      ': variable ''n_elements'' must be at least 1')
-    call positive(g, 'E', r%e_modulus, err)
-    call positive(g, 'A', r%area, err)
-    call positive(g, 'I', r%inertia, err)
-    call positive(g, 'rho', r%density, err)
-    call positive(g, 'G', r%shear_modulus, err, zero_ok=.true.)
-    call positive(g, 'shear_factor', r%shear_factor, err)
-    call positive(g, 'damping', r%damping, err, zero_ok=.true.)
+    call rd_classes(g, 'elongation', r%n_elements, r%elongation, err)
+    call rd_classes(g, 'bending', r%n_elements, r%bending, err)
+    call rd_choice(g, 'bending_form', r%bending_form, err)
+    call rd_choice(g, 'mass', r%mass, err)
+    call rd_real(g, 'damping', r%damping, err)
   end subroutine read_link
 
   subroutine read_hinge(g, r, err)
@@ -352,20 +437,15 @@ contains
     call rd_label(g, r%label, err)
     call rd_string(g, 'node', r%node, err)
     call rd_string(g, 'link', r%link, err)
-    call rd_string(g, 'mode', r%mode, err, default='dynamic', lower=.true.)
-    if (err%ok() .and. all(r%mode /= [character(len=10) :: 'rigid', 'released', 'prescribed', &
-        'dynamic', 'elastic'])) call err%set(ERR_INPUT, g%where() // ': variable ''mode'': ''' &
-        // r%mode // ''' is not rigid, released, prescribed, dynamic or elastic')
+    call rd_choice(g, 'mode', r%mode, err)
     if (err%ok()) then
       call only_with(g, ['motion'], r%mode == 'prescribed', 'with mode = ''prescribed''', err)
       call only_with(g, ['stiffness', 'damping  '], r%mode == 'dynamic' .or. &
         r%mode == 'elastic', 'with mode = ''dynamic'' or ''elastic''', err)
     end if
-    call rd_string(g, 'motion', r%motion, err, default='')
-    call rd_real(g, 'stiffness', r%stiffness, err, default=0.0_wp)
-    call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
-    call positive(g, 'stiffness', r%stiffness, err, zero_ok=.true.)
-    call positive(g, 'damping', r%damping, err, zero_ok=.true.)
+    call rd_string(g, 'motion', r%motion, err)
+    call rd_real(g, 'stiffness', r%stiffness, err)
+    call rd_real(g, 'damping', r%damping, err)
     if (err%ok() .and. r%mode == 'prescribed' .and. len(r%motion) == 0) call err%set(ERR_INPUT, &
       g%where() // ': variable ''motion'' is required when mode = ''prescribed''')
   end subroutine read_hinge
@@ -379,16 +459,10 @@ contains
     call rd_string(g, 'to', r%to, err)
     call rd_real(g, 'E', r%e_modulus, err)
     call rd_real(g, 'A', r%area, err)
-    call rd_real(g, 'rho', r%density, err, default=0.0_wp)
-    call rd_string(g, 'mode', r%mode, err, default='dynamic', lower=.true.)
-    call rd_string(g, 'mass', r%mass, err, default='consistent', lower=.true.)
-    call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
-    if (err%ok() .and. r%mass /= 'consistent' .and. r%mass /= 'lumped') call err%set(ERR_INPUT, &
-      g%where() // ': variable ''mass'': ''' // r%mass // ''' is neither consistent nor lumped')
-    call positive(g, 'E', r%e_modulus, err)
-    call positive(g, 'A', r%area, err)
-    call positive(g, 'rho', r%density, err, zero_ok=.true.)
-    call positive(g, 'damping', r%damping, err, zero_ok=.true.)
+    call rd_real(g, 'rho', r%density, err)
+    call rd_choice(g, 'mode', r%mode, err)
+    call rd_choice(g, 'mass', r%mass, err)
+    call rd_real(g, 'damping', r%damping, err)
   end subroutine read_truss
 
   !> A slider; the node and the guide's length are checked by model_build (add_sliders).
@@ -400,16 +474,11 @@ contains
     type(error_t) :: e
     call rd_label(g, r%label, err)
     call rd_string(g, 'node', r%node, err)
-    call rd_string(g, 'mode', r%mode, err, default='rigid', lower=.true.)
-    if (err%ok() .and. all(r%mode /= [character(len=8) :: 'rigid', 'released', 'dynamic', &
-        'elastic'])) call err%set(ERR_INPUT, g%where() // ': variable ''mode'': ''' // r%mode &
-        // ''' is not rigid, released, dynamic or elastic')
+    call rd_choice(g, 'mode', r%mode, err)
     call only_with(g, ['stiffness', 'damping  '], r%mode == 'dynamic' .or. r%mode == 'elastic', &
       'with mode = ''dynamic'' or ''elastic''', err)
-    call rd_real(g, 'stiffness', r%stiffness, err, default=0.0_wp)
-    call rd_real(g, 'damping', r%damping, err, default=0.0_wp)
-    call positive(g, 'stiffness', r%stiffness, err, zero_ok=.true.)
-    call positive(g, 'damping', r%damping, err, zero_ok=.true.)
+    call rd_real(g, 'stiffness', r%stiffness, err)
+    call rd_real(g, 'damping', r%damping, err)
     if (.not. err%ok()) return
     call g%get_real_array('direction', direction, e)
     if (.not. e%ok()) then
@@ -429,10 +498,8 @@ contains
     type(mass_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
     call rd_string(g, 'node', r%node, err)
-    call rd_real(g, 'm', r%m, err, default=0.0_wp)
-    call rd_real(g, 'J', r%j, err, default=0.0_wp)
-    call positive(g, 'm', r%m, err, zero_ok=.true.)
-    call positive(g, 'J', r%j, err, zero_ok=.true.)
+    call rd_real(g, 'm', r%m, err)
+    call rd_real(g, 'J', r%j, err)
   end subroutine read_mass
 
   subroutine read_force(g, r, err)
@@ -440,10 +507,10 @@ contains
     type(force_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
     call rd_string(g, 'node', r%node, err)
-    call rd_real(g, 'fx', r%fx, err, default=0.0_wp)
-    call rd_real(g, 'fy', r%fy, err, default=0.0_wp)
-    call rd_real(g, 'moment', r%moment, err, default=0.0_wp)
-    call rd_string(g, 'time_law', r%time_law, err, default='')
+    call rd_real(g, 'fx', r%fx, err)
+    call rd_real(g, 'fy', r%fy, err)
+    call rd_real(g, 'moment', r%moment, err)
+    call rd_string(g, 'time_law', r%time_law, err)
   end subroutine read_force
 
   subroutine read_motion(g, r, err)
@@ -457,13 +524,8 @@ contains
     logical :: rest_to_rest
     integer :: i
     call rd_label(g, r%label, err)
-    call rd_string(g, 'law', r%law, err, default='cubic', lower=.true.)
+    call rd_choice(g, 'law', r%law, err)
     if (.not. err%ok()) return
-    if (law_from_name(r%law) < 0) then
-      call err%set(ERR_INPUT, g%where() // ': variable ''law'': unknown law ''' // r%law // &
-        ''' (use constant, cubic, quintic, cycloidal, ramp, harmonic, spin_up, sum or table)')
-      return
-    end if
     ! Each law reads only its own variables: another law's would be ignored without a word.
     rest_to_rest = any(r%law == [character(len=9) :: 'constant', 'cubic', 'quintic', 'cycloidal'])
     call only_with(g, ['end'], rest_to_rest, REST, err)
@@ -477,23 +539,22 @@ contains
       'with law = ''harmonic''', err)
     call only_with(g, ['terms'], r%law == 'sum', 'with law = ''sum''', err)
     call only_with(g, ['times ', 'values', 'file  '], r%law == 'table', 'with law = ''table''', err)
-    call rd_real(g, 'start', r%start, err, default=0.0_wp)
-    call rd_real(g, 't0', r%t0, err, default=0.0_wp)
+    call rd_real(g, 'start', r%start, err)
+    call rd_real(g, 't0', r%t0, err)
     select case (r%law)
     case ('constant')
       call rd_real(g, 'end', r%end, err, default=r%start)
-      call rd_real(g, 'duration', r%duration, err, default=0.0_wp)
+      ! A constant law ignores its duration; one given must still make sense.
+      if (g%has('duration')) call rd_real(g, 'duration', r%duration, err)
     case ('ramp')
       call rd_real(g, 'rate', r%rate, err)
     case ('spin_up')
       call rd_real(g, 'rate', r%rate, err)
       call rd_real(g, 'duration', r%duration, err)
-      call positive(g, 'duration', r%duration, err)
     case ('harmonic')
       call rd_real(g, 'amplitude', r%amplitude, err)
       call rd_real(g, 'frequency', r%frequency, err)
-      call rd_real(g, 'phase', r%phase, err, default=0.0_wp)
-      call positive(g, 'frequency', r%frequency, err)
+      call rd_real(g, 'phase', r%phase, err)
     case ('sum')
       if (.not. err%ok()) return
       call g%get_string_array('terms', terms, e)
@@ -512,7 +573,6 @@ contains
     case default
       call rd_real(g, 'end', r%end, err)
       call rd_real(g, 'duration', r%duration, err)
-      call positive(g, 'duration', r%duration, err)
     end select
   end subroutine read_motion
 
@@ -554,15 +614,10 @@ contains
     type(scene_t), intent(inout) :: scene
     type(error_t), intent(inout) :: err
     scene%static%active = .true.
-    call rd_int(g, 'n_steps', scene%static%n_steps, err, default=10)
-    call rd_real(g, 'tol', scene%static%tol, err, default=1.0e-10_wp)
-    call rd_int(g, 'max_iter', scene%static%max_iter, err, default=30)
-    call rd_int(g, 'n_frequencies', scene%static%n_frequencies, err, default=0)
-    if (err%ok() .and. scene%static%n_frequencies < 0) call err%set(ERR_INPUT, g%where() // &
-      ': variable ''n_frequencies'' must not be negative')
-    call positive(g, 'tol', scene%static%tol, err)
-    if (err%ok() .and. (scene%static%n_steps < 1 .or. scene%static%max_iter < 1)) &
-      call err%set(ERR_INPUT, g%where() // ': n_steps and max_iter must be at least 1')
+    call rd_int(g, 'n_steps', scene%static%n_steps, err)
+    call rd_real(g, 'tol', scene%static%tol, err)
+    call rd_int(g, 'max_iter', scene%static%max_iter, err)
+    call rd_int(g, 'n_frequencies', scene%static%n_frequencies, err)
   end subroutine read_static
 
   subroutine read_modal(g, scene, err)
@@ -570,10 +625,8 @@ contains
     type(scene_t), intent(inout) :: scene
     type(error_t), intent(inout) :: err
     scene%modal%active = .true.
-    call rd_int(g, 'n_modes', scene%modal%n_modes, err, default=0)
-    call rd_real(g, 'time', scene%modal%time, err, default=0.0_wp)
-    if (err%ok() .and. scene%modal%n_modes < 0) call err%set(ERR_INPUT, g%where() // &
-      ': variable ''n_modes'' must not be negative (0 means all)')
+    call rd_int(g, 'n_modes', scene%modal%n_modes, err)
+    call rd_real(g, 'time', scene%modal%time, err)
   end subroutine read_modal
 
   subroutine read_buckling(g, scene, err)
@@ -581,11 +634,8 @@ contains
     type(scene_t), intent(inout) :: scene
     type(error_t), intent(inout) :: err
     scene%buckling%active = .true.
-    call rd_int(g, 'n_modes', scene%buckling%n_modes, err, default=6)
-    call rd_real(g, 'load_factor', scene%buckling%load_factor, err, default=1.0_wp)
-    call positive(g, 'load_factor', scene%buckling%load_factor, err)
-    if (err%ok() .and. scene%buckling%n_modes < 1) call err%set(ERR_INPUT, g%where() // &
-      ': variable ''n_modes'' must be at least 1')
+    call rd_int(g, 'n_modes', scene%buckling%n_modes, err)
+    call rd_real(g, 'load_factor', scene%buckling%load_factor, err)
   end subroutine read_buckling
 
   subroutine read_dynamic(g, scene, err)
@@ -595,8 +645,8 @@ contains
     associate (d => scene%dynamic)
       d%active = .true.
       call rd_real(g, 't_end', d%t_end, err)
-      call rd_real(g, 'output_dt', d%output_dt, err, default=1.0e-3_wp)
-      call rd_string(g, 'integrator', d%integrator, err, default='bdf', lower=.true.)
+      call rd_real(g, 'output_dt', d%output_dt, err)
+      call rd_choice(g, 'integrator', d%integrator, err)
       if (err%ok()) then
         associate (m => d%integrator, when => 'with integrator = ')
           call only_with(g, ['dt     ', 'rho_inf'], m == 'galpha', when // '''galpha''', err)
@@ -606,37 +656,18 @@ contains
           call only_with(g, ['jacobian'], m /= 'erk', when // '''bdf'' or ''galpha''', err)
         end associate
       end if
-      call rd_string(g, 'jacobian', d%jacobian, err, default='linearised', lower=.true.)
-      call rd_real(g, 'rtol', d%rtol, err, default=1.0e-6_wp)
-      call rd_real(g, 'atol', d%atol, err, default=1.0e-8_wp)
-      call rd_real(g, 'max_step', d%max_step, err, default=0.0_wp)
-      call rd_int(g, 'max_order', d%max_order, err, default=5)
-      call rd_int(g, 'erk_order', d%erk_order, err, default=5)
-      call rd_real(g, 'dt', d%dt, err, default=1.0e-3_wp)
-      call rd_real(g, 'rho_inf', d%rho_inf, err, default=0.8_wp)
-      call positive(g, 't_end', d%t_end, err)
-      call positive(g, 'output_dt', d%output_dt, err)
-      call positive(g, 'rtol', d%rtol, err)
-      call positive(g, 'atol', d%atol, err)
-      call positive(g, 'max_step', d%max_step, err, zero_ok=.true.)
-      call positive(g, 'dt', d%dt, err)
+      call rd_choice(g, 'jacobian', d%jacobian, err)
+      call rd_real(g, 'rtol', d%rtol, err)
+      call rd_real(g, 'atol', d%atol, err)
+      call rd_real(g, 'max_step', d%max_step, err)
+      call rd_int(g, 'max_order', d%max_order, err)
+      call rd_int(g, 'erk_order', d%erk_order, err)
+      call rd_real(g, 'dt', d%dt, err)
+      call rd_real(g, 'rho_inf', d%rho_inf, err)
       if (.not. err%ok()) return
-      if (all(d%integrator /= [character(len=6) :: 'bdf', 'galpha', 'erk'])) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''integrator'': ''' // d%integrator // &
-          ''' is not bdf, galpha or erk')
-      else if (all(d%erk_order /= [2, 3, 4, 5, 6, 8])) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''erk_order'' must be 2, 3, 4, 5, 6 or 8')
-      else if (all(d%jacobian /= [character(len=10) :: 'linearised', 'fd', 'internal'])) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''jacobian'': ''' // d%jacobian // &
-          ''' is not linearised, fd or internal')
-      else if (d%jacobian == 'internal' .and. d%integrator /= 'bdf') then
-        call err%set(ERR_INPUT, g%where() // ': variable ''jacobian'': ''internal'' (CVODE''s' &
-          // ' difference quotients) needs integrator = ''bdf''')
-      else if (d%max_order < 1 .or. d%max_order > 5) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''max_order'' must be 1 to 5')
-      else if (d%rho_inf < 0 .or. d%rho_inf > 1) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''rho_inf'' must be in [0, 1]')
-      end if
+      if (d%jacobian == 'internal' .and. d%integrator /= 'bdf') call err%set(ERR_INPUT, &
+        g%where() // ': variable ''jacobian'': ''internal'' (CVODE''s difference quotients) ' &
+        // 'needs integrator = ''bdf''')
     end associate
   end subroutine read_dynamic
 
@@ -657,45 +688,29 @@ contains
       if (g%has('n_modes')) then
         r%selection = 'count'
         call rd_int(g, 'n_modes', r%n_modes, err)
-        if (err%ok() .and. r%n_modes < 1) call err%set(ERR_INPUT, g%where() // &
-          ': variable ''n_modes'' must be at least 1')
       else if (g%has('cutoff_hz')) then
         r%selection = 'cutoff'
         call rd_real(g, 'cutoff_hz', r%cutoff_hz, err)
-        call positive(g, 'cutoff_hz', r%cutoff_hz, err)
       else
         r%selection = 'auto'
         call rd_real(g, 'auto_factor', r%auto_factor, err)
-        call positive(g, 'auto_factor', r%auto_factor, err)
       end if
-      call rd_real(g, 'basis_time', r%basis_time, err, default=0.0_wp)
+      call rd_real(g, 'basis_time', r%basis_time, err)
       if (g%has('basis_prescribed') .and. err%ok()) then
         call g%get_real_array('basis_prescribed', r%basis_prescribed, e)
         if (.not. e%ok()) err = e
       end if
-      call rd_logical(g, 'static_correction', r%static_correction, err, default=.false.)
-      call rd_string(g, 'update', r%update, err, default='none', lower=.true.)
+      call rd_logical(g, 'static_correction', r%static_correction, err)
+      call rd_choice(g, 'update', r%update, err)
       if (err%ok()) then
         call only_with(g, ['update_interval'], r%update == 'interval' .or. r%update == 'mac', &
           'with update = ''interval'' or ''mac''', err)
         call only_with(g, ['mac_threshold'], r%update == 'mac', &
           'with update = ''mac''', err)
       end if
-      call rd_real(g, 'mac_threshold', r%mac_threshold, err, default=0.9_wp)
-      call rd_string(g, 'eigensolver', r%eigensolver, err, default='auto', lower=.true.)
-      if (.not. err%ok()) return
-      if (all(r%update /= [character(len=8) :: 'none', 'interval', 'mac'])) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''update'': ''' // r%update // &
-          ''' is not none, interval or mac')
-      else if (r%update /= 'none') then
-        call rd_real(g, 'update_interval', r%update_interval, err)
-        call positive(g, 'update_interval', r%update_interval, err)
-      end if
-      if (err%ok() .and. .not. (r%mac_threshold > 0 .and. r%mac_threshold <= 1)) &
-        call err%set(ERR_INPUT, g%where() // ': variable ''mac_threshold'' must be in (0, 1]')
-      if (err%ok() .and. all(r%eigensolver /= [character(len=6) :: 'auto', 'lapack', 'arpack'])) &
-        call err%set(ERR_INPUT, g%where() // ': variable ''eigensolver'': ''' // &
-          r%eigensolver // ''' is not auto, lapack or arpack')
+      call rd_real(g, 'mac_threshold', r%mac_threshold, err)
+      call rd_choice(g, 'eigensolver', r%eigensolver, err)
+      if (r%update /= 'none') call rd_real(g, 'update_interval', r%update_interval, err)
     end associate
   end subroutine read_reduction
 

@@ -10,7 +10,8 @@ module sweep_spec
   use core_error, only: error_t, ERR_INPUT, ERR_INTERNAL
   use core_strings, only: int_str, real_str
   use io_namelist, only: nml_file_t, nml_group_t, string_t
-  use io_scene, only: SCENE_GROUPS
+  use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS, SCHEMA, find_spec, kind_name, VK_REAL, &
+    VK_INT
   implicit none
   private
   public :: sweep_spec_t, apply_case
@@ -45,34 +46,6 @@ module sweep_spec
     procedure :: n_cases => spec_n_cases
     procedure :: n_parameters => spec_n_parameters
   end type sweep_spec_t
-
-  !> Groups that occur at most once in a scene (io_scene.read_scene); the others repeat and are
-  !> named by a key.
-  character(len=9), parameter :: SINGLE_GROUPS(6) = [character(len=9) :: 'scene', 'static', &
-    'modal', 'dynamic', 'reduction', 'output']
-
-  !> Integer scene variables (io_scene rd_int calls): their values must be whole numbers.
-  character(len=20), parameter :: INT_VARS(7) = [character(len=20) :: 'link.n_elements', &
-    'static.n_steps', 'static.max_iter', 'modal.n_modes', 'dynamic.max_order', &
-    'dynamic.erk_order', 'reduction.n_modes']
-
-  !> Scene variables that are not one number: a number written into them fails every case, so
-  !> they are refused up front. A variable missing here is still caught, by the scene reader.
-  character(len=40), parameter :: NON_NUMERIC(30) = [character(len=40) :: &
-    'scene.title string', 'scene.gravity list of 2 reals', &
-    'node.label string', 'node.fixed logical', 'node.fix_x logical', 'node.fix_y logical', &
-    'node.fix_phi logical', &
-    'link.label string', 'link.from string', 'link.to string', 'link.elongation string', &
-    'link.bending string', 'link.bending_form string', 'link.mass string', &
-    'hinge.label string', 'hinge.node string', 'hinge.link string', 'hinge.mode string', &
-    'hinge.motion string', &
-    'truss.label string', 'truss.from string', 'truss.to string', 'truss.mode string', &
-    'truss.mass string', &
-    'mass.node string', 'force.node string', 'motion.label string', 'motion.law string', &
-    'dynamic.integrator string', 'dynamic.jacobian string']
-  character(len=40), parameter :: NON_NUMERIC_2(5) = [character(len=40) :: &
-    'reduction.basis_prescribed real list', 'reduction.static_correction logical', &
-    'reduction.update string', 'reduction.eigensolver string', 'output.nodes string list']
 
   !> A value within this relative distance of an integer counts as that integer: start/stop/n
   !> spacing of integers carries round-off.
@@ -440,8 +413,8 @@ contains
   subroutine split_name(p, err)
     type(param_t), intent(inout) :: p
     type(error_t), intent(inout) :: err
-    character(len=:), allocatable :: name, what
-    integer :: d1, d2, i
+    character(len=:), allocatable :: name
+    integer :: d1, d2, k
 
     name = trim(adjustl(p%name))
     d1 = index(name, '.')
@@ -482,26 +455,18 @@ contains
       return
     end if
 
-    what = ''
-    do i = 1, size(NON_NUMERIC)
-      call match(NON_NUMERIC(i))
-    end do
-    do i = 1, size(NON_NUMERIC_2)
-      call match(NON_NUMERIC_2(i))
-    end do
-    if (len(what) > 0) then
-      call err%set(ERR_INPUT, p%origin // ": variable '" // p%var // "' of &" // p%group // &
-        ' is a ' // what // ', not one number: it cannot be swept')
+    k = find_spec(p%group, p%var)
+    if (k == 0) then
+      call err%set(ERR_INPUT, p%origin // ": &" // p%group // " has no variable '" // p%var // &
+        "' (docs/input.md lists them)")
       return
     end if
-    p%is_int = any(INT_VARS == p%group // '.' // p%var)
-  contains
-    subroutine match(entry)
-      character(len=*), intent(in) :: entry
-      integer :: sp
-      sp = index(entry, ' ')
-      if (entry(1:sp - 1) == p%group // '.' // p%var) what = trim(entry(sp + 1:))
-    end subroutine match
+    if (SCHEMA(k)%kind /= VK_REAL .and. SCHEMA(k)%kind /= VK_INT) then
+      call err%set(ERR_INPUT, p%origin // ": variable '" // p%var // "' of &" // p%group // &
+        ' is a ' // kind_name(SCHEMA(k)%kind) // ', not one number: it cannot be swept')
+      return
+    end if
+    p%is_int = SCHEMA(k)%kind == VK_INT
   end subroutine split_name
 
   !> The variable that names a group of a repeating kind.

@@ -1,0 +1,480 @@
+!> The scene schema: every input variable of a scene file declared once, with its group,
+!> type, unit, default, range, choices and a short description. The scene reader (io_scene)
+!> takes defaults, range checks and keyword choices from here, the sweep (sweep_spec) its type
+!> checks, and a test compares it with the tables of docs/input.md (`flexmor --schema` prints
+!> it). A variable that is read but not declared here is an internal error.
+module io_schema
+  use core_kinds, only: wp
+  use core_strings, only: real_str, lower_case
+  implicit none
+  private
+  public :: var_spec_t, SCHEMA, SCENE_GROUPS, SINGLE_GROUPS, find_spec, kind_name, &
+    bound_problem, choice_list, has_choice, write_schema
+  public :: VK_REAL, VK_INT, VK_LOGICAL, VK_STRING, VK_CHOICE, VK_REAL_LIST, VK_STRING_LIST, &
+    VK_CHOICE_LIST
+
+  integer, parameter :: VK_REAL = 1, VK_INT = 2, VK_LOGICAL = 3, VK_STRING = 4, VK_CHOICE = 5, &
+    VK_REAL_LIST = 6, VK_STRING_LIST = 7, VK_CHOICE_LIST = 8
+
+  !> Groups of a scene file, and those that may appear at most once.
+  character(len=9), parameter :: SCENE_GROUPS(15) = [character(len=9) :: 'scene', 'node', &
+    'link', 'hinge', 'truss', 'slider', 'mass', 'force', 'motion', 'static', 'modal', &
+    'buckling', 'dynamic', 'reduction', 'output']
+  character(len=9), parameter :: SINGLE_GROUPS(7) = [character(len=9) :: 'scene', 'static', &
+    'modal', 'buckling', 'dynamic', 'reduction', 'output']
+
+  !> One variable. `default` is the text shown in docs ('' with `required`; a word such as
+  !> 'law' where it depends on other variables); numbers are parsed from it. The range is
+  !> lower <= x <= upper, with strict inequalities where *_open; keyword values (and whole
+  !> numbers with a fixed set, erk_order) list their `choices` separated by '|'.
+  type :: var_spec_t
+    character(len=10) :: group
+    character(len=18) :: name
+    integer :: kind
+    character(len=12) :: units
+    character(len=14) :: default
+    logical :: required
+    real(wp) :: lower
+    logical :: lower_open
+    real(wp) :: upper
+    logical :: upper_open
+    character(len=72) :: choices
+    character(len=56) :: doc
+  end type var_spec_t
+
+  type(var_spec_t), parameter :: SCENE_VARS(2) = [ &
+    var_spec_t('scene', 'title', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'free text, the result file title attribute'), &
+    var_spec_t('scene', 'gravity', VK_REAL_LIST, 'm/s^2', '0, 0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'gravitational acceleration (gx, gy)')]
+  type(var_spec_t), parameter :: NODE_VARS(11) = [ &
+    var_spec_t('node', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'unique name'), &
+    var_spec_t('node', 'x', VK_REAL, 'm', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'reference position'), &
+    var_spec_t('node', 'y', VK_REAL, 'm', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'reference position'), &
+    var_spec_t('node', 'fixed', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'default of fix_x, fix_y, fix_phi'), &
+    var_spec_t('node', 'fix_x', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hold that coordinate'), &
+    var_spec_t('node', 'fix_y', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hold that coordinate'), &
+    var_spec_t('node', 'fix_phi', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hold that coordinate'), &
+    var_spec_t('node', 'dynamic', VK_CHOICE_LIST, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'x|y|phi', 'coordinates that are degrees of freedom'), &
+    var_spec_t('node', 'motion_x', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion prescribing that coordinate'), &
+    var_spec_t('node', 'motion_y', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion prescribing that coordinate'), &
+    var_spec_t('node', 'motion_phi', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion prescribing that coordinate')]
+  type(var_spec_t), parameter :: LINK_VARS(15) = [ &
+    var_spec_t('link', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'unique name'), &
+    var_spec_t('link', 'from', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'end node labels'), &
+    var_spec_t('link', 'to', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'end node labels'), &
+    var_spec_t('link', 'n_elements', VK_INT, '', '1', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'beam elements'), &
+    var_spec_t('link', 'E', VK_REAL, 'N/m^2 (Pa)', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'Young''s modulus'), &
+    var_spec_t('link', 'A', VK_REAL, 'm^2', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'cross-section area'), &
+    var_spec_t('link', 'I', VK_REAL, 'm^4', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'second moment of area'), &
+    var_spec_t('link', 'rho', VK_REAL, 'kg/m^3', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'density'), &
+    var_spec_t('link', 'G', VK_REAL, 'N/m^2', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'shear modulus, 0 = Euler-Bernoulli'), &
+    var_spec_t('link', 'shear_factor', VK_REAL, '', '5/6', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'shear correction factor'), &
+    var_spec_t('link', 'elongation', VK_CHOICE_LIST, '', 'rigid', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|dynamic|elastic', 'elongation class, 1 or n_elements values'), &
+    var_spec_t('link', 'bending', VK_CHOICE_LIST, '', 'dynamic', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|dynamic|elastic', 'bending classes, 1, n_elements or 2 n_elements values'), &
+    var_spec_t('link', 'bending_form', VK_CHOICE, '', 'angle', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'angle|sine', 'bending measure'), &
+    var_spec_t('link', 'mass', VK_CHOICE, '', 'consistent', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'consistent|lumped', 'mass model'), &
+    var_spec_t('link', 'damping', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'stiffness-proportional time constant')]
+  type(var_spec_t), parameter :: HINGE_VARS(7) = [ &
+    var_spec_t('hinge', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'name'), &
+    var_spec_t('hinge', 'node', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'node label'), &
+    var_spec_t('hinge', 'link', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'link label'), &
+    var_spec_t('hinge', 'mode', VK_CHOICE, '', 'dynamic', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|prescribed|dynamic|elastic', 'class of the relative rotation'), &
+    var_spec_t('hinge', 'motion', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion of a prescribed hinge'), &
+    var_spec_t('hinge', 'stiffness', VK_REAL, 'N m/rad', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'torsion spring'), &
+    var_spec_t('hinge', 'damping', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'stiffness-proportional time constant')]
+  type(var_spec_t), parameter :: TRUSS_VARS(9) = [ &
+    var_spec_t('truss', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'name'), &
+    var_spec_t('truss', 'from', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'end node labels'), &
+    var_spec_t('truss', 'to', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'end node labels'), &
+    var_spec_t('truss', 'E', VK_REAL, 'N/m^2', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'Young''s modulus'), &
+    var_spec_t('truss', 'A', VK_REAL, 'm^2', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'area'), &
+    var_spec_t('truss', 'rho', VK_REAL, 'kg/m^3', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'density, 0 = massless'), &
+    var_spec_t('truss', 'mode', VK_CHOICE, '', 'dynamic', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|dynamic|elastic', 'class of the elongation'), &
+    var_spec_t('truss', 'mass', VK_CHOICE, '', 'consistent', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'consistent|lumped', 'mass model'), &
+    var_spec_t('truss', 'damping', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'stiffness-proportional time constant')]
+  type(var_spec_t), parameter :: SLIDER_VARS(6) = [ &
+    var_spec_t('slider', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'name'), &
+    var_spec_t('slider', 'node', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'node label'), &
+    var_spec_t('slider', 'direction', VK_REAL_LIST, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'guide direction (dx, dy)'), &
+    var_spec_t('slider', 'mode', VK_CHOICE, '', 'rigid', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|dynamic|elastic', 'class of the offset across the guide'), &
+    var_spec_t('slider', 'stiffness', VK_REAL, 'N/m', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'guide spring across the guide'), &
+    var_spec_t('slider', 'damping', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'stiffness-proportional time constant')]
+  type(var_spec_t), parameter :: MASS_VARS(3) = [ &
+    var_spec_t('mass', 'node', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'node label'), &
+    var_spec_t('mass', 'm', VK_REAL, 'kg', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'point mass'), &
+    var_spec_t('mass', 'J', VK_REAL, 'kg m^2', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'rotary inertia')]
+  type(var_spec_t), parameter :: FORCE_VARS(5) = [ &
+    var_spec_t('force', 'node', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'node label'), &
+    var_spec_t('force', 'fx', VK_REAL, 'N', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'force components'), &
+    var_spec_t('force', 'fy', VK_REAL, 'N', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'force components'), &
+    var_spec_t('force', 'moment', VK_REAL, 'N m', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'moment'), &
+    var_spec_t('force', 'time_law', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion whose value multiplies the load')]
+  type(var_spec_t), parameter :: MOTION_VARS(14) = [ &
+    var_spec_t('motion', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'unique name'), &
+    var_spec_t('motion', 'law', VK_CHOICE, '', 'cubic', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'constant|cubic|quintic|cycloidal|ramp|harmonic|spin_up|sum|table', 'time law'), &
+    var_spec_t('motion', 'start', VK_REAL, 'rad', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'value before t0'), &
+    var_spec_t('motion', 't0', VK_REAL, 's', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'start time'), &
+    var_spec_t('motion', 'end', VK_REAL, 'rad', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'value after t0 + duration'), &
+    var_spec_t('motion', 'duration', VK_REAL, 's', 'law', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'length of the motion'), &
+    var_spec_t('motion', 'rate', VK_REAL, 'rad/s', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'constant (final) rate'), &
+    var_spec_t('motion', 'amplitude', VK_REAL, 'rad', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'harmonic amplitude'), &
+    var_spec_t('motion', 'frequency', VK_REAL, 'Hz', 'law', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'harmonic frequency'), &
+    var_spec_t('motion', 'phase', VK_REAL, 'rad', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'harmonic phase'), &
+    var_spec_t('motion', 'terms', VK_STRING_LIST, '', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motions to add'), &
+    var_spec_t('motion', 'times', VK_REAL_LIST, 's', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'table times'), &
+    var_spec_t('motion', 'values', VK_REAL_LIST, 'rad', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'table values'), &
+    var_spec_t('motion', 'file', VK_STRING, '', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'table CSV file')]
+  type(var_spec_t), parameter :: STATIC_VARS(4) = [ &
+    var_spec_t('static', 'n_steps', VK_INT, '', '10', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'load steps'), &
+    var_spec_t('static', 'tol', VK_REAL, '', '1e-10', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'Newton tolerance relative to the model size'), &
+    var_spec_t('static', 'max_iter', VK_INT, '', '30', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'Newton iterations per step'), &
+    var_spec_t('static', 'n_frequencies', VK_INT, '', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'frequencies written per step')]
+  type(var_spec_t), parameter :: MODAL_VARS(2) = [ &
+    var_spec_t('modal', 'n_modes', VK_INT, '', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'lowest modes kept, 0 = all'), &
+    var_spec_t('modal', 'time', VK_REAL, 's', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'time of the prescribed motions')]
+  type(var_spec_t), parameter :: BUCKLING_VARS(2) = [ &
+    var_spec_t('buckling', 'n_modes', VK_INT, '', '6', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'multipliers kept'), &
+    var_spec_t('buckling', 'load_factor', VK_REAL, '', '1', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'load factor of the difference')]
+  type(var_spec_t), parameter :: DYNAMIC_VARS(11) = [ &
+    var_spec_t('dynamic', 't_end', VK_REAL, 's', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'end time'), &
+    var_spec_t('dynamic', 'output_dt', VK_REAL, 's', '1e-3', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'output interval'), &
+    var_spec_t('dynamic', 'integrator', VK_CHOICE, '', 'bdf', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'bdf|galpha|erk', 'time integrator'), &
+    var_spec_t('dynamic', 'jacobian', VK_CHOICE, '', 'linearised', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'linearised|fd|internal', 'Jacobian of the implicit integrators'), &
+    var_spec_t('dynamic', 'rtol', VK_REAL, '', '1e-6', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'relative tolerance'), &
+    var_spec_t('dynamic', 'atol', VK_REAL, '', '1e-8', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'absolute tolerance'), &
+    var_spec_t('dynamic', 'max_step', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'largest step, 0 = no limit'), &
+    var_spec_t('dynamic', 'max_order', VK_INT, '', '5', .false., &
+      1.0_wp, .false., 5.0_wp, .false., &
+      '', 'largest BDF order'), &
+    var_spec_t('dynamic', 'erk_order', VK_INT, '', '5', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '2|3|4|5|6|8', 'order of the Runge-Kutta pair'), &
+    var_spec_t('dynamic', 'dt', VK_REAL, 's', '1e-3', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'generalized-alpha step'), &
+    var_spec_t('dynamic', 'rho_inf', VK_REAL, '', '0.8', .false., &
+      0.0_wp, .false., 1.0_wp, .false., &
+      '', 'spectral radius at infinite frequency')]
+  type(var_spec_t), parameter :: REDUCTION_VARS(10) = [ &
+    var_spec_t('reduction', 'n_modes', VK_INT, '', 'one of three', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'modes kept'), &
+    var_spec_t('reduction', 'cutoff_hz', VK_REAL, 'Hz', 'one of three', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'keep modes up to this frequency'), &
+    var_spec_t('reduction', 'auto_factor', VK_REAL, '', 'one of three', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'multiple of the motion bandwidth'), &
+    var_spec_t('reduction', 'basis_time', VK_REAL, 's', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'configuration of the basis'), &
+    var_spec_t('reduction', 'basis_prescribed', VK_REAL_LIST, 'rad (m)', 'motions', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'prescribed values of the basis configuration'), &
+    var_spec_t('reduction', 'static_correction', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'mode-acceleration correction of the output'), &
+    var_spec_t('reduction', 'update', VK_CHOICE, '', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'none|interval|mac', 'basis updates'), &
+    var_spec_t('reduction', 'update_interval', VK_REAL, 's', 'with update', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'time between checks'), &
+    var_spec_t('reduction', 'mac_threshold', VK_REAL, '', '0.9', .false., &
+      0.0_wp, .true., 1.0_wp, .false., &
+      '', 'MAC below which the basis is replaced'), &
+    var_spec_t('reduction', 'eigensolver', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|lapack|arpack', 'eigensolver of the basis')]
+  type(var_spec_t), parameter :: OUTPUT_VARS(2) = [ &
+    var_spec_t('output', 'nodes', VK_STRING_LIST, '', 'all nodes', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'output nodes'), &
+    var_spec_t('output', 'compliance_nodes', VK_STRING_LIST, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'nodes whose static compliance is written')]
+  !> Every variable, group by group.
+  type(var_spec_t), parameter :: SCHEMA(103) = [ &
+    SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
+    MASS_VARS, FORCE_VARS, MOTION_VARS, STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, &
+    REDUCTION_VARS, OUTPUT_VARS]
+
+contains
+
+  !> Index of group%name in SCHEMA, 0 if it is not declared. Names are case-insensitive, as
+  !> in the scene file (`E` and `e`).
+  pure integer function find_spec(group, name) result(idx)
+    character(len=*), intent(in) :: group, name
+    do idx = 1, size(SCHEMA)
+      if (SCHEMA(idx)%group == lower_case(group) .and. &
+          lower_case(SCHEMA(idx)%name) == lower_case(name)) return
+    end do
+    idx = 0
+  end function find_spec
+
+  pure function kind_name(kind) result(name)
+    integer, intent(in) :: kind
+    character(len=:), allocatable :: name
+    select case (kind)
+    case (VK_REAL); name = 'real'
+    case (VK_INT); name = 'int'
+    case (VK_LOGICAL); name = 'logical'
+    case (VK_STRING); name = 'string'
+    case (VK_CHOICE); name = 'keyword'
+    case (VK_REAL_LIST); name = 'real list'
+    case (VK_STRING_LIST); name = 'string list'
+    case (VK_CHOICE_LIST); name = 'keyword list'
+    case default; name = 'unknown'
+    end select
+  end function kind_name
+
+  !> '' if x lies in the declared range, else what is wrong ("must be positive, got -1").
+  pure function bound_problem(spec, x) result(msg)
+    type(var_spec_t), intent(in) :: spec
+    real(wp), intent(in) :: x
+    character(len=:), allocatable :: msg
+    logical :: low, high
+    msg = ''
+    low = x < spec%lower .or. (spec%lower_open .and. x == spec%lower)
+    high = x > spec%upper .or. (spec%upper_open .and. x == spec%upper)
+    if (.not. (low .or. high)) return
+    if (spec%upper < huge(1.0_wp)) then
+      msg = 'must be in ' // merge('(', '[', spec%lower_open) // real_str(spec%lower) // ', ' // &
+        real_str(spec%upper) // merge(')', ']', spec%upper_open)
+    else if (spec%lower == 0 .and. spec%lower_open) then
+      msg = 'must be positive'
+    else if (spec%lower == 0) then
+      msg = 'must not be negative'
+    else
+      msg = 'must be at least ' // real_str(spec%lower)
+    end if
+    msg = msg // ', got ' // real_str(x)
+  end function bound_problem
+
+  !> The choices as text for messages: 'a, b or c'.
+  pure function choice_list(spec) result(text)
+    type(var_spec_t), intent(in) :: spec
+    character(len=:), allocatable :: text, rest
+    integer :: bar
+    text = ''
+    rest = trim(spec%choices)
+    do
+      bar = index(rest, '|')
+      if (bar == 0) exit
+      if (len(text) > 0) text = text // ', '
+      text = text // rest(:bar - 1)
+      rest = rest(bar + 1:)
+    end do
+    if (len(text) > 0) text = text // ' or '
+    text = text // rest
+  end function choice_list
+
+  pure logical function has_choice(spec, value)
+    type(var_spec_t), intent(in) :: spec
+    character(len=*), intent(in) :: value
+    has_choice = index('|' // trim(spec%choices) // '|', '|' // value // '|') > 0 .and. &
+      len(value) > 0 .and. index(value, '|') == 0
+  end function has_choice
+
+  !> The schema as tab-separated text, one variable per line, with a header.
+  subroutine write_schema(unit)
+    integer, intent(in) :: unit
+    integer :: i
+    character(len=:), allocatable :: range
+    type(var_spec_t) :: s
+    write(unit, '(a)') 'group' // achar(9) // 'name' // achar(9) // 'type' // achar(9) // &
+      'units' // achar(9) // 'default' // achar(9) // 'range' // achar(9) // 'choices' // &
+      achar(9) // 'doc'
+    do i = 1, size(SCHEMA)
+      s = SCHEMA(i)
+        range = ''
+        if (s%lower > -huge(1.0_wp) .or. s%upper < huge(1.0_wp)) range = &
+          merge('(', '[', s%lower_open) // real_str(s%lower) // ', ' // &
+          trim(merge('inf        ', real_str_pad(s%upper), s%upper >= huge(1.0_wp))) // &
+          merge(')', ']', s%upper_open .or. s%upper >= huge(1.0_wp))
+        write(unit, '(a)') trim(s%group) // achar(9) // trim(s%name) // achar(9) // &
+          kind_name(s%kind) // achar(9) // trim(s%units) // achar(9) // &
+          trim(merge('required      ', s%default, s%required)) // achar(9) // range // &
+          achar(9) // trim(s%choices) // achar(9) // trim(s%doc)
+    end do
+  contains
+    pure function real_str_pad(x) result(t)
+      real(wp), intent(in) :: x
+      character(len=11) :: t
+      t = real_str(x)
+    end function real_str_pad
+  end subroutine write_schema
+end module io_schema
