@@ -5,13 +5,13 @@
 !> the check needs no other record; cross-references are checked by model_build.
 module io_scene
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_INPUT, ERR_INTERNAL
+  use core_error, only: error_t, ERR_INPUT
   use io_namelist, only: nml_file_t, nml_group_t, string_t
-  use core_strings, only: lower_case, int_str
-  use io_schema, only: var_spec_t, SCHEMA, SCENE_GROUPS, find_spec, bound_problem, choice_list, &
-    has_choice, SINGLE_GROUPS
+  use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS
+  use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, &
+    rd_classes, rd_label, only_with
   use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
-    mass_rec_t, force_rec_t, motion_rec_t, label_t, slider_rec_t
+    mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t
   use motion_law, only: table_problem
   use io_table, only: read_table_csv, relative_to
   implicit none
@@ -91,248 +91,6 @@ contains
       file%path // ': group &reduction needs a &dynamic group (it reduces the dynamic analysis)')
   end subroutine read_scene
 
-  ! Getter wrappers that keep the first error and skip work after it. Each takes the variable's
-  ! default, range and choices from the scene schema (io_schema); `default` overrides the
-  ! schema's where it depends on other variables (fix_x on fixed, a motion's end on start).
-
-  !> The schema entry of a variable of g's group; reading an undeclared one is a bug.
-  function spec_of(g, var, err) result(spec)
-    type(nml_group_t), intent(in) :: g
-    character(len=*), intent(in) :: var
-    type(error_t), intent(inout) :: err
-    type(var_spec_t) :: spec
-    integer :: k
-    k = find_spec(g%name, var)
-    spec = SCHEMA(max(k, 1))
-    if (k == 0) call err%set(ERR_INTERNAL, 'variable ''' // var // ''' of &' // g%name // &
-      ' is not declared in the scene schema (io_schema)')
-  end function spec_of
-
-  !> Range check of a number read for `spec`.
-  subroutine check_bounds(g, spec, x, err)
-    type(nml_group_t), intent(in) :: g
-    type(var_spec_t), intent(in) :: spec
-    real(wp), intent(in) :: x
-    type(error_t), intent(inout) :: err
-    character(len=:), allocatable :: msg
-    if (.not. err%ok()) return
-    msg = bound_problem(spec, x)
-    if (len(msg) > 0) call err%set(ERR_INPUT, g%where() // ': variable ''' // &
-      trim(spec%name) // ''' ' // msg)
-  end subroutine check_bounds
-
-  subroutine rd_real(g, var, value, err, default)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: var
-    real(wp), intent(inout) :: value
-    type(error_t), intent(inout) :: err
-    real(wp), intent(in), optional :: default
-    type(var_spec_t) :: spec
-    type(error_t) :: e
-    real(wp) :: fallback
-    integer :: ios
-    if (.not. err%ok()) return
-    spec = spec_of(g, var, err)
-    if (.not. err%ok()) return
-    read(spec%default, *, iostat=ios) fallback
-    if (present(default)) then
-      call g%get_real(var, value, e, default)
-    else if (spec%required .or. ios /= 0) then
-      call g%get_real(var, value, e)
-    else
-      call g%get_real(var, value, e, fallback)
-    end if
-    if (.not. e%ok()) err = e
-    call check_bounds(g, spec, value, err)
-  end subroutine rd_real
-
-  subroutine rd_int(g, var, value, err, default)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: var
-    integer, intent(inout) :: value
-    type(error_t), intent(inout) :: err
-    integer, intent(in), optional :: default
-    type(var_spec_t) :: spec
-    type(error_t) :: e
-    integer :: fallback, ios
-    if (.not. err%ok()) return
-    spec = spec_of(g, var, err)
-    if (.not. err%ok()) return
-    read(spec%default, *, iostat=ios) fallback
-    if (present(default)) then
-      call g%get_int(var, value, e, default)
-    else if (spec%required .or. ios /= 0) then
-      call g%get_int(var, value, e)
-    else
-      call g%get_int(var, value, e, fallback)
-    end if
-    if (.not. e%ok()) err = e
-    call check_bounds(g, spec, real(value, wp), err)
-    if (err%ok() .and. len_trim(spec%choices) > 0) then
-      if (.not. has_choice(spec, int_str(value))) call err%set(ERR_INPUT, g%where() // &
-        ': variable ''' // var // ''' must be ' // choice_list(spec) // ', got ' // &
-        int_str(value))
-    end if
-  end subroutine rd_int
-
-  subroutine rd_logical(g, var, value, err, default)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: var
-    logical, intent(inout) :: value
-    type(error_t), intent(inout) :: err
-    logical, intent(in), optional :: default
-    type(var_spec_t) :: spec
-    type(error_t) :: e
-    if (.not. err%ok()) return
-    spec = spec_of(g, var, err)
-    if (.not. err%ok()) return
-    if (present(default)) then
-      call g%get_logical(var, value, e, default)
-    else if (spec%required) then
-      call g%get_logical(var, value, e)
-    else
-      call g%get_logical(var, value, e, spec%default == '.true.')
-    end if
-    if (.not. e%ok()) err = e
-  end subroutine rd_logical
-
-  !> A string: free text, a label or a file name ('' by default unless required).
-  subroutine rd_string(g, var, value, err, default)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: var
-    character(len=:), allocatable, intent(inout) :: value
-    type(error_t), intent(inout) :: err
-    character(len=*), intent(in), optional :: default
-    type(var_spec_t) :: spec
-    type(error_t) :: e
-    if (.not. err%ok()) return
-    spec = spec_of(g, var, err)
-    if (.not. err%ok()) return
-    if (present(default)) then
-      call g%get_string(var, value, e, default)
-    else if (spec%required) then
-      call g%get_string(var, value, e)
-    else
-      call g%get_string(var, value, e, trim(spec%default))
-    end if
-    if (.not. e%ok()) err = e
-  end subroutine rd_string
-
-  !> A keyword (mode class, law, integrator, ...): folded to lower case and checked against
-  !> the schema's choices.
-  subroutine rd_choice(g, var, value, err)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: var
-    character(len=:), allocatable, intent(inout) :: value
-    type(error_t), intent(inout) :: err
-    type(var_spec_t) :: spec
-    type(error_t) :: e
-    if (.not. err%ok()) return
-    spec = spec_of(g, var, err)
-    if (.not. err%ok()) return
-    call g%get_string(var, value, e, trim(spec%default))
-    if (.not. e%ok()) then
-      err = e
-      return
-    end if
-    value = lower_case(value)
-    if (.not. has_choice(spec, value)) call err%set(ERR_INPUT, g%where() // ': variable ''' // &
-      var // ''': ''' // value // ''' is not ' // choice_list(spec))
-  end subroutine rd_choice
-
-  !> Keywords, each checked against the schema's choices (default: the schema's, if any).
-  subroutine rd_choices(g, var, values, err)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: var
-    type(string_t), allocatable, intent(out) :: values(:)
-    type(error_t), intent(inout) :: err
-    type(var_spec_t) :: spec
-    type(string_t), allocatable :: fallback(:)
-    type(error_t) :: e
-    integer :: i
-    allocate(values(0))
-    if (.not. err%ok()) return
-    spec = spec_of(g, var, err)
-    if (.not. err%ok()) return
-    allocate(fallback(merge(1, 0, len_trim(spec%default) > 0)))
-    if (size(fallback) > 0) fallback(1)%s = trim(spec%default)
-    call g%get_string_array(var, values, e, default=fallback)
-    if (.not. e%ok()) then
-      err = e
-      return
-    end if
-    do i = 1, size(values)
-      values(i)%s = lower_case(values(i)%s)
-      if (.not. has_choice(spec, values(i)%s)) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''': ''' // &
-          values(i)%s // ''' is not ' // choice_list(spec))
-        return
-      end if
-    end do
-  end subroutine rd_choices
-
-  !> Mode classes of a link: one keyword for every element, one per element (n of them) or,
-  !> for bending, one per bending mode (2 n: each element's `from` side, then its `to` side).
-  subroutine rd_classes(g, var, n, classes, err)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: var
-    integer, intent(in) :: n
-    type(label_t), allocatable, intent(out) :: classes(:)
-    type(error_t), intent(inout) :: err
-    type(string_t), allocatable :: values(:)
-    integer :: i
-    allocate(classes(0))
-    call rd_choices(g, var, values, err)
-    if (.not. err%ok()) return
-    if (size(values) /= 1 .and. size(values) /= n .and. &
-        .not. (var == 'bending' .and. size(values) == 2 * n)) then
-      call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''' needs 1 value (all ' // &
-        'elements) or one per element (n_elements = ' // int_str(n) // ')' // &
-        trim(merge(' or one per bending mode (2 n_elements)', '                                       ', &
-        var == 'bending')) // ', got ' // int_str(size(values)))
-      return
-    end if
-    deallocate(classes)
-    allocate(classes(size(values)))
-    do i = 1, size(values)
-      classes(i)%s = values(i)%s
-    end do
-  end subroutine rd_classes
-
-  !> A label names a node, link, ... in references and in the result file's paths: it must be
-  !> non-empty and must not contain '/' (an HDF5 path separator) or leading/trailing blanks.
-  subroutine rd_label(g, label, err)
-    type(nml_group_t), intent(inout) :: g
-    character(len=:), allocatable, intent(inout) :: label
-    type(error_t), intent(inout) :: err
-    call rd_string(g, 'label', label, err)
-    if (.not. err%ok()) return
-    if (len_trim(label) == 0) then
-      call err%set(ERR_INPUT, g%where() // ': variable ''label'' must not be empty')
-    else if (index(label, '/') > 0 .or. label /= trim(adjustl(label))) then
-      call err%set(ERR_INPUT, g%where() // ': variable ''label'': ''' // label // &
-        ''' may not contain ''/'' or start or end with a blank')
-    end if
-  end subroutine rd_label
-
-  !> An option of one setting that is given with another (`dt` with integrator = 'bdf') would be
-  !> ignored without a word: refuse it, saying when it applies.
-  subroutine only_with(g, vars, applies, when, err)
-    type(nml_group_t), intent(in) :: g
-    character(len=*), intent(in) :: vars(:), when
-    logical, intent(in) :: applies
-    type(error_t), intent(inout) :: err
-    integer :: i
-    if (.not. err%ok() .or. applies) return
-    do i = 1, size(vars)
-      if (g%has(trim(vars(i)))) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''' // trim(vars(i)) // &
-          ''' applies only ' // when // ': remove it or change that setting')
-        return
-      end if
-    end do
-  end subroutine only_with
-
   subroutine read_scene_group(g, scene, err)
     type(nml_group_t), intent(inout) :: g
     type(scene_t), intent(inout) :: scene
@@ -374,29 +132,18 @@ contains
     type(node_rec_t), intent(inout) :: n
     type(error_t), intent(inout) :: err
     character(len=3), parameter :: names(3) = ['x  ', 'y  ', 'phi']
-    type(string_t), allocatable :: dyn(:), none(:)
-    type(error_t) :: e
+    type(string_t), allocatable :: dyn(:)
     logical :: fixed(3)
     integer :: i, k
     if (.not. err%ok()) return
-    allocate(none(0))
-    call g%get_string_array('dynamic', dyn, e, default=none)
-    if (.not. e%ok()) then
-      err = e
-      return
-    end if
+    call rd_choices(g, 'dynamic', dyn, err)
+    if (.not. err%ok()) return
     do i = 1, size(dyn)
-      k = findloc(names, lower_case(dyn(i)%s), 1)
-      if (k == 0) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''dynamic'': ''' // dyn(i)%s // &
-          ''' is not a coordinate (x, y or phi)')
-        return
-      end if
-      n%dynamic(k) = .true.
+      n%dynamic(findloc(names, dyn(i)%s, 1)) = .true.
     end do
     fixed = [n%fix_x, n%fix_y, n%fix_phi]
     do k = 1, 3
-      call rd_string(g, 'motion_' // trim(names(k)), n%motion(k)%s, err, default='')
+      call rd_string(g, 'motion_' // trim(names(k)), n%motion(k)%s, err)
       if (.not. err%ok()) return
       if (fixed(k) .and. (n%dynamic(k) .or. len(n%motion(k)%s) > 0)) then
         call err%set(ERR_INPUT, g%where() // ': coordinate ' // trim(names(k)) // ' is fixed ' // &
