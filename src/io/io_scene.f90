@@ -139,7 +139,9 @@ contains
     call rd_choices(g, 'dynamic', dyn, err)
     if (.not. err%ok()) return
     do i = 1, size(dyn)
-      n%dynamic(findloc(names, dyn(i)%s, 1)) = .true.
+      do k = 1, 3
+        if (trim(names(k)) == dyn(i)%s) n%dynamic(k) = .true.
+      end do
     end do
     fixed = [n%fix_x, n%fix_y, n%fix_phi]
     do k = 1, 3
