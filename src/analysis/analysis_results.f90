@@ -14,7 +14,7 @@ module analysis_results
   type :: results_t
     !> Output times of the dynamic analysis [s].
     real(wp), allocatable :: time(:)
-    !> Load factor of each static load step (k / n_steps, the last is 1).
+    !> Load factor of each static step (load control: k / n_steps; arc-length: as traced).
     real(wp), allocatable :: load_factor(:)
     !> Dynamic (elastic) coordinates at the static equilibrium under the full load.
     real(wp), allocatable :: q_static(:)
@@ -39,7 +39,6 @@ contains
   subroutine results_from_run(this, run)
     class(results_t), intent(out) :: this
     type(run_t), intent(in) :: run
-    integer :: k, n
     if (allocated(run%dyn%model%node_label)) then
       this%node_label = run%dyn%model%node_label
       this%node_coord = run%dyn%model%node_coord
@@ -47,8 +46,7 @@ contains
     this%wall_time_s = run%wall_time_s
     allocate(this%time(0), this%load_factor(0), this%q_static(0), this%frequency_hz(0))
     if (run%scene%static%active .and. allocated(run%x_static)) then
-      n = size(run%x_static, 2)
-      this%load_factor = [(real(k, wp) / n, k=1, n)]
+      this%load_factor = run%static_load_factor
       this%q_static = run%q_static
       this%x_static = run%x_static
     end if

@@ -14,6 +14,7 @@ module analysis_run
   use model_build, only: build_model, unused_motions
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: static_solve
+  use dynamics_continuation, only: arc_length_solve
   use dynamics_response, only: static_response_t
   use reduction_modal, only: modal_result_t, modal_analysis
   use dynamics_buckling, only: buckling_result_t, buckling_analysis
@@ -237,27 +238,44 @@ contains
     type(run_t), intent(inout) :: this
     type(error_t), intent(out) :: err
     real(wp), allocatable :: q_steps(:, :)
-    integer :: k
+    integer :: k, n
+    logical :: arc
     associate (s => this%scene%static)
+      arc = s%method == 'arc_length'
       allocate(this%x_static(this%dyn%model%n_x, s%n_steps), this%static_stable(s%n_steps))
-      allocate(q_steps(this%dyn%model%n_dy, s%n_steps))
-      this%static_load_factor = [(real(k, wp) / s%n_steps, k = 1, s%n_steps)]
+      allocate(q_steps(this%dyn%model%n_dy, s%n_steps), this%static_load_factor(s%n_steps))
       call this%progress%start('static', 0.0_wp, 1.0_wp)
-      call static_solve(this%dyn, 0.0_wp, s%n_steps, s%tol, s%max_iter, this%q_static, &
-        this%x_static, this%static_iterations, err, this%static_stable, this%progress, q_steps)
+      if (arc) then
+        call arc_length_solve(this%dyn, 0.0_wp, s%n_steps, s%arc_length, s%max_load_factor, &
+          s%tol, s%max_iter, this%q_static, this%static_load_factor, this%x_static, q_steps, &
+          this%static_stable, n, this%static_iterations, err, this%progress)
+        ! Fewer steps when max_load_factor was reached: keep those taken.
+        this%x_static = this%x_static(:, 1:n)
+        this%static_stable = this%static_stable(1:n)
+        this%static_load_factor = this%static_load_factor(1:n)
+        q_steps = q_steps(:, 1:n)
+      else
+        this%static_load_factor = [(real(k, wp) / s%n_steps, k = 1, s%n_steps)]
+        call static_solve(this%dyn, 0.0_wp, s%n_steps, s%tol, s%max_iter, this%q_static, &
+          this%x_static, this%static_iterations, err, this%static_stable, this%progress, &
+          q_steps)
+      end if
     end associate
-    if (err%ok()) call static_responses(this, q_steps, err)
+    if (err%ok()) call static_responses(this, q_steps, .not. arc, err)
     if (.not. err%ok()) return
-    if (this%verbose) write(*, '(a,i0,a,i0,a)') 'static: ', &
-      this%scene%static%n_steps, ' load steps, ', this%static_iterations, ' Newton iterations'
+    if (this%verbose) write(*, '(a,i0,a,a,i0,a)') 'static: ', size(this%static_load_factor), &
+      trim(merge(' arc-length steps', ' load steps      ', arc)), ', ', this%static_iterations, &
+      ' Newton iterations'
     call warn_unstable(this)
   end subroutine run_static
 
   !> Reactions and compliances at each converged static step, from the tangent there (the
-  !> prescribed coordinates stepped with the load, as static_solve had them).
-  subroutine static_responses(this, q_steps, err)
+  !> prescribed coordinates stepped with the load when `ramped`, as static_solve has them;
+  !> held at their full values as arc_length_solve has them).
+  subroutine static_responses(this, q_steps, ramped, err)
     type(run_t), intent(inout) :: this
     real(wp), intent(in) :: q_steps(:, :)
+    logical, intent(in) :: ramped
     type(error_t), intent(out) :: err
     integer, allocatable :: out_coords(:, :), comp_coords(:, :)
     integer :: i, k
@@ -277,7 +295,7 @@ contains
       end if
       call this%static_response%init(out_coords, comp_coords, sc%static%n_frequencies, &
         size(q_steps, 2))
-      this%dyn%ramp_prescribed = .true.
+      this%dyn%ramp_prescribed = ramped
       do k = 1, size(q_steps, 2)
         this%dyn%load_factor = this%static_load_factor(k)
         call this%static_response%record(this%dyn, 0.0_wp, q_steps(:, k), k, err)
@@ -315,8 +333,9 @@ contains
     n = size(this%static_stable)
     k = findloc(this%static_stable, .false., dim=1)
     call add_warning(this, 'static: equilibrium unstable from load step ' // int_str(k) // &
-      ' of ' // int_str(n) // ' (load factor ' // real_str(real(k, wp) / n) // '): the ' // &
-      'tangent stiffness is not positive definite (buckled? try a perturbation)')
+      ' of ' // int_str(n) // ' (load factor ' // real_str(this%static_load_factor(k)) // &
+      '): the tangent stiffness is not positive definite (buckled? past a limit point? ' // &
+      'try a perturbation)')
   end subroutine warn_unstable
 
   subroutine run_dynamic(this, err)

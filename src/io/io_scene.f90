@@ -367,6 +367,12 @@ contains
     call rd_real(g, 'tol', scene%static%tol, err)
     call rd_int(g, 'max_iter', scene%static%max_iter, err)
     call rd_int(g, 'n_frequencies', scene%static%n_frequencies, err)
+    call rd_choice(g, 'method', scene%static%method, err)
+    if (err%ok()) call only_with(g, ['arc_length     ', 'max_load_factor'], &
+      scene%static%method == 'arc_length', 'with method = ''arc_length''', err)
+    if (g%has('arc_length')) call rd_real(g, 'arc_length', scene%static%arc_length, err)
+    if (g%has('max_load_factor')) call rd_real(g, 'max_load_factor', &
+      scene%static%max_load_factor, err)
   end subroutine read_static
 
   subroutine read_modal(g, scene, err)

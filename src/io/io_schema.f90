@@ -267,7 +267,7 @@ module io_schema
     var_spec_t('motion', 'file', VK_STRING, '', 'law', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'table CSV file')]
-  type(var_spec_t), parameter :: STATIC_VARS(4) = [ &
+  type(var_spec_t), parameter :: STATIC_VARS(7) = [ &
     var_spec_t('static', 'n_steps', VK_INT, '', '10', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
       '', 'load steps'), &
@@ -279,7 +279,16 @@ module io_schema
       '', 'Newton iterations per step'), &
     var_spec_t('static', 'n_frequencies', VK_INT, '', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
-      '', 'frequencies written per step')]
+      '', 'frequencies written per step'), &
+    var_spec_t('static', 'method', VK_CHOICE, '', 'load', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'load|arc_length', 'load control or arc-length continuation'), &
+    var_spec_t('static', 'arc_length', VK_REAL, '', 'auto', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'arc-length step in (q/|q1|, lambda)'), &
+    var_spec_t('static', 'max_load_factor', VK_REAL, '', 'none', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'arc-length stops beyond this load factor')]
   type(var_spec_t), parameter :: MODAL_VARS(2) = [ &
     var_spec_t('modal', 'n_modes', VK_INT, '', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
@@ -367,10 +376,10 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(103) = [ &
+  type(var_spec_t), parameter :: SCHEMA(106) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
-    MASS_VARS, FORCE_VARS, MOTION_VARS, STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, &
-    REDUCTION_VARS, OUTPUT_VARS]
+    MASS_VARS, FORCE_VARS, MOTION_VARS, &
+    STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]
 
 contains
 

@@ -83,6 +83,9 @@ module model_scene
     real(wp) :: tol = 1.0e-10_wp
     integer :: max_iter = 30
     integer :: n_frequencies = 0    !< lowest natural frequencies written at each step
+    character(len=:), allocatable :: method   !< 'load' or 'arc_length'
+    real(wp) :: arc_length = 0.0_wp           !< 0: sqrt(2)/n_steps
+    real(wp) :: max_load_factor = huge(1.0_wp)
   end type static_rec_t
 
   type :: modal_rec_t

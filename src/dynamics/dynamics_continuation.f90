@@ -1,0 +1,223 @@
+!> Arc-length continuation of static equilibria (docs/theory.md section 7.2): the load factor
+!> lambda becomes an unknown beside q_dy, so that the path can be followed through limit
+!> points (snap-through of an arch, a post-buckled column) where load control stops.
+!>
+!> With velocities zero the generalised force is affine in lambda at a fixed configuration,
+!> F(q, lambda) = F(q, 0) + lambda P(q), P = F(q, 1) - F(q, 0) (the loads, without the
+!> stiffness). Each step predicts along the path tangent (K_T v = P, direction (v, 1)
+!> normalised) and corrects by Newton on F = 0 together with the Riks normal-plane condition
+!> (the correction stays orthogonal to the predictor), solved by bordering with two solves of
+!> K_T per iteration. Lengths are measured in the plane of (q / c, lambda), c = |K_0^-1 P| the
+!> linear response to the full load, so that an arc of sqrt(2)/n is one load step's worth near
+!> the start whatever the units of q. A step that does not converge is halved (up to
+!> MAX_HALVINGS times) and grows back after easy steps.
+module dynamics_continuation
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_NUMERIC
+  use core_linalg, only: lu_factor, lu_solve
+  use core_strings, only: int_str, real_str
+  use core_progress, only: progress_t
+  use dynamics_system, only: dynamics_t
+  use dynamics_static, only: tangent_stiffness, stable_tangent
+  implicit none
+  private
+  public :: arc_length_solve
+
+  integer, parameter :: MAX_HALVINGS = 12
+  !> Pivots of K_T this much below the largest: the bordered solve treats K_T as singular,
+  !> exactly at a bifurcation (not at a limit point, where the border keeps it regular).
+  real(wp), parameter :: SINGULAR_PIVOT = 1.0e-14_wp
+
+contains
+
+  !> `n_steps` arc-length steps from q_dy at load factor 0 (q_dy: start on entry, last
+  !> equilibrium on exit), step `arc` (<= 0: sqrt(2)/n_steps), stopping early once lambda
+  !> reaches `max_load_factor`. Per converged step: lambda_steps, x_steps, q_steps and
+  !> stable. `n_done` is the number of steps taken.
+  subroutine arc_length_solve(dyn, t, n_steps, arc, max_load_factor, tol, max_iter, q_dy, &
+      lambda_steps, x_steps, q_steps, stable, n_done, iterations, err, progress)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, arc, max_load_factor, tol
+    integer, intent(in) :: n_steps, max_iter
+    real(wp), intent(inout) :: q_dy(:)
+    real(wp), intent(out) :: lambda_steps(:), x_steps(:, :), q_steps(:, :)
+    logical, intent(out) :: stable(:)
+    integer, intent(out) :: n_done, iterations
+    type(error_t), intent(out) :: err
+    type(progress_t), intent(inout), optional :: progress
+    real(wp) :: k(size(q_dy), size(q_dy)), p(size(q_dy)), v(size(q_dy))
+    real(wp) :: tq(size(q_dy)), tl, q_pred(size(q_dy)), l_pred, lambda, c, ds, ds_max
+    real(wp) :: q(size(q_dy)), l, scale
+    integer :: halvings, it
+    logical :: converged
+    n_done = 0
+    iterations = 0
+    dyn%locked = .true.
+    lambda = 0.0_wp
+    scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+    ! The scale of q: the linear response to the full load at the start.
+    call tangent_and_load(dyn, t, q_dy, lambda, k, p, err)
+    if (err%ok()) call solve_tangent(k, p, v, err)
+    if (.not. err%ok()) then
+      call err%prefix('arc-length start: ')
+      call finish(dyn)
+      return
+    end if
+    c = max(norm2(v), tiny(1.0_wp))
+    ds_max = arc
+    if (ds_max <= 0) ds_max = sqrt(2.0_wp) / n_steps
+    ds = ds_max
+    tq = v / c
+    tl = 1.0_wp
+    call normalise(tq, tl)
+    do while (n_done < n_steps)
+      if (present(progress)) then
+        if (progress%due()) call progress%report_load(n_done + 1, n_steps, lambda)
+      end if
+      halvings = 0
+      do
+        q_pred = q_dy + ds * tq * c
+        l_pred = lambda + ds * tl
+        q = q_pred
+        l = l_pred
+        call correct(q, l, converged)
+        if (.not. err%ok()) then
+          if (err%code /= ERR_NUMERIC .or. halvings == MAX_HALVINGS) exit
+          call err%clear()
+          converged = .false.
+        end if
+        if (converged) exit
+        halvings = halvings + 1
+        if (halvings > MAX_HALVINGS) exit
+        ds = ds / 2
+      end do
+      if (.not. err%ok()) exit
+      if (.not. converged) then
+        call err%set(ERR_NUMERIC, 'static arc-length: no equilibrium found from load factor ' // &
+          real_str(lambda) // ' after ' // int_str(MAX_HALVINGS) // ' halvings of the arc ' // &
+          '(a bifurcation or a mechanism: try a smaller arc_length or a small perturbing load)')
+        exit
+      end if
+      ! The new tangent, oriented to continue in the direction just travelled.
+      call tangent_and_load(dyn, t, q, l, k, p, err)
+      if (err%ok()) call solve_tangent(k, p, v, err)
+      if (.not. err%ok()) exit
+      n_done = n_done + 1
+      stable(n_done) = stable_tangent(k, dyn%mbar)
+      block
+        real(wp) :: new_q(size(q_dy)), new_l
+        new_q = v / c
+        new_l = 1.0_wp
+        call normalise(new_q, new_l)
+        if (dot_product(new_q, (q - q_dy) / c) + new_l * (l - lambda) < 0) then
+          new_q = -new_q
+          new_l = -new_l
+        end if
+        tq = new_q
+        tl = new_l
+      end block
+      q_dy = q
+      lambda = l
+      lambda_steps(n_done) = lambda
+      q_steps(:, n_done) = q_dy
+      x_steps(:, n_done) = dyn%kin%x
+      if (halvings == 0) ds = min(ds_max, 2 * ds)
+      if (lambda >= max_load_factor) exit
+    end do
+    call finish(dyn)
+
+  contains
+
+    !> Newton from (q, l) on F = 0 and the normal-plane condition through the predictor.
+    subroutine correct(q, l, converged)
+      real(wp), intent(inout) :: q(:), l
+      logical, intent(out) :: converged
+      real(wp) :: a(size(q)), b(size(q)), f(size(q)), g, dl, den
+      converged = .false.
+      do it = 1, max_iter
+        call tangent_and_load(dyn, t, q, l, k, p, err, f)
+        if (.not. err%ok()) return
+        call solve_two(k, f, p, a, b, err)
+        if (.not. err%ok()) return
+        g = dot_product(tq, (q - q_pred) / c) + tl * (l - l_pred)
+        den = dot_product(tq, b) / c + tl
+        if (abs(den) < tiny(1.0_wp)) then
+          call err%set(ERR_NUMERIC, 'static arc-length: the path is tangent to the constraint')
+          return
+        end if
+        dl = -(g + dot_product(tq, a) / c) / den
+        q = q + a + b * dl
+        l = l + dl
+        iterations = iterations + 1
+        if (maxval(abs(a + b * dl)) <= tol * scale .and. abs(dl) <= tol) then
+          converged = .true.
+          return
+        end if
+      end do
+    end subroutine correct
+  end subroutine arc_length_solve
+
+  !> K_T and the load vector P at (q, lambda); optionally F(q, lambda) itself.
+  subroutine tangent_and_load(dyn, t, q, lambda, k, p, err, f)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q(:), lambda
+    real(wp), intent(out) :: k(:, :), p(:)
+    type(error_t), intent(out) :: err
+    real(wp), intent(out), optional :: f(:)
+    real(wp) :: a(size(q)), f0(size(q))
+    dyn%load_factor = 0.0_wp
+    call dyn%evaluate(t, q, 0.0_wp * q, a, err)
+    if (.not. err%ok()) return
+    f0 = dyn%gen_force
+    dyn%load_factor = 1.0_wp
+    call dyn%evaluate(t, q, 0.0_wp * q, a, err)
+    if (.not. err%ok()) return
+    p = dyn%gen_force - f0
+    if (present(f)) f = f0 + lambda * p
+    dyn%load_factor = lambda
+    call tangent_stiffness(dyn, t, q, k, err)
+  end subroutine tangent_and_load
+
+  !> K a = f and K b = p with one factorisation (the Newton correction is a + b dlambda).
+  subroutine solve_two(k, f, p, a, b, err)
+    real(wp), intent(in) :: k(:, :), f(:), p(:)
+    real(wp), intent(out) :: a(:), b(:)
+    type(error_t), intent(inout) :: err
+    real(wp) :: lu(size(k, 1), size(k, 2)), rhs(size(f), 2), rcond
+    integer :: ipiv(size(f)), info
+    lu = k
+    call lu_factor(lu, ipiv, info, rcond)
+    if (info /= 0 .or. rcond < SINGULAR_PIVOT) then
+      call err%set(ERR_NUMERIC, 'static arc-length: the tangent stiffness is singular ' // &
+        '(a bifurcation point or a mechanism)')
+      return
+    end if
+    rhs(:, 1) = f
+    rhs(:, 2) = p
+    call lu_solve(lu, ipiv, rhs)
+    a = rhs(:, 1)
+    b = rhs(:, 2)
+  end subroutine solve_two
+
+  subroutine solve_tangent(k, p, v, err)
+    real(wp), intent(in) :: k(:, :), p(:)
+    real(wp), intent(out) :: v(:)
+    type(error_t), intent(inout) :: err
+    real(wp) :: dummy(size(p))
+    call solve_two(k, p, p, v, dummy, err)
+  end subroutine solve_tangent
+
+  pure subroutine normalise(tq, tl)
+    real(wp), intent(inout) :: tq(:), tl
+    real(wp) :: n
+    n = sqrt(dot_product(tq, tq) + tl**2)
+    tq = tq / n
+    tl = tl / n
+  end subroutine normalise
+
+  subroutine finish(dyn)
+    type(dynamics_t), intent(inout) :: dyn
+    dyn%locked = .false.
+    dyn%load_factor = 1.0_wp
+  end subroutine finish
+end module dynamics_continuation

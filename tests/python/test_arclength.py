@@ -1,0 +1,91 @@
+"""Arc-length statics (&static method = 'arc_length') through limit points: the von Mises truss
+against its closed-form path, the shallow arch example qualitatively, and bad inputs."""
+import subprocess
+
+import h5py
+import numpy as np
+import pytest
+
+from helpers import BIN, ROOT
+
+
+def run(tmp_path, text, name="scene"):
+    nml = tmp_path / f"{name}.nml"
+    nml.write_text(text)
+    out = tmp_path / f"{name}.h5"
+    proc = subprocess.run([BIN, str(nml), "-o", str(out), "-q"], capture_output=True, text=True,
+                          timeout=600)
+    return proc, out
+
+
+def path(out, node="apex"):
+    with h5py.File(out) as f:
+        return (f["static/load_factor"][:], f[f"static/nodes/{node}/position"][:, 1],
+                f["static/stable"][:])
+
+
+def test_von_mises_truss_follows_the_closed_form(tmp_path):
+    """Every converged point lies on F(w) = -2 N (h - w)/l: the Newton tolerance (1e-10 m of
+    the 1 m model) times the bar stiffness (2e7 N/m) bounds the force error by 2e-3 N
+    (observed 4e-7 N); bound 1e-2 N of the 1e5 N load. The path passes the limit point (the
+    largest load of the closed form, sampled by the steps), turns negative on the unstable
+    branch and ends stable on the inverted side."""
+    proc, out = run(tmp_path, (ROOT / "input" / "von_mises_truss.nml").read_text())
+    assert proc.returncode == 0, proc.stderr
+    lam, y, stable = path(out)
+    a, h, ea, f0 = 1.0, 0.2, 2.0e11 * 1.0e-4, 1.0e5
+    w = h - y
+    l0, l = np.hypot(a, h), np.hypot(a, h - w)
+    force = -2 * ea * (l - l0) / l0 * (h - w) / l
+    assert np.max(np.abs(lam * f0 - force)) < 1e-2
+    ws = np.linspace(0, h, 20001)
+    ls = np.hypot(a, h - ws)
+    limit = np.max(-2 * ea * (ls - l0) / l0 * (h - ws) / ls) / f0
+    assert 0.95 * limit < lam.max() and lam[:np.argmax(w > h)].max() <= limit + 1e-9
+    assert lam.min() < 0 and np.all(np.diff(w) > 0) and w[-1] > 2 * h
+    assert stable[0] == 1 and stable[-1] == 1 and 0 in stable
+    # Stable exactly where the load still rises with the deflection (one degree of freedom),
+    # away from the two limit points where dF/dw changes sign.
+    dfdw = np.gradient(force, w)
+    clear = np.abs(dfdw) > 0.05 * np.max(np.abs(dfdw))
+    assert np.all(stable[clear] == (dfdw[clear] > 0))
+
+
+def test_shallow_arch_snaps_through(tmp_path):
+    """The shallow arch example (4 elements per half here): the load rises to a limit point,
+    falls to less than half of it while the apex keeps moving down, then rises again past it
+    on the inverted side; the unstable branch is marked (it starts a little before the
+    limit point: an antisymmetric mode of the arch goes unstable first)."""
+    text = (ROOT / "input" / "shallow_arch.nml").read_text().replace(
+        "n_elements = 8", "n_elements = 4").replace("7*'dynamic', 'elastic'",
+        "3*'dynamic', 'elastic'").replace("14*'dynamic'", "6*'dynamic'")
+    assert text.count("n_elements = 4") == 2
+    proc, out = run(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    lam, y, stable = path(out)
+    k = int(np.argmax(np.diff(lam) < 0))  # the first step after which the load falls
+    assert 0 < k < 20
+    later = lam[k:]
+    assert later.min() < 0.5 * lam[k] and later[-1] > lam[k]
+    assert np.all(np.diff(y) < 0)
+    assert stable[0] == 1 and stable[-1] == 1 and 0 in stable
+
+
+BASE = (ROOT / "input" / "von_mises_truss.nml").read_text()
+
+
+@pytest.mark.parametrize("old, new, fragments", [
+    ("arc_length = 0.1", "arc_length = 0", ["&static", "'arc_length'", "positive"]),
+    ("method = 'arc_length', n_steps = 40, arc_length = 0.1", "n_steps = 4, max_load_factor = 2",
+     ["&static", "'max_load_factor'", "method = 'arc_length'"]),
+    ("method = 'arc_length'", "method = 'riks'", ["&static", "'method'", "'riks'",
+                                                   "load or arc_length"]),
+])
+def test_bad_input(tmp_path, old, new, fragments):
+    assert old in BASE
+    proc, out = run(tmp_path, BASE.replace(old, new))
+    assert proc.returncode != 0 and not out.exists()
+    err = proc.stderr.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("flexmor: error: "), err
+    for fragment in fragments:
+        assert fragment in err, (fragment, err)
