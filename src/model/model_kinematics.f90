@@ -30,6 +30,7 @@ module model_kinematics
     procedure :: transfer => kin_transfer
     procedure :: second => kin_second
     procedure :: residual => kin_residual
+    procedure, private :: free_modes_moved => kin_free_modes_moved
   end type kinematics_t
 
 contains
@@ -114,7 +115,8 @@ contains
         call err%set(ERR_MODEL, 'the kinematic Jacobian is singular: coordinate ' // &
           trim(model%coord_name(model%calc_coord(worst))) // ' is not determined by ' // &
           'the rigid, prescribed and dynamic modes (check the mode classes and supports; ' // &
-          'elastic and released modes follow from the others and determine nothing)')
+          'elastic and released modes follow from the others and determine nothing)' // &
+          this%free_modes_moved(model, worst))
         this%x = x_start
         return
       end if
@@ -141,6 +143,52 @@ contains
     call err%set(ERR_NUMERIC, trim(msg))
     this%x = x_start
   end subroutine kin_solve
+
+  !> The elastic and released modes that the undetermined motion changes. With the smallest
+  !> pivot k of the factors J_c = P L U treated as zero, z_k = 1, z_(>k) = 0 and
+  !> U(1:k-1, 1:k-1) z(1:k-1) = -U(1:k-1, k) solve U z = 0, so z is (nearly) the motion that
+  !> nothing determines. A mode that changes along z is one whose promotion to dynamic or
+  !> rigid would fix that motion. '' if none is found.
+  function kin_free_modes_moved(this, model, k) result(hint)
+    class(kinematics_t), intent(in) :: this
+    type(model_t), intent(in) :: model
+    integer, intent(in) :: k
+    character(len=:), allocatable :: hint
+    real(wp) :: z(model%n_c), dz(model%n_x)
+    real(wp), allocatable :: e(:), de(:, :)
+    integer :: iel, j, m, n_listed, i
+    hint = ''
+    if (model%n_c == 0) return
+    z = 0.0_wp
+    z(k) = 1.0_wp
+    do i = k - 1, 1, -1
+      if (this%lu(i, i) == 0) return
+      z(i) = -(dot_product(this%lu(i, i + 1:k), z(i + 1:k))) / this%lu(i, i)
+    end do
+    dz = 0.0_wp
+    dz(model%calc_coord) = z / maxval(abs(z))
+    n_listed = 0
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        allocate(e(el%n_modes()), de(el%n_modes(), size(el%dofs)))
+        call el%evaluate(this%x(el%dofs), e, de)
+        do j = 1, el%n_modes()
+          m = model%mode_first(iel) + j - 1
+          if (model%modes(m)%row /= 0) cycle
+          if (abs(dot_product(de(j, :), dz(el%dofs))) <= 1.0e-6_wp * &
+              max(maxval(abs(de(j, :))), tiny(1.0_wp))) cycle
+          n_listed = n_listed + 1
+          if (n_listed > 4) cycle
+          if (len(hint) > 0) hint = hint // ', '
+          hint = hint // model%mode_name(m)
+        end do
+        deallocate(e, de)
+      end associate
+    end do
+    if (n_listed > 4) hint = hint // ' and others'
+    if (len(hint) > 0) hint = '; that motion changes ' // hint // ': make one of them ' // &
+      'dynamic and another mode of the same loop elastic'
+  end function kin_free_modes_moved
 
   !> First-order transfer function DF_x = dx/dq at the last solution.
   subroutine kin_transfer(this, model)

@@ -206,7 +206,7 @@ BAD = {
                                 ["&link", "'elongation'", "not rigid, released, dynamic or elastic"]),
     "singular choice": (GUIDED.replace("elongation = 'dynamic', bending = 3*'dynamic', 'elastic'",
                                        "elongation = 'dynamic', 'elastic', bending = 4*'dynamic'"),
-                        ["not determined"]),
+                        ["not determined", "mode 1 of element 'leaf#2'", "make one of them dynamic"]),
     "node dynamic unknown": (GUIDED.replace("fix_phi = .true.", "fix_phi = .true., dynamic = 'z'"),
                              ["&node", "'dynamic'", "'z'"]),
     "node fixed and dynamic": (GUIDED.replace("fix_phi = .true.", "fix_phi = .true., dynamic = 'phi'"),
