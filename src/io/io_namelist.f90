@@ -10,6 +10,7 @@ module io_namelist
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
+  use core_strings, only: lower_case
   implicit none
   private
   public :: nml_file_t, nml_group_t, string_t
@@ -231,7 +232,7 @@ contains
         return
       end select
 
-      v%name = lower(tok%text)
+      v%name = lower_case(tok%text)
       v%line = tok%line
       call check_name(v%name, msg)
       if (len(msg) == 0) then
@@ -372,10 +373,10 @@ contains
     case ('&')
       start = pos
       do while (pos <= n)
-        if (index(NAME_CHARS, lower(text(pos:pos))) == 0) exit
+        if (index(NAME_CHARS, lower_case(text(pos:pos))) == 0) exit
         pos = pos + 1
       end do
-      tok%text = lower(text(start:pos - 1))
+      tok%text = lower_case(text(start:pos - 1))
       tok%kind = TK_AMP
       if (.not. is_name(tok%text)) then
         tok%kind = TK_ERR
@@ -448,7 +449,7 @@ contains
     n = 0
     if (.not. allocated(this%groups)) return
     do i = 1, size(this%groups)
-      if (this%groups(i)%name == lower(trim(name))) n = n + 1
+      if (this%groups(i)%name == lower_case(trim(name))) n = n + 1
     end do
   end function file_count
 
@@ -461,7 +462,7 @@ contains
     if (.not. allocated(this%groups)) return
     seen = 0
     do i = 1, size(this%groups)
-      if (this%groups(i)%name == lower(trim(name))) then
+      if (this%groups(i)%name == lower_case(trim(name))) then
         seen = seen + 1
         if (seen == k) then
           idx = i
@@ -481,7 +482,7 @@ contains
     do i = 1, size(this%groups)
       known = .false.
       do j = 1, size(names)
-        known = known .or. this%groups(i)%name == lower(trim(names(j)))
+        known = known .or. this%groups(i)%name == lower_case(trim(names(j)))
       end do
       if (.not. known) then
         call err%set(ERR_INPUT, at(this%path, this%groups(i)%line) // 'unknown group &' // &
@@ -520,7 +521,7 @@ contains
   logical function group_has(this, var)
     class(nml_group_t), intent(in) :: this
     character(*), intent(in) :: var
-    group_has = find_var(this, lower(trim(var))) > 0
+    group_has = find_var(this, lower_case(trim(var))) > 0
   end function group_has
 
   !> Find `var` and mark it used. k = 0 when absent: an error unless a default exists.
@@ -531,10 +532,10 @@ contains
     integer, intent(out) :: k
     type(error_t), intent(inout) :: err
     integer :: n
-    k = find_var(g, lower(trim(var)))
+    k = find_var(g, lower_case(trim(var)))
     if (k == 0) then
       if (.not. has_default) call err%set(ERR_INPUT, g%where() // &
-        ": missing required variable '" // lower(trim(var)) // "'")
+        ": missing required variable '" // lower_case(trim(var)) // "'")
       return
     end if
     g%vars(k)%used = .true.
@@ -597,7 +598,7 @@ contains
     end if
     it = this%vars(k)%items(1)
     if (.not. it%quoted) then
-      select case (lower(it%text))
+      select case (lower_case(it%text))
       case ('.true.', '.t.', 't')
         value = .true.
         return
@@ -746,7 +747,7 @@ contains
     character(:), allocatable :: name, msg
     integer :: pos, line, eline, k
 
-    name = lower(trim(var))
+    name = lower_case(trim(var))
     call check_name(name, msg)
     if (len(msg) > 0) then
       call err%set(ERR_INPUT, this%where() // ': ' // msg)
@@ -840,7 +841,7 @@ contains
     integer :: ios
     x = 0
     msg = ''
-    t = lower(it%text)
+    t = lower_case(it%text)
     select case (t(max(verify(t, '+-'), 1):))   ! sign stripped
     case ('nan', 'inf', 'infinity')
       if (.not. it%quoted) then
@@ -999,14 +1000,4 @@ contains
     write(buf, '(i0)') i
     s = trim(buf)
   end function itoa
-
-  pure function lower(s) result(r)
-    character(*), intent(in) :: s
-    character(len(s)) :: r
-    integer :: i
-    r = s
-    do i = 1, len(s)
-      if (s(i:i) >= 'A' .and. s(i:i) <= 'Z') r(i:i) = achar(iachar(s(i:i)) + 32)
-    end do
-  end function lower
 end module io_namelist

@@ -8,7 +8,7 @@
 module sweep_spec
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_INPUT, ERR_INTERNAL
-  use core_strings, only: int_str, real_str
+  use core_strings, only: int_str, real_str, lower_case
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS, SCHEMA, find_spec, kind_name, VK_REAL, &
     VK_INT
@@ -159,7 +159,7 @@ contains
       err = e
       return
     end if
-    this%mode = lower(this%mode)
+    this%mode = lower_case(this%mode)
 
     if (len_trim(base) == 0) then
       call err%set(ERR_INPUT, g%where() // ": variable 'base' is empty (the base scene file)")
@@ -424,8 +424,8 @@ contains
         "'group.key.variable' (e.g. 'dynamic.rtol', 'link.link1.E')")
       return
     end if
-    p%group = lower(name(1:d1 - 1))
-    p%var = lower(name(d2 + 1:))
+    p%group = lower_case(name(1:d1 - 1))
+    p%var = lower_case(name(d2 + 1:))
     p%key = ''
     if (d2 > d1) p%key = name(d1 + 1:d2 - 1)
 
@@ -815,13 +815,4 @@ contains
     is_name = index(LETTERS, s(1:1)) > 0 .and. verify(s, LETTERS // '0123456789_') == 0
   end function is_name
 
-  pure function lower(s) result(r)
-    character(len=*), intent(in) :: s
-    character(len=len(s)) :: r
-    integer :: i
-    r = s
-    do i = 1, len(s)
-      if (s(i:i) >= 'A' .and. s(i:i) <= 'Z') r(i:i) = achar(iachar(s(i:i)) + 32)
-    end do
-  end function lower
 end module sweep_spec

@@ -2,6 +2,7 @@
 set by CTest; a Debug build by default), a small scene, and loading a benchmark driver."""
 import importlib.util
 import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -28,3 +29,29 @@ def load_driver(path):
     sys.modules[path.stem] = module  # dataclasses look their module up there
     spec.loader.exec_module(module)
     return module
+
+
+def run_scene(folder, text, name="scene", quiet=True, timeout=600):
+    """Write `text` to folder/<name>.nml and run flexmor on it (in `folder`); returns the
+    completed process and the result path (which exists only on success)."""
+    nml = Path(folder) / f"{name}.nml"
+    nml.write_text(text)
+    out = Path(folder) / f"{name}.h5"
+    cmd = [str(BIN), str(nml), "-o", str(out)] + (["-q"] if quiet else [])
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=folder)
+    return proc, out
+
+
+def assert_clean_error(proc, out, *fragments):
+    """A failed run: non-zero status, exactly one line 'flexmor: error: ...' holding every
+    fragment, no backtrace or NaN, and no result file (nor a temporary) left behind."""
+    assert proc.returncode != 0, proc.stdout + proc.stderr
+    err = proc.stderr.strip()
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("flexmor: error: "), err
+    for fragment in fragments:
+        assert fragment in err, f"{fragment!r} not in {err!r}"
+    for bad in ("Backtrace", "Error termination", "NaN", " nan", "Infinity"):
+        assert bad not in proc.stdout + proc.stderr
+    assert not out.exists()
+    assert not list(out.parent.glob("*.h5*")), list(out.parent.glob("*"))

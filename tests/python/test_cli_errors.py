@@ -4,7 +4,7 @@ import subprocess
 
 import pytest
 
-from helpers import ARM, BIN
+from helpers import ARM, BIN, assert_clean_error
 
 
 GOOD = "\n" + ARM + """&motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.05 /
@@ -21,19 +21,6 @@ def run(tmp_path, text, args=None):
     cmd = [BIN, str(nml), "-o", str(out)] if args is None else [BIN] + args
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120, cwd=tmp_path)
     return proc, out
-
-
-def assert_clean_error(proc, out, *fragments):
-    assert proc.returncode != 0, proc.stdout + proc.stderr
-    err = proc.stderr.strip()
-    lines = err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("flexmor: error: "), err
-    for fragment in fragments:
-        assert fragment in err, f"{fragment!r} not in {err!r}"
-    for bad in ("Backtrace", "Error termination", "NaN", " nan", "Infinity"):
-        assert bad not in proc.stdout + proc.stderr
-    assert not out.exists()
-    assert not list(out.parent.glob("*.h5*")), list(out.parent.glob("*"))
 
 
 def test_good_scene_runs(tmp_path):

@@ -3,23 +3,19 @@ compliance) against closed forms. Each bound is derived in its test: the Newton 
 &static (1e-10 of the largest reference coordinate) and the model error of the closed form
 (small-deflection limits), with a margin of 10 or more over what is observed."""
 import math
-import subprocess
 
 import h5py
 import numpy as np
 import pytest
 
-from helpers import BIN, ROOT
+from helpers import ROOT, assert_clean_error, run_scene
 
 E = 2.1e11
 
 
 def run(tmp_path, text, name="scene"):
-    nml = tmp_path / f"{name}.nml"
-    nml.write_text(text)
-    out = tmp_path / f"{name}.h5"
-    proc = subprocess.run([BIN, str(nml), "-o", str(out), "-q"], capture_output=True, text=True,
-                          timeout=600)
+    """The result file of a run that must succeed, open for reading."""
+    proc, out = run_scene(tmp_path, text, name)
     assert proc.returncode == 0, proc.stderr
     return h5py.File(out, "r")
 
@@ -229,17 +225,8 @@ BAD = {
 @pytest.mark.parametrize("name", sorted(BAD))
 def test_bad_input(tmp_path, name):
     text, fragments = BAD[name]
-    nml = tmp_path / "scene.nml"
-    nml.write_text(text)
-    out = tmp_path / "out.h5"
-    proc = subprocess.run([BIN, str(nml), "-o", str(out)], capture_output=True, text=True,
-                          timeout=120)
-    assert proc.returncode != 0
-    err = proc.stderr.strip()
-    assert len(err.splitlines()) == 1 and err.startswith("flexmor: error: "), err
-    for fragment in fragments:
-        assert fragment in err, f"{fragment!r} not in {err!r}"
-    assert not out.exists()
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, *fragments)
 
 
 def guide_dynamic(extra=""):

@@ -1,21 +1,11 @@
 """Nodal loads that follow a time law (&force time_law): a spring-mass oscillator driven by a
 harmonic force against the closed-form response from rest."""
 import math
-import subprocess
 
 import h5py
 import numpy as np
 
-from helpers import BIN
-
-
-def run(tmp_path, text):
-    nml = tmp_path / "scene.nml"
-    nml.write_text(text)
-    out = tmp_path / "out.h5"
-    proc = subprocess.run([BIN, str(nml), "-o", str(out), "-q"], capture_output=True, text=True,
-                          timeout=300)
-    return proc, out
+from helpers import assert_clean_error, run_scene
 
 
 # A 1 kg mass on a massless truss spring k = EA/L = 1000 N/m along x (omega = 31.6 rad/s).
@@ -34,7 +24,7 @@ def test_harmonic_force_on_an_oscillator(tmp_path):
     """F = F0 sin(W t) from rest: x = F0/(k - m W^2) (sin W t - (W/w) sin w t). The truss is
     exactly linear along its axis, so only the integrator error remains (rtol 1e-10: observed
     2.6e-10 m of 5e-3 m); bound 1e-8 m."""
-    proc, out = run(tmp_path, OSCILLATOR)
+    proc, out = run_scene(tmp_path, OSCILLATOR)
     assert proc.returncode == 0, proc.stderr
     with h5py.File(out) as f:
         t = f["time"][:]
@@ -49,8 +39,7 @@ def test_harmonic_force_on_an_oscillator(tmp_path):
 def test_time_law_errors(tmp_path):
     """An undefined law is an error naming the group and variable; a law nobody uses but a
     force is not reported as unused."""
-    proc, out = run(tmp_path, OSCILLATOR.replace("time_law = 'drive'", "time_law = 'nope'"))
-    assert proc.returncode != 0 and not out.exists()
-    assert "&force #1" in proc.stderr and "'time_law'" in proc.stderr and "'nope'" in proc.stderr
-    proc, out = run(tmp_path, OSCILLATOR)
+    proc, out = run_scene(tmp_path, OSCILLATOR.replace("time_law = 'drive'", "time_law = 'nope'"))
+    assert_clean_error(proc, out, "&force #1", "'time_law'", "'nope'")
+    proc, out = run_scene(tmp_path, OSCILLATOR)
     assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr

@@ -5,12 +5,11 @@ its static sag under gravity, its two frequencies (along the guide from the trus
 from a dynamic slider's guide spring) against the closed forms, the result file's model; then
 every input error of the group, each a one-line message naming the group and variable."""
 import math
-import subprocess
 
 import numpy as np
 import pytest
 
-from helpers import BIN
+from helpers import assert_clean_error, run_scene
 
 h5py = pytest.importorskip("h5py")
 
@@ -28,21 +27,12 @@ BLOCK = f"""&scene gravity = 0.0, {-G} /
 """
 
 
-def run(tmp_path, text):
-    nml = tmp_path / "scene.nml"
-    nml.write_text(text)
-    out = tmp_path / "out.h5"
-    proc = subprocess.run([BIN, str(nml), "-o", str(out), "-q"], capture_output=True, text=True,
-                          timeout=120, cwd=tmp_path)
-    return proc, out
-
-
 def test_block_static_sag(tmp_path):
     """Gravity's component along the guide, m g sin(alpha), stretches the truss by
     m g sin(alpha) L0 / EA (compresses: the block slides down): 4.9e-4 m. The truss is
     geometrically exact and linear in its elongation, so only the Newton tolerance remains
     (1e-11 max(1e-3, max |x0|) = 4e-12 m); allowed 1e-10 m. The block stays on the guide."""
-    proc, out = run(tmp_path, BLOCK + "&static n_steps = 1 /\n")
+    proc, out = run_scene(tmp_path, BLOCK + "&static n_steps = 1 /\n")
     assert proc.returncode == 0, proc.stderr
     with h5py.File(out) as f:
         pos = f["static/nodes/block/position"][-1, :2]
@@ -59,7 +49,7 @@ def test_dynamic_guide_spring_frequencies(tmp_path):
     relative allowed. The mode shapes point along and across the guide."""
     text = BLOCK.replace(f"gravity = 0.0, {-G}", "gravity = 0.0, 0.0").replace(
         "direction =", f"mode = 'dynamic', stiffness = {K_GUIDE}, direction =") + "&modal /\n"
-    proc, out = run(tmp_path, text)
+    proc, out = run_scene(tmp_path, text)
     assert proc.returncode == 0, proc.stderr
     with h5py.File(out) as f:
         f_hz = f["modal/frequency_hz"][:]
@@ -76,7 +66,7 @@ def test_dynamic_guide_spring_frequencies(tmp_path):
 def test_python_package_reads_sliders(tmp_path):
     """flexmor.read_result reads a model with a slider: the element names its node twice."""
     flexmor = pytest.importorskip("flexmor")
-    proc, out = run(tmp_path, BLOCK + "&static n_steps = 1 /\n")
+    proc, out = run_scene(tmp_path, BLOCK + "&static n_steps = 1 /\n")
     assert proc.returncode == 0, proc.stderr
     model = flexmor.read_result(out).model
     e = model.element_labels.index("guide")
@@ -120,13 +110,8 @@ CASES = {
 def test_bad_slider(tmp_path, name):
     text, fragments = CASES[name]
     assert text != GOOD, "the case did not change the scene"
-    proc, out = run(tmp_path, text)
-    assert proc.returncode != 0, proc.stdout + proc.stderr
-    lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("flexmor: error: "), proc.stderr
-    for fragment in fragments:
-        assert fragment in lines[0], f"{fragment!r} not in {lines[0]!r}"
-    assert not out.exists()
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, *fragments)
 
 
 
@@ -149,7 +134,7 @@ def test_prismatic_joint_of_a_body(tmp_path):
     frequency is sqrt(k / (m_cart + rhoA l)) (the post's consistent mass, translated rigidly,
     is its whole mass), k = EA/l0 of the truss; a 1x1 eigenproblem, 1e-9 relative allowed.
     Without fix_phi the post could turn about the cart: a mechanism."""
-    proc, out = run(tmp_path, CARRIAGE)
+    proc, out = run_scene(tmp_path, CARRIAGE)
     assert proc.returncode == 0, proc.stderr
     with h5py.File(out) as f:
         f_hz = f["modal/frequency_hz"][:]
@@ -157,6 +142,6 @@ def test_prismatic_joint_of_a_body(tmp_path):
     assert f_hz.shape == (1,)
     assert abs(f_hz[0] * 2 * math.pi / math.sqrt(k / mass) - 1) <= 1e-9, f_hz
     (tmp_path / "free").mkdir()
-    proc, out = run(tmp_path / "free", CARRIAGE.replace(", fix_phi = .true.", ""))
+    proc, out = run_scene(tmp_path / "free", CARRIAGE.replace(", fix_phi = .true.", ""))
     assert proc.returncode == 2 and "mechanism" in proc.stderr, proc.stderr
     assert not out.exists()
