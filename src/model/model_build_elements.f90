@@ -12,11 +12,7 @@ submodule (model_build) model_build_elements
 
 contains
 
-  module subroutine add_links(scene, model, b, err)
-    type(scene_t), intent(in) :: scene
-    type(model_t), intent(inout) :: model
-    type(builder_t), intent(inout) :: b
-    type(error_t), intent(inout) :: err
+  module procedure add_links
     integer :: i, k, ia, ib, p(3), q(3), idx, first_rot, last_rot
     real(wp) :: xa(2), xb(2), xk(2)
     type(beam_t) :: beam
@@ -67,7 +63,7 @@ contains
         end do
       end associate
     end do
-  end subroutine add_links
+  end procedure add_links
 
   !> Beam properties and mode classes shared by all elements of a link.
   subroutine link_beam(r, where, beam, err)
@@ -144,11 +140,7 @@ contains
     class_of = mode_class_from_name(classes(i)%s)
   end function class_of
 
-  module subroutine add_hinges(scene, model, b, err)
-    type(scene_t), intent(in) :: scene
-    type(model_t), intent(inout) :: model
-    type(builder_t), intent(inout) :: b
-    type(error_t), intent(inout) :: err
+  module procedure add_hinges
     type(hinge_t) :: hinge
     integer :: h, in, im, idx, c
     do h = 1, size(scene%hinges)
@@ -190,13 +182,9 @@ contains
         idx = model%add_element(hinge, [im])
       end associate
     end do
-  end subroutine add_hinges
+  end procedure add_hinges
 
-  module subroutine add_trusses(scene, model, b, err)
-    type(scene_t), intent(in) :: scene
-    type(model_t), intent(inout) :: model
-    type(builder_t), intent(in) :: b
-    type(error_t), intent(inout) :: err
+  module procedure add_trusses
     type(truss_t) :: truss
     integer :: i, ia, ib, idx, c
     do i = 1, size(scene%trusses)
@@ -228,15 +216,11 @@ contains
         idx = model%add_element(truss, [0])
       end associate
     end do
-  end subroutine add_trusses
+  end procedure add_trusses
 
   !> Sliders, after the trusses (element order: docs/input.md). A scene made by a program may
   !> leave `sliders` unallocated: no sliders.
-  module subroutine add_sliders(scene, model, b, err)
-    type(scene_t), intent(in) :: scene
-    type(model_t), intent(inout) :: model
-    type(builder_t), intent(in) :: b
-    type(error_t), intent(inout) :: err
+  module procedure add_sliders
     type(slider_t) :: slider
     integer :: i, in, idx, c
     if (.not. allocated(scene%sliders)) return
@@ -273,7 +257,7 @@ contains
         idx = model%add_element(slider, [0])
       end associate
     end do
-  end subroutine add_sliders
+  end procedure add_sliders
 
   !> Rotation coordinate a link uses at one of its end nodes.
   integer function link_end_rotation(scene, model, b, link, node) result(idx)

@@ -7,10 +7,7 @@ submodule (model_build) model_build_motions
 
 contains
 
-  module subroutine add_motions(scene, model, err)
-    type(scene_t), intent(in) :: scene
-    type(model_t), intent(inout) :: model
-    type(error_t), intent(inout) :: err
+  module procedure add_motions
     type(motion_t) :: mo
     integer :: i, idx
     do i = 1, size(scene%motions)
@@ -34,7 +31,7 @@ contains
       end if
       idx = model%add_motion(mo)
     end do
-  end subroutine add_motions
+  end procedure add_motions
 
   !> The motion of scene%motions(i); `chain` holds the sums that lead to it, to refuse cycles.
   recursive subroutine make_motion(scene, i, chain, mo, err)
