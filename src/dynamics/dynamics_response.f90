@@ -60,16 +60,22 @@ contains
     real(wp), intent(in) :: t, q_dy(:)
     integer, intent(in) :: step
     type(error_t), intent(out) :: err
-    real(wp) :: k(size(q_dy), size(q_dy)), r(dyn%model%n_x)
-    logical :: was_locked
+    real(wp) :: k(size(q_dy), size(q_dy)), r(dyn%model%n_x), acc(size(q_dy))
+    logical :: was_locked, need_compliance
     was_locked = dyn%locked
     dyn%locked = .true.
-    call tangent_stiffness(dyn, t, q_dy, k, err, accurate=.true.)
+    need_compliance = size(this%compliance_coords, 2) > 0
+    ! The tangent (2 or 4 n_dy evaluations) only when asked for; reactions need one evaluation.
+    if (need_compliance .or. this%n_frequencies > 0) then
+      call tangent_stiffness(dyn, t, q_dy, k, err, accurate=need_compliance)
+    else
+      call dyn%evaluate(t, q_dy, 0.0_wp * q_dy, acc, err)
+    end if
     if (err%ok()) then
       r = reactions(dyn)
       this%reaction(:, :, step) = gather(r, this%reaction_coords)
-      if (size(this%compliance_coords, 2) > 0) call compliance(dyn, k, &
-        this%compliance_coords, this%compliance(:, :, :, step), err)
+      if (need_compliance) call compliance(dyn, k, this%compliance_coords, &
+        this%compliance(:, :, :, step), err)
     end if
     if (err%ok() .and. this%n_frequencies > 0) &
       call lowest_frequencies(k, dyn%mbar, this%frequency_hz(:, step), err)

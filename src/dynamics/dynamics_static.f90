@@ -22,7 +22,7 @@
 module dynamics_static
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC, ERR_INPUT
-  use core_linalg, only: solve_dense, chol_factor
+  use core_linalg, only: lu_factor, lu_solve, chol_factor
   use dynamics_system, only: dynamics_t
   use core_progress, only: progress_t
   implicit none
@@ -131,7 +131,9 @@ contains
     stable = info == 0
   end function stable_tangent
 
-  !> Newton-Raphson with the load applied in n_steps equal increments. q_dy holds the start
+  !> Newton-Raphson with the load applied in n_steps equal increments (modified: the tangent
+  !> is refreshed at the start of a step and when convergence slows, as differencing it costs
+  !> 2 n_dy evaluations). q_dy holds the start
   !> on entry and the equilibrium on exit; x_steps(:, k) the nodal coordinates after step k,
   !> stable(k) whether that equilibrium is stable (stable_tangent of the last Newton matrix,
   !> taken within the Newton tolerance of it). `progress` is polled once per Newton iteration.
@@ -148,8 +150,10 @@ contains
     type(progress_t), intent(inout), optional :: progress
     real(wp), intent(out), optional :: q_steps(:, :)   !< q_dy after each step
     real(wp) :: k(size(q_dy), size(q_dy)), r(size(q_dy)), a(size(q_dy)), v0(size(q_dy))
-    real(wp) :: lambda, scale, rcond
-    integer :: step, it, info
+    real(wp) :: kf(size(q_dy), size(q_dy)), rhs(size(q_dy), 1)
+    real(wp) :: lambda, scale, rcond, r_prev, q_last(size(q_dy))
+    integer :: step, it, info, ipiv(size(q_dy))
+    logical :: refresh, fresh
     character(len=200) :: msg
     if (n_steps < 1 .or. max_iter < 1 .or. tol <= 0) then
       call err%set(ERR_INPUT, 'group &static: n_steps and max_iter must be >= 1 and tol > 0')
@@ -157,30 +161,66 @@ contains
     end if
     v0 = 0.0_wp
     iterations = 0
+    scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
     if (present(stable)) stable = .true.
     dyn%locked = .true.
     dyn%ramp_prescribed = .true.
+    q_last = q_dy
     do step = 1, n_steps
       lambda = real(step, wp) / n_steps
+      dyn%load_factor = lambda
+      ! Secant predictor: equal steps along a smooth path change q_dy by about as much as the
+      ! last one did (a large saving under displacement control, where the unchanged q_dy
+      ! would stretch stiff elastic modes by the whole prescribed increment).
+      a = q_dy
+      if (step > 1) q_dy = q_dy + (q_dy - q_last)
+      q_last = a
+      refresh = .true.
+      r_prev = huge(1.0_wp)
       do it = 1, max_iter
         if (present(progress)) then
           if (progress%due()) call progress%report_load(step, n_steps, lambda)
         end if
-        dyn%load_factor = lambda
-        call tangent_stiffness(dyn, t, q_dy, k, err)
-        if (.not. err%ok()) exit
-        r = dyn%gen_force
-        call solve_dense(k, r, info, rcond)
-        if (info /= 0 .or. rcond < 1.0e-12_wp) then
-          write(msg, '(a,f8.5,a)') 'static analysis: the tangent stiffness is singular at ' // &
-            'load factor ', lambda, ' (buckling or a mechanism)'
-          call err%set(ERR_NUMERIC, trim(msg))
-          exit
+        fresh = refresh
+        if (refresh) then
+          call tangent_stiffness(dyn, t, q_dy, k, err)
+          if (.not. err%ok()) exit
+          kf = k
+          call lu_factor(kf, ipiv, info, rcond)
+          if (info /= 0 .or. rcond < 1.0e-12_wp) then
+            write(msg, '(a,f8.5,a)') 'static analysis: the tangent stiffness is singular at ' &
+              // 'load factor ', lambda, ' (buckling or a mechanism)'
+            call err%set(ERR_NUMERIC, trim(msg))
+            exit
+          end if
+          refresh = .false.
+        else
+          call dyn%evaluate(t, q_dy, v0, a, err)
+          if (.not. err%ok()) then
+            ! A correction with old factors that leaves the kinematics unsolvable: take it
+            ! back and go on with a fresh tangent.
+            if (err%code /= ERR_NUMERIC) exit
+            call err%clear()
+            q_dy = q_dy - r
+            refresh = .true.
+            cycle
+          end if
         end if
+        rhs(:, 1) = dyn%gen_force
+        call lu_solve(kf, ipiv, rhs)
+        if (.not. fresh .and. maxval(abs(rhs(:, 1))) > r_prev) then
+          refresh = .true.
+          cycle
+        end if
+        r = rhs(:, 1)
         q_dy = q_dy + r
         iterations = iterations + 1
-        scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
         if (maxval(abs(r)) <= tol * scale) exit
+        ! Modified Newton: keep the factors while each correction is at most a quarter of the
+        ! last (then the error left is at most a third of the last correction); a growing
+        ! correction is never taken.
+        refresh = maxval(abs(r)) > 0.25_wp * r_prev
+        r_prev = maxval(abs(r))
       end do
       if (err%ok() .and. it > max_iter) then
         write(msg, '(a,i0,a,f8.5,a,es10.3)') 'static analysis: Newton did not converge in ', &
@@ -188,8 +228,12 @@ contains
         call err%set(ERR_NUMERIC, trim(msg))
       end if
       if (.not. err%ok()) exit
-      ! k and dyn%mbar are still those of the last iteration, within tol of the equilibrium.
-      if (present(stable)) stable(step) = stable_tangent(k, dyn%mbar)
+      ! The stability of the equilibrium needs the tangent at it (within tol).
+      if (present(stable)) then
+        if (.not. (fresh .and. it == 1)) call tangent_stiffness(dyn, t, q_dy, k, err)
+        if (.not. err%ok()) exit
+        stable(step) = stable_tangent(k, dyn%mbar)
+      end if
       call dyn%evaluate(t, q_dy, v0, a, err)
       if (.not. err%ok()) exit
       x_steps(:, step) = dyn%kin%x
