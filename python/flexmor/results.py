@@ -113,10 +113,14 @@ def _check_rows(path: str, name: str, data: np.ndarray, n: int, tail: tuple[int,
 @dataclass
 class NodePath:
     """Positions (n, 3) [m] and, for nodes that have one, rotations (n,) [rad] of one node at
-    each output time (or load step)."""
+    each output time (or load step). Static paths also carry the node's ``reaction`` (n, 3):
+    fx, fy [N], mz [N m] from supports and prescribed inputs, and, for ``&output
+    compliance_nodes``, its tangent ``compliance`` (n, 3, 3): d(x, y, phi)/d(fx, fy, mz)."""
 
     position: np.ndarray
     rotation: np.ndarray | None = None
+    reaction: np.ndarray | None = None
+    compliance: np.ndarray | None = None
 
 
 @dataclass
@@ -144,15 +148,17 @@ class Buckling:
 
 @dataclass
 class Static:
-    """``&static`` results: per load step the load factor, node paths, all coordinates ``x``
-    (n_steps, n_x) and the ``stable`` flag (None where the file does not have them), and
-    ``q`` (n_dy,) at the full load."""
+    """``&static`` results: per load step the load factor (arc-length: as traced), node paths
+    (with reactions and compliances), all coordinates ``x`` (n_steps, n_x), the ``stable``
+    flag and the lowest natural frequencies ``frequency_hz`` (n_steps, n) [Hz] (None where the
+    file does not have them), and ``q`` (n_dy,) at the last step."""
 
     load_factor: np.ndarray
     q: np.ndarray | None
     nodes: dict[str, NodePath] = field(default_factory=dict)
     x: np.ndarray | None = None
     stable: np.ndarray | None = None
+    frequency_hz: np.ndarray | None = None
 
 
 @dataclass
@@ -230,11 +236,13 @@ def _paths(path: str, group: h5py.Group | None, prefix: str, n: int, against: st
             continue
         position = np.asarray(node["position"][...], dtype=float)
         _check_rows(path, f"/{prefix}/{label}/position", position, n, (3,), against)
-        rotation = None
-        if isinstance(node.get("rotation"), h5py.Dataset):
-            rotation = np.asarray(node["rotation"][...], dtype=float)
-            _check_rows(path, f"/{prefix}/{label}/rotation", rotation, n, (), against)
-        out[label] = NodePath(position, rotation)
+        extra: dict[str, np.ndarray | None] = {}
+        for name, shape in (("rotation", ()), ("reaction", (3,)), ("compliance", (3, 3))):
+            extra[name] = None
+            if isinstance(node.get(name), h5py.Dataset):
+                extra[name] = np.asarray(node[name][...], dtype=float)
+                _check_rows(path, f"/{prefix}/{label}/{name}", extra[name], n, shape, against)
+        out[label] = NodePath(position, **extra)
     return out
 
 
@@ -264,8 +272,12 @@ def _read_static(path: str, f: h5py.File, model: Model | None) -> Static | None:
         stable = np.asarray(stable[...]).astype(bool)
         _check_rows(path, "/static/stable", stable, n, (), against)
     x = _coordinates(path, _float(path, f, "static/x"), "static/x", n, against, model)
+    freq = _float(path, f, "static/frequency_hz")
+    if freq is not None and (freq.ndim != 2 or freq.shape[0] != n):
+        raise ResultFileError(f"{path}: /static/frequency_hz has shape {freq.shape}, expected "
+                              f"({n}, n) to match {against}")
     return Static(load, _float(path, f, "static/q"), _paths(path, f.get("static/nodes"),
-                  "static/nodes", n, against), x, stable)
+                  "static/nodes", n, against), x, stable, freq)
 
 
 def _read_shapes(path: str, f: h5py.File, name: str, values: str

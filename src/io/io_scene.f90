@@ -34,7 +34,7 @@ contains
     type(nml_file_t), intent(inout) :: file
     type(scene_t), intent(out) :: scene
     type(error_t), intent(out) :: err
-    integer :: i
+    integer :: i, k
     call file%check_known_groups(SCENE_GROUPS, err)
     if (.not. err%ok()) return
     do i = 1, size(SCENE_GROUPS)
@@ -84,6 +84,12 @@ contains
     end if
     if (.not. allocated(scene%title)) scene%title = ''
     if (.not. allocated(scene%compliance_nodes)) allocate(scene%compliance_nodes(0))
+    ! A compliance belongs to a node path: compliance nodes are output nodes too.
+    do i = 1, size(scene%compliance_nodes)
+      if (any([(scene%output_nodes(k)%s == scene%compliance_nodes(i)%s, &
+          k = 1, size(scene%output_nodes))])) cycle
+      scene%output_nodes = [scene%output_nodes, scene%compliance_nodes(i)]
+    end do
     if (size(scene%compliance_nodes) > 0 .and. .not. scene%static%active) call err%set( &
       ERR_INPUT, file%path // ': group &output: variable ''compliance_nodes'' needs a ' // &
       '&static group (the compliance is computed at its equilibria)')

@@ -333,3 +333,18 @@ def test_free_body_falls(tmp_path):
         pos = f["nodes/ball/position"][:]
     assert np.max(np.abs(pos[:, 1] + 9.81 * t**2 / 2)) < 1e-6
     assert np.max(np.abs(pos[:, 0])) == 0
+
+
+def test_python_reader(tmp_path):
+    """flexmor.read_result gives the static reactions, compliances and frequencies per node,
+    and a compliance node left out of &output nodes is an output node all the same."""
+    import flexmor
+    text = guided_leaf(2, 1e-3).replace("&output nodes = 'top',", "&output").replace(
+        "&static n_steps = 1 /", "&static n_steps = 2, n_frequencies = 1 /")
+    with run(tmp_path, text) as f:
+        path = f.filename
+    static = flexmor.read_result(path).static
+    top, base = static.nodes["top"], static.nodes["base"]
+    assert top.compliance.shape == (2, 3, 3) and base.compliance is None
+    assert base.reaction.shape == (2, 3) and abs(base.reaction[-1, 0] + 1e-3) < 1e-9
+    assert static.frequency_hz.shape == (2, 1) and np.all(static.frequency_hz > 0)
