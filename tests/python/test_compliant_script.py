@@ -1,0 +1,18 @@
+"""scripts/compliant_examples.py (the tables and plots of docs/examples.md) runs, on coarse
+meshes, and writes its tables and plots."""
+import subprocess
+import sys
+
+from helpers import BIN, ROOT
+
+
+def test_script_quick(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "scripts" / "compliant_examples.py"),
+                           "--bin", str(BIN), "--meshes", "2", "4", "--out-dir", str(tmp_path)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    table = (tmp_path / "bench" / "compliant_examples.md").read_text()
+    assert "## Parallel leaf-spring guide (2 elements per leaf)" in table
+    assert "| 2.2 |" in table and "| 0.30 |" in table
+    for name in ("leaf_spring_guide.png", "cross_spring_pivot.png"):
+        assert (tmp_path / "img" / name).stat().st_size > 10000
