@@ -16,3 +16,13 @@ def test_script_quick(tmp_path):
     assert "| 2.2 |" in table and "| 0.30 |" in table
     for name in ("leaf_spring_guide.png", "cross_spring_pivot.png"):
         assert (tmp_path / "img" / name).stat().st_size > 10000
+
+
+def test_spin_up_plot(tmp_path):
+    """scripts/spin_up.py (the spin-up plot of docs/examples.md) runs and draws."""
+    out = tmp_path / "spin_up.png"
+    proc = subprocess.run([sys.executable, str(ROOT / "scripts" / "spin_up.py"), "--bin",
+                           str(BIN), "--out", str(out)], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert out.stat().st_size > 10000 and "largest deflection 0.4" in proc.stdout
