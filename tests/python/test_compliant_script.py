@@ -25,4 +25,7 @@ def test_spin_up_plot(tmp_path):
                            str(BIN), "--out", str(out)], capture_output=True, text=True,
                           timeout=600)
     assert proc.returncode == 0, proc.stderr
-    assert out.stat().st_size > 10000 and "largest deflection 0.4" in proc.stdout
+    assert out.stat().st_size > 10000
+    # The peak of a 0.4 m swing (galpha, 2 ms): a model quantity, not a round-off one.
+    peak = float(proc.stdout.split("largest deflection")[1].split()[0])
+    assert 0.3 < peak < 0.5
