@@ -8,8 +8,8 @@ reaction moment M(phi), centre shift and the translational stiffness along the t
 every step, against 2 EI/L phi and EA/L + 12 EI/L^3. Both with 4, 8 (the examples) and 16
 elements per leaf (--meshes), the differences from the finest mesh reported.
 
-Usage (--bin defaults to build/bin/flexmor in the repository; the flexmor Python package is
-taken from python/ when it is not installed):
+Usage (--bin defaults to build/bin/flexmor in the repository; needs the flexmor Python package:
+`pip install .`, as scripts/setup.sh does, or PYTHONPATH=python):
 
     python3 scripts/compliant_examples.py [--bin BIN] [--meshes 4 8 16] [--out-dir docs]
 
@@ -30,8 +30,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "python"))  # the package, when it is not installed
-import flexmor  # noqa: E402
+import flexmor
 
 E = 2.1e11
 GUIDE = dict(L=0.1, A=6.0e-6, I=4.5e-14)

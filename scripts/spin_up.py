@@ -15,8 +15,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "python"))  # the package, when it is not installed
-import flexmor  # noqa: E402
+import flexmor
 
 HUB = "link 'beam' phi at node 'base'"
 

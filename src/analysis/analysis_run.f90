@@ -122,22 +122,14 @@ contains
     type(model_t), intent(in) :: model
     type(error_t), intent(inout) :: err
     integer :: i, j
-    do i = 1, size(scene%output_nodes)
-      do j = 1, i - 1
-        if (scene%output_nodes(j)%s == scene%output_nodes(i)%s) then
-          call err%set(ERR_INPUT, 'group &output: variable ''nodes'': node ''' // &
-            scene%output_nodes(i)%s // ''' is listed twice')
-          return
-        end if
-      end do
-      if (model%find_node(scene%output_nodes(i)%s) == 0) then
-        call err%set(ERR_INPUT, 'group &output: variable ''nodes'': node ''' // &
-          scene%output_nodes(i)%s // ''' is not defined')
-        return
-      end if
-    end do
+    ! Compliance nodes first: they are also output nodes (io_scene adds them).
     do i = 1, size(scene%compliance_nodes)
       associate (label => scene%compliance_nodes(i)%s)
+        if (any([(scene%compliance_nodes(j)%s == label, j = 1, i - 1)])) then
+          call err%set(ERR_INPUT, 'group &output: variable ''compliance_nodes'': node ''' // &
+            label // ''' is listed twice')
+          return
+        end if
         j = model%find_node(label)
         if (j == 0) then
           call err%set(ERR_INPUT, 'group &output: variable ''compliance_nodes'': node ''' // &
@@ -151,6 +143,20 @@ contains
         end if
         if (.not. err%ok()) return
       end associate
+    end do
+    do i = 1, size(scene%output_nodes)
+      do j = 1, i - 1
+        if (scene%output_nodes(j)%s == scene%output_nodes(i)%s) then
+          call err%set(ERR_INPUT, 'group &output: variable ''nodes'': node ''' // &
+            scene%output_nodes(i)%s // ''' is listed twice')
+          return
+        end if
+      end do
+      if (model%find_node(scene%output_nodes(i)%s) == 0) then
+        call err%set(ERR_INPUT, 'group &output: variable ''nodes'': node ''' // &
+          scene%output_nodes(i)%s // ''' is not defined')
+        return
+      end if
     end do
   end subroutine check_output_nodes
 

@@ -217,6 +217,8 @@ BAD = {
                              ["&output", "'compliance_nodes'", "'nope'"]),
     "compliance held": (GUIDED.replace("compliance_nodes = 'top'", "compliance_nodes = 'base'"),
                         ["&output", "'base'", "no free coordinate"]),
+    "compliance twice": (GUIDED.replace("compliance_nodes = 'top'", "compliance_nodes = 'top', 'top'"),
+                         ["&output", "'compliance_nodes'", "twice"]),
     "compliance without static": (GUIDED.replace("&static n_steps = 1 /", ""),
                                   ["&output", "'compliance_nodes'", "&static"]),
 }
