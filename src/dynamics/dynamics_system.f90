@@ -41,9 +41,6 @@ module dynamics_system
     real(wp), allocatable :: k_dd(:, :)       !< structural stiffness dsigma_dy/dq_dy
     real(wp), allocatable :: d_dd(:, :)       !< structural damping dsigma_dy/dv_dy
     real(wp), allocatable :: k_dr(:, :), d_dr(:, :)  !< the same w.r.t. the prescribed q_rh
-    !> Stiffness and damping DF_e^T S DF_e of the elastic elements at the last evaluation
-    !> (configuration dependent; zero without elastic modes).
-    real(wp), allocatable :: k_el(:, :), d_el(:, :)
     !> Jacobian for implicit integrators: 'linearised' (-Mbar^-1 K0, -Mbar^-1 D0 at the current
     !> state: the stiff structural part, exact enough for Newton) or 'fd' (forward differences).
     character(len=16) :: jacobian_kind = 'linearised'
@@ -89,9 +86,7 @@ contains
     if (allocated(this%mbar)) deallocate(this%mbar, this%gen_force)
     this%n_evals = 0
     allocate(this%mbar(model%n_dy, model%n_dy), this%gen_force(model%n_dy))
-    allocate(this%k_el(model%n_dy, model%n_dy), this%d_el(model%n_dy, model%n_dy))
-    this%k_el = 0.0_wp
-    this%d_el = 0.0_wp
+
     block
       real(wp) :: k_q(model%n_dy, model%n_q), d_q(model%n_dy, model%n_q)
       zero = 0.0_wp
@@ -233,19 +228,13 @@ contains
   end subroutine dyn_assemble
 
   !> Stresses of the elements with elastic modes, from e = D(x) and e_dot = D_x x_dot at the
-  !> last kinematic solution, subtracted from the nodal forces f as -D_x^T sigma; also their
-  !> contribution to the structural stiffness and damping, k_el = DF_e^T S DF_e (the K0 part;
-  !> the geometric part sigma D2F is left to the difference tangent of statics).
+  !> last kinematic solution, subtracted from the nodal forces f as -D_x^T sigma.
   subroutine dyn_elastic_forces(this, xd, f)
-    class(dynamics_t), intent(inout) :: this
+    class(dynamics_t), intent(in) :: this
     real(wp), intent(in) :: xd(:)
     real(wp), intent(inout) :: f(:)
-    real(wp), allocatable :: e(:), de(:, :), s(:, :), sigma(:), dfe(:, :), sdfe(:, :)
-    logical, allocatable :: stressed(:)
-    integer :: iel, nm, nr
-    this%k_el = 0.0_wp
-    this%d_el = 0.0_wp
-    nr = this%model%n_rh
+    real(wp), allocatable :: e(:), de(:, :), s(:, :), sigma(:)
+    integer :: iel, nm
     associate (m => this%model)
       do iel = 1, m%n_elements
         if (.not. m%elastic_element(iel)) cycle
@@ -254,28 +243,55 @@ contains
           allocate(e(nm), de(nm, size(el%dofs)), s(nm, nm))
           call el%evaluate(this%kin%x(el%dofs), e, de)
           call el%stiffness(s)
-          stressed = mode_has_stress(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1)%class)
           sigma = matmul(s, e + el%damping * matmul(de, xd(el%dofs)))
-          where (.not. stressed) sigma = 0.0_wp
+          where (.not. stressed_modes(m, iel)) sigma = 0.0_wp
           f(el%dofs) = f(el%dofs) - matmul(sigma, de)
-          dfe = matmul(de, this%kin%df(el%dofs, nr + 1:))
-          where (spread(.not. stressed, 2, size(dfe, 2))) dfe = 0.0_wp
-          sdfe = matmul(s, dfe)
-          this%k_el = this%k_el + matmul(transpose(dfe), sdfe)
-          if (el%damping > 0) this%d_el = this%d_el + el%damping * matmul(transpose(dfe), sdfe)
           deallocate(e, de, s)
         end associate
       end do
     end associate
   end subroutine dyn_elastic_forces
 
-  !> Structural stiffness and damping on the dynamic coordinates, K0 and D0: the constant
-  !> part of the dynamic modes plus that of the elastic elements at the last evaluation.
+  !> Which modes of element iel carry a stress (dynamic and elastic ones).
+  pure function stressed_modes(m, iel) result(stressed)
+    type(model_t), intent(in) :: m
+    integer, intent(in) :: iel
+    logical :: stressed(m%elements(iel)%e%n_modes())
+    stressed = mode_has_stress(m%modes(m%mode_first(iel):m%mode_first(iel) + &
+      size(stressed) - 1)%class)
+  end function stressed_modes
+
+  !> Structural stiffness and damping on the dynamic coordinates, K0 and D0, at the last
+  !> evaluation: the constant part of the dynamic modes plus DF_e^T S DF_e (and its damping)
+  !> of the elastic elements (the K0 part; their geometric part sigma D2F is left to the
+  !> difference tangent of statics). Assembled here, for the Jacobians that ask for it, not
+  !> in every evaluation.
   subroutine dyn_structural_stiffness(this, k0, d0)
     class(dynamics_t), intent(in) :: this
     real(wp), intent(out) :: k0(:, :), d0(:, :)
-    k0 = this%k_dd + this%k_el
-    d0 = this%d_dd + this%d_el
+    real(wp), allocatable :: e(:), de(:, :), s(:, :), dfe(:, :), sdfe(:, :)
+    logical, allocatable :: stressed(:)
+    integer :: iel, nm
+    k0 = this%k_dd
+    d0 = this%d_dd
+    associate (m => this%model)
+      do iel = 1, m%n_elements
+        if (.not. m%elastic_element(iel)) cycle
+        associate (el => m%elements(iel)%e)
+          nm = el%n_modes()
+          allocate(e(nm), de(nm, size(el%dofs)), s(nm, nm))
+          call el%evaluate(this%kin%x(el%dofs), e, de)
+          call el%stiffness(s)
+          stressed = stressed_modes(m, iel)
+          dfe = matmul(de, this%kin%df(el%dofs, m%n_rh + 1:))
+          where (spread(.not. stressed, 2, size(dfe, 2))) dfe = 0.0_wp
+          sdfe = matmul(transpose(dfe), matmul(s, dfe))
+          k0 = k0 + sdfe
+          d0 = d0 + el%damping * sdfe
+          deallocate(e, de, s)
+        end associate
+      end do
+    end associate
   end subroutine dyn_structural_stiffness
 
   !> Accelerations of the dynamic coordinates; also leaves mbar and gen_force for callers.
