@@ -132,13 +132,25 @@ contains
     subroutine correct(q, l, converged)
       real(wp), intent(inout) :: q(:), l
       logical, intent(out) :: converged
-      real(wp) :: a(size(q)), b(size(q)), f(size(q)), g, dl, den
+      real(wp) :: a(size(q)), b(size(q)), f(size(q)), g, dl, den, step, prev
+      real(wp) :: lu(size(q), size(q))
+      integer :: ipiv(size(q))
+      logical :: refresh
       converged = .false.
+      refresh = .true.
+      prev = huge(1.0_wp)
       do it = 1, max_iter
-        call tangent_and_load(dyn, t, q, l, k, p, err, f)
+        ! Modified Newton as in static_solve: new factors of K_T at the start and whenever a
+        ! correction is not at most a quarter of the last (a difference tangent costs 2 n_dy
+        ! evaluations, the loads two).
+        if (refresh) then
+          call tangent_and_load(dyn, t, q, l, k, p, err, f)
+          if (err%ok()) call factor(k, lu, ipiv, err)
+        else
+          call load_and_force(dyn, t, q, l, p, f, err)
+        end if
         if (.not. err%ok()) return
-        call solve_two(k, f, p, a, b, err)
-        if (.not. err%ok()) return
+        call solve_factored(lu, ipiv, f, p, a, b)
         g = dot_product(tq, (q - q_pred) / c) + tl * (l - l_pred)
         den = dot_product(tq, b) / c + tl
         if (abs(den) < tiny(1.0_wp)) then
@@ -146,6 +158,11 @@ contains
           return
         end if
         dl = -(g + dot_product(tq, a) / c) / den
+        step = max(maxval(abs(a + b * dl)) / scale, abs(dl))
+        if (.not. refresh .and. step > prev) then
+          refresh = .true.
+          cycle
+        end if
         q = q + a + b * dl
         l = l + dl
         iterations = iterations + 1
@@ -153,17 +170,18 @@ contains
           converged = .true.
           return
         end if
+        refresh = step > 0.25_wp * prev
+        prev = step
       end do
     end subroutine correct
   end subroutine arc_length_solve
 
-  !> K_T and the load vector P at (q, lambda); optionally F(q, lambda) itself.
-  subroutine tangent_and_load(dyn, t, q, lambda, k, p, err, f)
+  !> The load vector P and F(q, lambda) = F(q, 0) + lambda P at q (two evaluations).
+  subroutine load_and_force(dyn, t, q, lambda, p, f, err)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q(:), lambda
-    real(wp), intent(out) :: k(:, :), p(:)
+    real(wp), intent(out) :: p(:), f(:)
     type(error_t), intent(out) :: err
-    real(wp), intent(out), optional :: f(:)
     real(wp) :: a(size(q)), f0(size(q))
     dyn%load_factor = 0.0_wp
     call dyn%evaluate(t, q, 0.0_wp * q, a, err)
@@ -173,38 +191,60 @@ contains
     call dyn%evaluate(t, q, 0.0_wp * q, a, err)
     if (.not. err%ok()) return
     p = dyn%gen_force - f0
-    if (present(f)) f = f0 + lambda * p
+    f = f0 + lambda * p
+  end subroutine load_and_force
+
+  !> K_T at (q, lambda) and the load vector P; optionally F(q, lambda) itself.
+  subroutine tangent_and_load(dyn, t, q, lambda, k, p, err, f)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q(:), lambda
+    real(wp), intent(out) :: k(:, :), p(:)
+    type(error_t), intent(out) :: err
+    real(wp), intent(out), optional :: f(:)
+    real(wp) :: fl(size(q))
+    call load_and_force(dyn, t, q, lambda, p, fl, err)
+    if (.not. err%ok()) return
+    if (present(f)) f = fl
     dyn%load_factor = lambda
     call tangent_stiffness(dyn, t, q, k, err)
   end subroutine tangent_and_load
 
-  !> K a = f and K b = p with one factorisation (the Newton correction is a + b dlambda).
-  subroutine solve_two(k, f, p, a, b, err)
-    real(wp), intent(in) :: k(:, :), f(:), p(:)
-    real(wp), intent(out) :: a(:), b(:)
+  !> LU factors of K_T, or an error at a singular one.
+  subroutine factor(k, lu, ipiv, err)
+    real(wp), intent(in) :: k(:, :)
+    real(wp), intent(out) :: lu(:, :)
+    integer, intent(out) :: ipiv(:)
     type(error_t), intent(inout) :: err
-    real(wp) :: lu(size(k, 1), size(k, 2)), rhs(size(f), 2), rcond
-    integer :: ipiv(size(f)), info
+    real(wp) :: rcond
+    integer :: info
     lu = k
     call lu_factor(lu, ipiv, info, rcond)
-    if (info /= 0 .or. rcond < SINGULAR_PIVOT) then
-      call err%set(ERR_NUMERIC, 'static arc-length: the tangent stiffness is singular ' // &
-        '(a bifurcation point or a mechanism)')
-      return
-    end if
+    if (info /= 0 .or. rcond < SINGULAR_PIVOT) call err%set(ERR_NUMERIC, 'static ' // &
+      'arc-length: the tangent stiffness is singular (a bifurcation point or a mechanism)')
+  end subroutine factor
+
+  !> K a = f and K b = p with the factors of K (the Newton correction is a + b dlambda).
+  subroutine solve_factored(lu, ipiv, f, p, a, b)
+    real(wp), intent(in) :: lu(:, :), f(:), p(:)
+    integer, intent(in) :: ipiv(:)
+    real(wp), intent(out) :: a(:), b(:)
+    real(wp) :: rhs(size(f), 2)
     rhs(:, 1) = f
     rhs(:, 2) = p
     call lu_solve(lu, ipiv, rhs)
     a = rhs(:, 1)
     b = rhs(:, 2)
-  end subroutine solve_two
+  end subroutine solve_factored
 
+  !> The path tangent's q part, K v = P.
   subroutine solve_tangent(k, p, v, err)
     real(wp), intent(in) :: k(:, :), p(:)
     real(wp), intent(out) :: v(:)
     type(error_t), intent(inout) :: err
-    real(wp) :: dummy(size(p))
-    call solve_two(k, p, p, v, dummy, err)
+    real(wp) :: lu(size(k, 1), size(k, 2)), dummy(size(p))
+    integer :: ipiv(size(p))
+    call factor(k, lu, ipiv, err)
+    if (err%ok()) call solve_factored(lu, ipiv, p, p, v, dummy)
   end subroutine solve_tangent
 
   pure subroutine normalise(tq, tl)
