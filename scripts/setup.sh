@@ -15,7 +15,7 @@ set -euo pipefail
 
 DEBIAN_PACKAGES=(
   gfortran libopenmpi-dev openmpi-bin libhdf5-openmpi-dev hdf5-tools
-  libarpack2-dev libparpack2-dev libsundials-dev libsundials-fortran-dev
+  libarpack2-dev libparpack2-dev libsundials-dev libsundials-fortran-dev libsuitesparse-dev
   liblapack-dev libopenblas-dev pkg-config cmake make
 )
 # wheel: lets tests/python/test_package.py build the package without network (setuptools < 70.1).

@@ -325,7 +325,7 @@ contains
   !> Kinematic checks at q with velocities qd: residual, DF, D2F (model already solved there
   !> in kin, with transfer done).
   subroutine check_kinematics(kin, model, q, qd, hq, s2, what)
-    type(kinematics_t), intent(in) :: kin
+    type(kinematics_t), intent(inout) :: kin
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: q(:), qd(:), hq(:), s2
     character(len=*), intent(in) :: what

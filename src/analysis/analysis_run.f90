@@ -112,7 +112,7 @@ contains
     if (err%ok()) then
       allocate(this%q_static(model%n_dy))
       this%q_static = 0.0_wp
-      call this%dyn%init(model, 0.0_wp, this%q_static, err)
+      call this%dyn%init(model, 0.0_wp, this%q_static, err, this%scene%linear_solver)
     end if
     if (.not. err%ok()) call err%prefix(this%file%path // ': ')
   end subroutine run_load_parsed

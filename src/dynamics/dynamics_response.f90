@@ -69,7 +69,7 @@ contains
     if (need_compliance .or. this%n_frequencies > 0) then
       call tangent_stiffness(dyn, t, q_dy, k, err, accurate=need_compliance)
     else
-      call dyn%evaluate(t, q_dy, 0.0_wp * q_dy, acc, err)
+      call dyn%evaluate_dense(t, q_dy, 0.0_wp * q_dy, acc, err)
     end if
     if (err%ok()) then
       r = reactions(dyn)
@@ -85,14 +85,14 @@ contains
   !> Reaction at every coordinate that is not calculable (0 at calculable ones) at the last
   !> evaluation of dyn, which must be at rest.
   function reactions(dyn) result(r)
-    type(dynamics_t), intent(in) :: dyn
+    type(dynamics_t), intent(inout) :: dyn
     real(wp) :: r(dyn%model%n_x)
     real(wp) :: sigma(dyn%model%n_c, 1)
     real(wp), allocatable :: e(:), de(:, :)
     integer :: iel, j, row, nm
     associate (m => dyn%model)
       sigma(:, 1) = dyn%nodal_force(m%calc_coord)
-      call lu_solve(dyn%kin%lu, dyn%kin%ipiv, sigma, transposed=.true.)
+      call dyn%kin%jacobian_solve(sigma, transposed=.true.)
       r = -dyn%nodal_force
       do iel = 1, m%n_elements
         associate (el => m%elements(iel)%e)

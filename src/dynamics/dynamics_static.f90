@@ -55,7 +55,7 @@ contains
     type(error_t), intent(out) :: err
     real(wp) :: a(size(q_dy)), q(dyn%model%n_q)
     q = dyn%full_q(t, q_dy)
-    call dyn%evaluate(t, q_dy, 0.0_wp * q_dy, a, err)
+    call dyn%evaluate_dense(t, q_dy, 0.0_wp * q_dy, a, err)
     fl = dyn%gen_force + dyn%stresses(q, 0.0_wp * q)
   end subroutine load_force
 
@@ -70,7 +70,7 @@ contains
     real(wp), intent(out) :: k(:, :)
     type(error_t), intent(out) :: err
     logical, intent(in), optional :: accurate
-    real(wp) :: d1(size(q_dy)), d2(size(q_dy))
+    real(wp) :: d1(size(q_dy)), d2(size(q_dy)), d_mode(size(q_dy), size(q_dy))
     real(wp) :: h, a(size(q_dy)), v0(size(q_dy))
     integer :: j
     logical :: was_locked, extrapolate
@@ -78,7 +78,7 @@ contains
     dyn%locked = .true.
     extrapolate = .false.
     if (present(accurate)) extrapolate = accurate
-    k = dyn%k_dd
+    call dyn%mode_stiffness(k, d_mode)
     if (has_loads(dyn)) then
       h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
       do j = 1, size(q_dy)
@@ -94,7 +94,7 @@ contains
       k = 0.5_wp * (k + transpose(k))
     end if
     v0 = 0.0_wp
-    if (err%ok()) call dyn%evaluate(t, q_dy, v0, a, err)
+    if (err%ok()) call dyn%evaluate_dense(t, q_dy, v0, a, err)
     dyn%locked = was_locked
   end subroutine tangent_stiffness
 
@@ -195,7 +195,7 @@ contains
           end if
           refresh = .false.
         else
-          call dyn%evaluate(t, q_dy, v0, a, err)
+          call dyn%evaluate_dense(t, q_dy, v0, a, err)
           if (.not. err%ok()) then
             ! A correction with old factors that leaves the kinematics unsolvable: take it
             ! back and go on with a fresh tangent.
@@ -234,7 +234,7 @@ contains
         if (.not. err%ok()) exit
         stable(step) = stable_tangent(k, dyn%mbar)
       end if
-      call dyn%evaluate(t, q_dy, v0, a, err)
+      call dyn%evaluate_dense(t, q_dy, v0, a, err)
       if (.not. err%ok()) exit
       x_steps(:, step) = dyn%kin%x
       if (present(q_steps)) q_steps(:, step) = q_dy

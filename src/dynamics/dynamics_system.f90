@@ -12,11 +12,15 @@ module dynamics_system
   use core_linalg, only: chol_factor, chol_solve
   use model_system, only: model_t, COORD_X, COORD_Y
   use model_kinematics, only: kinematics_t
+  use dynamics_augmented, only: augmented_t, element_mass_t
   use elements_base, only: MODE_DYNAMIC, mode_has_stress
   use integrators_system, only: ode2_system_t, system_fd_jacobian
   implicit none
   private
   public :: dynamics_t, check_finite
+
+  !> Above this many nodal coordinates `auto` takes the sparse path (see dyn_init).
+  integer, parameter :: SPARSE_ABOVE = 60
 
   type, extends(ode2_system_t) :: dynamics_t
     type(model_t) :: model
@@ -26,21 +30,23 @@ module dynamics_system
     !> When allocated, the prescribed coordinates take these values instead of their motions
     !> (a configuration named in the input, e.g. for a reduced basis); rates are then zero.
     real(wp), allocatable :: held_rh(:)
-    real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last evaluation
-    real(wp), allocatable :: gen_force(:)     !< right-hand side of the last evaluation
+    !> Sparse path: kinematics and accelerations by KLU (O(n) per evaluation), no dense Mbar.
+    logical :: sparse = .false.
+    type(augmented_t) :: aug
+    type(element_mass_t) :: mass              !< element mass matrices of the last evaluation
+    real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last assembly
+    real(wp), allocatable :: gen_force(:)     !< right-hand side of the last assembly
     !> Nodal forces of the last evaluation before projection (n_x): loads, weight, inertia
     !> terms and the stresses of elastic elements; reactions are computed from it.
     real(wp), allocatable :: nodal_force(:)
+    !> Full q, qd, x_dot and sigma_dy of the last evaluation.
+    real(wp), allocatable :: q_now(:), qd_now(:), xd_now(:), sigma_now(:)
     !> Statics (displacement control): the prescribed coordinates take load_factor times their
     !> values, so that they are stepped together with the loads.
     logical :: ramp_prescribed = .false.
     !> Constant loads: nodal forces plus gravity on the lumped masses (consistent masses get
     !> their weight from the elements, as it depends on the configuration).
     real(wp), allocatable :: load(:)
-    ! sigma_dy is linear in (q, qd): its constant matrices, assembled once by init.
-    real(wp), allocatable :: k_dd(:, :)       !< structural stiffness dsigma_dy/dq_dy
-    real(wp), allocatable :: d_dd(:, :)       !< structural damping dsigma_dy/dv_dy
-    real(wp), allocatable :: k_dr(:, :), d_dr(:, :)  !< the same w.r.t. the prescribed q_rh
     !> Jacobian for implicit integrators: 'linearised' (-Mbar^-1 K0, -Mbar^-1 D0 at the current
     !> state: the stiff structural part, exact enough for Newton) or 'fd' (forward differences).
     character(len=16) :: jacobian_kind = 'linearised'
@@ -52,8 +58,10 @@ module dynamics_system
     procedure :: init => dyn_init
     procedure :: prescribed => dyn_prescribed
     procedure :: full_q => dyn_full_q
+    procedure :: prepare => dyn_prepare
     procedure :: assemble => dyn_assemble
     procedure :: evaluate => dyn_evaluate
+    procedure :: evaluate_dense => dyn_evaluate_dense
     procedure :: accel => dyn_accel
     procedure :: report => dyn_report
     procedure :: record => dyn_record
@@ -62,7 +70,9 @@ module dynamics_system
     procedure :: energy => dyn_energy
     procedure :: stresses => dyn_stresses
     procedure :: loads_at => dyn_loads_at
+    procedure :: mode_stiffness => dyn_mode_stiffness
     procedure :: structural_stiffness => dyn_structural_stiffness
+    procedure :: structural_action => dyn_structural_action
     procedure :: elastic_forces => dyn_elastic_forces
     procedure :: allocate_history => dyn_allocate_history
   end type dynamics_t
@@ -71,36 +81,32 @@ contains
 
   !> Take ownership of a finalised model and solve the kinematics in its initial state, which
   !> also checks that the coordinate classes determine every calculable coordinate.
-  subroutine dyn_init(this, model, t0, q_dy0, err)
+  !> linear_solver: 'dense' (LAPACK on J_c and Mbar), 'sparse' (KLU on J_c and the augmented
+  !> system) or 'auto' (the default: sparse above SPARSE_ABOVE nodal coordinates, where it is
+  !> faster; docs/bench/scaling.md).
+  subroutine dyn_init(this, model, t0, q_dy0, err, linear_solver)
     class(dynamics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: t0, q_dy0(:)
     type(error_t), intent(out) :: err
-    real(wp) :: a(model%n_dy), unit(model%n_q), zero(model%n_q)
-    integer :: j
+    character(len=*), intent(in), optional :: linear_solver
+    real(wp) :: a(model%n_dy)
     this%model = model
     this%load = model%force
     where (model%coord_kind == COORD_X) this%load = this%load + model%lumped * model%gravity(1)
     where (model%coord_kind == COORD_Y) this%load = this%load + model%lumped * model%gravity(2)
-    call this%kin%init(this%model)
-    if (allocated(this%mbar)) deallocate(this%mbar, this%gen_force)
+    this%sparse = model%n_x > SPARSE_ABOVE
+    if (present(linear_solver)) then
+      if (linear_solver == 'dense') this%sparse = .false.
+      if (linear_solver == 'sparse') this%sparse = .true.
+    end if
+    call this%kin%init(this%model, this%sparse)
+    if (this%sparse) call this%aug%init(this%model)
+    call this%mass%init(this%model)
+    if (allocated(this%gen_force)) deallocate(this%gen_force)
+    if (allocated(this%mbar)) deallocate(this%mbar)
     this%n_evals = 0
-    allocate(this%mbar(model%n_dy, model%n_dy), this%gen_force(model%n_dy))
-
-    block
-      real(wp) :: k_q(model%n_dy, model%n_q), d_q(model%n_dy, model%n_q)
-      zero = 0.0_wp
-      do j = 1, model%n_q
-        unit = 0.0_wp
-        unit(j) = 1.0_wp
-        k_q(:, j) = element_stresses(this%model, unit, zero)
-        d_q(:, j) = element_stresses(this%model, zero, unit)
-      end do
-      this%k_dr = k_q(:, 1:model%n_rh)
-      this%k_dd = k_q(:, model%n_rh + 1:)
-      this%d_dr = d_q(:, 1:model%n_rh)
-      this%d_dd = d_q(:, model%n_rh + 1:)
-    end block
+    allocate(this%gen_force(model%n_dy))
     call this%evaluate(t0, q_dy0, 0.0_wp * q_dy0, a, err)
     if (.not. err%ok()) call err%prefix('initial configuration: ')
   end subroutine dyn_init
@@ -140,29 +146,20 @@ contains
     if (size(this%model%load_motion) > 0) f = f + this%model%loads_at(t) - this%model%force
   end function dyn_loads_at
 
-  !> Stress resultants of the dynamic modes, in q_dy order, for full q = (q_rh, q_dy).
-  pure function dyn_stresses(this, q, qd) result(sigma)
+  !> Stress resultants of the dynamic modes, sigma_dy = S (e + beta e_dot), in q_dy order, for
+  !> full q = (q_rh, q_dy), element by element (elements with elastic modes excluded: their
+  !> stresses act as nodal forces).
+  function dyn_stresses(this, q, qd) result(sigma)
     class(dynamics_t), intent(in) :: this
     real(wp), intent(in) :: q(:), qd(:)
     real(wp) :: sigma(this%model%n_dy)
-    integer :: nr
-    nr = this%model%n_rh
-    sigma = matmul(this%k_dd, q(nr + 1:)) + matmul(this%d_dd, qd(nr + 1:)) &
-      + matmul(this%k_dr, q(1:nr)) + matmul(this%d_dr, qd(1:nr))
-  end function dyn_stresses
-
-  !> sigma_dy = S (e + beta e_dot) element by element; used once to build the matrices.
-  function element_stresses(m, q, qd) result(sigma)
-    type(model_t), intent(in) :: m
-    real(wp), intent(in) :: q(:), qd(:)
-    real(wp) :: sigma(m%n_dy)
     real(wp), allocatable :: e(:), ed(:), s(:, :)
     integer :: iel, j, nm
-    block
+    associate (m => this%model)
       sigma = 0.0_wp
       do iel = 1, m%n_elements
-        nm = m%elements(iel)%e%n_modes()
         if (m%elastic_element(iel)) cycle
+        nm = m%elements(iel)%e%n_modes()
         if (.not. any(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1)%class &
                       == MODE_DYNAMIC)) cycle
         allocate(e(nm), ed(nm), s(nm, nm))
@@ -177,53 +174,108 @@ contains
         end do
         deallocate(e, ed, s)
       end do
-    end block
-  end function element_stresses
+    end associate
+  end function dyn_stresses
 
-  !> Mass matrix mbar and generalised force gen_force (the right-hand side) at a state:
-  !>   mbar a = gen_force.
-  subroutine dyn_assemble(this, t, q_dy, v_dy, err)
+  !> The constant part of K0 and D0: dsigma_dy/dq_dy and dsigma_dy/dv_dy of the dynamic
+  !> modes (block diagonal by element).
+  subroutine dyn_mode_stiffness(this, k0, d0)
+    class(dynamics_t), intent(in) :: this
+    real(wp), intent(out) :: k0(:, :), d0(:, :)
+    real(wp), allocatable :: s(:, :)
+    integer :: iel, i, j, nm, qi, qj
+    k0 = 0.0_wp
+    d0 = 0.0_wp
+    associate (m => this%model)
+      do iel = 1, m%n_elements
+        if (m%elastic_element(iel)) cycle
+        nm = m%elements(iel)%e%n_modes()
+        allocate(s(nm, nm))
+        call m%elements(iel)%e%stiffness(s)
+        do j = 1, nm
+          qj = m%modes(m%mode_first(iel) + j - 1)%q - m%n_rh
+          if (m%modes(m%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
+          do i = 1, nm
+            qi = m%modes(m%mode_first(iel) + i - 1)%q - m%n_rh
+            if (m%modes(m%mode_first(iel) + i - 1)%class /= MODE_DYNAMIC) cycle
+            k0(qi, qj) = s(i, j)
+            d0(qi, qj) = m%elements(iel)%e%damping * s(i, j)
+          end do
+        end do
+        deallocate(s)
+      end do
+    end associate
+  end subroutine dyn_mode_stiffness
+
+  !> Kinematics and nodal forces at a state: solves x, x_dot = DF qd, the convective part
+  !> conv = D2F qd qd + DF_rh qdd_rh of the accelerations, the element mass matrices and
+  !> nodal_force = f - M conv - h (+ weight, - elastic stresses); q_now, qd_now, xd_now and
+  !> sigma_now. Everything by solves with the factors of J_c: no dense DF.
+  subroutine dyn_prepare(this, t, q_dy, v_dy, err)
     class(dynamics_t), intent(inout) :: this
     real(wp), intent(in) :: t, q_dy(:), v_dy(:)
     type(error_t), intent(out) :: err
     real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
     real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
-    real(wp), allocatable :: me(:, :), he(:), fe(:), dfe(:, :)
-    real(wp) :: pot
+    real(wp) :: dq(this%model%n_q), cr(this%model%n_x), pot
+    real(wp), allocatable :: me(:, :), he(:), fe(:)
     integer :: iel, nr, nd
     this%n_evals = this%n_evals + 1
-    associate (m => this%model, df => this%kin%df)
+    associate (m => this%model)
       nr = m%n_rh
-      nd = m%n_dy
       call this%prescribed(t, q(1:nr), qd(1:nr), pdd)
       q(nr + 1:) = q_dy
       qd(nr + 1:) = v_dy
       call this%kin%solve(m, q, err)
       if (.not. err%ok()) return
-      call this%kin%transfer(m)
-      call this%kin%second(m, qd, conv)
-      if (nr > 0) conv = conv + matmul(df(:, 1:nr), pdd)
-      xd = matmul(df, qd)
+      call this%kin%apply_df(m, qd, xd)
+      call this%kin%second(m, qd, conv, xd)
+      if (nr > 0) then
+        dq = 0.0_wp
+        dq(1:nr) = pdd
+        call this%kin%apply_df(m, dq, cr)
+        conv = conv + cr
+      end if
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
-      associate (rows => m%lumped_rows)
-        this%mbar = matmul(transpose(df(rows, nr + 1:)), &
-                           spread(m%lumped(rows), 2, nd) * df(rows, nr + 1:))
-      end associate
       do iel = 1, m%n_elements
         associate (el => m%elements(iel)%e)
           if (.not. el%has_inertia()) cycle
-          allocate(me(size(el%dofs), size(el%dofs)), he(size(el%dofs)), fe(size(el%dofs)))
+          nd = size(el%dofs)
+          allocate(me(nd, nd), he(nd), fe(nd))
           call el%inertia(this%kin%x(el%dofs), xd(el%dofs), me, he)
-          call el%weight(this%kin%x(el%dofs), this%load_factor * m%gravity, fe, pot)
+          fe = 0.0_wp
+          if (any(m%gravity /= 0)) &
+            call el%weight(this%kin%x(el%dofs), this%load_factor * m%gravity, fe, pot)
           rhs(el%dofs) = rhs(el%dofs) - matmul(me, conv(el%dofs)) - he + fe
-          dfe = df(el%dofs, nr + 1:)
-          this%mbar = this%mbar + matmul(transpose(dfe), matmul(me, dfe))
+          this%mass%val(this%mass%offset(iel):this%mass%offset(iel) + nd * nd - 1) = &
+            reshape(me, [nd * nd])
           deallocate(me, he, fe)
         end associate
       end do
+      this%xd_now = xd
       if (m%n_elastic > 0) call this%elastic_forces(xd, rhs)
       this%nodal_force = rhs
-      this%gen_force = matmul(rhs, df(:, nr + 1:)) - this%stresses(q, qd)
+      this%q_now = q
+      this%qd_now = qd
+      this%sigma_now = this%stresses(q, qd)
+    end associate
+  end subroutine dyn_prepare
+
+  !> Mass matrix mbar and generalised force gen_force (the right-hand side) at a state:
+  !>   mbar a = gen_force, with the dense DF (O(n^2) memory, O(n^3) work: for statics, modal
+  !> analysis and small models).
+  subroutine dyn_assemble(this, t, q_dy, v_dy, err)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q_dy(:), v_dy(:)
+    type(error_t), intent(out) :: err
+    integer :: nr
+    call this%prepare(t, q_dy, v_dy, err)
+    if (.not. err%ok()) return
+    call this%kin%transfer(this%model)
+    nr = this%model%n_rh
+    associate (dfd => this%kin%df(:, nr + 1:))
+      this%mbar = matmul(transpose(dfd), this%mass%times(this%model, dfd))
+      this%gen_force = matmul(this%nodal_force, dfd) - this%sigma_now
     end associate
   end subroutine dyn_assemble
 
@@ -267,13 +319,13 @@ contains
   !> difference tangent of statics). Assembled here, for the Jacobians that ask for it, not
   !> in every evaluation.
   subroutine dyn_structural_stiffness(this, k0, d0)
-    class(dynamics_t), intent(in) :: this
+    class(dynamics_t), intent(inout) :: this
     real(wp), intent(out) :: k0(:, :), d0(:, :)
     real(wp), allocatable :: e(:), de(:, :), s(:, :), dfe(:, :), sdfe(:, :)
     logical, allocatable :: stressed(:)
     integer :: iel, nm
-    k0 = this%k_dd
-    d0 = this%d_dd
+    call this%mode_stiffness(k0, d0)
+    if (this%model%n_elastic > 0 .and. .not. this%kin%has_df) call this%kin%transfer(this%model)
     associate (m => this%model)
       do iel = 1, m%n_elements
         if (.not. m%elastic_element(iel)) cycle
@@ -294,8 +346,91 @@ contains
     end associate
   end subroutine dyn_structural_stiffness
 
-  !> Accelerations of the dynamic coordinates; also leaves mbar and gen_force for callers.
+  !> K0 v and D0 v for a few vectors v (n_dy, k) whose nodal shapes w = DF_dy v are given
+  !> (n_x, k), without forming K0: the dynamic modes element by element, the elastic elements
+  !> as nodal forces D_x^T S D_x w projected by DF_dy^T (k transposed solves). O(n k).
+  subroutine dyn_structural_action(this, v, w, kv, dv)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: v(:, :), w(:, :)
+    real(wp), intent(out) :: kv(:, :), dv(:, :)
+    real(wp), allocatable :: e(:), de(:, :), s(:, :), sdfe(:, :)
+    real(wp) :: gk(this%model%n_x, size(v, 2)), gd(this%model%n_x, size(v, 2))
+    real(wp) :: proj(this%model%n_q)
+    integer :: iel, i, j, nm, qi, qj
+    kv = 0.0_wp
+    dv = 0.0_wp
+    gk = 0.0_wp
+    gd = 0.0_wp
+    associate (m => this%model)
+      do iel = 1, m%n_elements
+        associate (el => m%elements(iel)%e)
+          nm = el%n_modes()
+          allocate(s(nm, nm))
+          call el%stiffness(s)
+          if (m%elastic_element(iel)) then
+            allocate(e(nm), de(nm, size(el%dofs)))
+            call el%evaluate(this%kin%x(el%dofs), e, de)
+            where (.not. spread(stressed_modes(m, iel), 2, size(el%dofs))) de = 0.0_wp
+            sdfe = matmul(transpose(de), matmul(s, matmul(de, w(el%dofs, :))))
+            gk(el%dofs, :) = gk(el%dofs, :) + sdfe
+            gd(el%dofs, :) = gd(el%dofs, :) + el%damping * sdfe
+            deallocate(e, de)
+          else
+            do j = 1, nm
+              if (m%modes(m%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
+              qj = m%modes(m%mode_first(iel) + j - 1)%q - m%n_rh
+              do i = 1, nm
+                if (m%modes(m%mode_first(iel) + i - 1)%class /= MODE_DYNAMIC) cycle
+                qi = m%modes(m%mode_first(iel) + i - 1)%q - m%n_rh
+                kv(qi, :) = kv(qi, :) + s(i, j) * v(qj, :)
+                dv(qi, :) = dv(qi, :) + el%damping * s(i, j) * v(qj, :)
+              end do
+            end do
+          end if
+          deallocate(s)
+        end associate
+      end do
+      if (m%n_elastic == 0) return
+      do j = 1, size(v, 2)
+        call this%kin%apply_dft(m, gk(:, j), proj)
+        kv(:, j) = kv(:, j) + proj(m%n_rh + 1:)
+        call this%kin%apply_dft(m, gd(:, j), proj)
+        dv(:, j) = dv(:, j) + proj(m%n_rh + 1:)
+      end do
+    end associate
+  end subroutine dyn_structural_action
+
+  !> Accelerations of the dynamic coordinates, by the sparse or the dense path.
   subroutine dyn_evaluate(this, t, q_dy, v_dy, a, err)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q_dy(:), v_dy(:)
+    real(wp), intent(out) :: a(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: f(this%model%n_x, 1), a2(size(a), 1)
+    integer :: info
+    if (.not. this%sparse) then
+      call this%evaluate_dense(t, q_dy, v_dy, a, err)
+      return
+    end if
+    call this%prepare(t, q_dy, v_dy, err)
+    if (.not. err%ok()) return
+    call this%aug%factor(this%model, this%kin%x, this%mass, info)
+    if (info /= 0) then
+      call err%set(ERR_MODEL, 'the mass matrix is singular: a dynamic coordinate has ' // &
+        'no inertia (add mass or rotary inertia, or make that mode rigid; a run with ' // &
+        '&dynamic linear_solver = ''dense'' names the coordinate)')
+      return
+    end if
+    f(:, 1) = this%nodal_force
+    f = f - this%aug%nodal_equivalent(this%model, reshape(this%sigma_now, [size(a), 1]))
+    call this%aug%accelerations(this%model, f, a2)
+    a = a2(:, 1)
+    call check_finite(a, t, err)
+  end subroutine dyn_evaluate
+
+  !> Accelerations by the dense path, which also leaves mbar and gen_force for the analyses
+  !> that need them (statics, modal analysis, buckling).
+  subroutine dyn_evaluate_dense(this, t, q_dy, v_dy, a, err)
     class(dynamics_t), intent(inout) :: this
     real(wp), intent(in) :: t, q_dy(:), v_dy(:)
     real(wp), intent(out) :: a(:)
@@ -310,13 +445,13 @@ contains
     call chol_factor(chol, info)
     if (info /= 0) then
       write(msg, '(a,i0,a)') 'the mass matrix is singular (dynamic coordinate ', info, ', '
-      call err%set(ERR_MODEL, trim(msg) // ' ' // this%model%q_name(this%model%n_rh + info) // &
-        ', has no inertia: add mass or rotary inertia, or make that mode rigid)')
+      call err%set(ERR_MODEL, trim(msg) // ' ' // this%model%q_name(this%model%n_rh + info) &
+        // ', has no inertia: add mass or rotary inertia, or make that mode rigid)')
       return
     end if
     call chol_solve(chol, a)
     call check_finite(a, t, err)
-  end subroutine dyn_evaluate
+  end subroutine dyn_evaluate_dense
 
   !> Accelerations that overflowed or became NaN are an error, never an output.
   subroutine check_finite(a, t, err)
@@ -355,6 +490,8 @@ contains
     call this%last_error%set(err%code, err%message)
   end subroutine dyn_report
 
+  !> -Mbar^-1 [K0, D0]: by Cholesky of Mbar (dense path) or by solves with the factors of
+  !> the augmented system (sparse path, O(n) per column).
   subroutine dyn_jacobian(this, t, q, v, dadq, dadv, status)
     class(dynamics_t), intent(inout) :: this
     real(wp), intent(in) :: t, q(:), v(:)
@@ -368,9 +505,14 @@ contains
     end if
     call this%accel(t, q, v, a, status)
     if (status /= 0) return
+    call this%structural_stiffness(k0, d0)
+    if (this%sparse) then
+      call this%aug%accelerations(this%model, -this%aug%nodal_equivalent(this%model, k0), dadq)
+      call this%aug%accelerations(this%model, -this%aug%nodal_equivalent(this%model, d0), dadv)
+      return
+    end if
     chol = this%mbar
     call chol_factor(chol, info)
-    call this%structural_stiffness(k0, d0)
     do j = 1, size(q)
       dadq(:, j) = -k0(:, j)
       dadv(:, j) = -d0(:, j)
@@ -411,7 +553,7 @@ contains
   !> Kinetic and potential energy (elastic, loads and gravity) at the last kinematic solution,
   !> which must belong to (t, q_dy).
   function dyn_energy(this, t, q_dy, v_dy) result(en)
-    class(dynamics_t), intent(in) :: this
+    class(dynamics_t), intent(inout) :: this
     real(wp), intent(in) :: t, q_dy(:), v_dy(:)
     real(wp) :: en(2)
     real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
@@ -423,7 +565,7 @@ contains
       q(m%n_rh + 1:) = q_dy
       qd(m%n_rh + 1:) = v_dy
       x = this%kin%x
-      xd = matmul(this%kin%df, qd)
+      call this%kin%apply_df(m, qd, xd)
       en(1) = 0.5_wp * sum(m%lumped * xd**2)
       en(2) = -this%load_factor * dot_product(this%loads_at(t), x)
       do iel = 1, m%n_elements

@@ -105,6 +105,8 @@ contains
     type(error_t) :: e
     call rd_string(g, 'title', scene%title, err)
     if (.not. err%ok()) return
+    call rd_choice(g, 'linear_solver', scene%linear_solver, err)
+    if (.not. err%ok()) return
     call g%get_real_array('gravity', gravity, e, default=[0.0_wp, 0.0_wp])
     if (.not. e%ok()) then
       err = e

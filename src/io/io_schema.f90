@@ -42,13 +42,16 @@ module io_schema
     character(len=56) :: doc
   end type var_spec_t
 
-  type(var_spec_t), parameter :: SCENE_VARS(2) = [ &
+  type(var_spec_t), parameter :: SCENE_VARS(3) = [ &
     var_spec_t('scene', 'title', VK_STRING, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'free text, the result file title attribute'), &
     var_spec_t('scene', 'gravity', VK_REAL_LIST, 'm/s^2', '0, 0', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'gravitational acceleration (gx, gy)')]
+      '', 'gravitational acceleration (gx, gy)'), &
+    var_spec_t('scene', 'linear_solver', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|dense|sparse', 'dense (LAPACK) or sparse (KLU) linear algebra')]
   type(var_spec_t), parameter :: NODE_VARS(11) = [ &
     var_spec_t('node', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -376,7 +379,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(106) = [ &
+  type(var_spec_t), parameter :: SCHEMA(107) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]

@@ -1,67 +1,127 @@
-!> Kinematic analysis (docs/theory.md section 4): Newton solution of the calculable nodal
-!> coordinates for given generalised coordinates q, then the first- and second-order
-!> transfer functions DF and D2F from the one LU factorisation of the Jacobian at the solution.
 module model_kinematics
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC, ERR_MODEL
   use core_linalg, only: lu_factor, lu_solve
+  use core_sparse, only: sparse_lu_t
   use model_system, only: model_t
   implicit none
   private
-  public :: kinematics_t
+  public :: kinematics_t, kin_state_t
 
   integer, parameter :: MAX_NEWTON = 25
   !> Pivots this much smaller than the largest mean a singular kinematic Jacobian.
   real(wp), parameter :: SINGULAR_PIVOT = 1.0e-12_wp
 
+  !> What a caller keeps to go on from a kinematic solution after evaluating elsewhere (a basis
+  !> computation); the factors are not kept: the next solve makes new ones.
+  type :: kin_state_t
+    real(wp), allocatable :: x(:), q(:)
+  end type kin_state_t
+
+  !> The Jacobian J_c is factorised dense (LAPACK) or sparse (KLU, `sparse`): its few entries per
+  !> element make the sparse factors O(n), the dense ones O(n^3). Either way DF and D2F are
+  !> applied through solves with the one factorisation (apply_df, apply_dft, second); the dense
+  !> DF matrix is formed only on request (transfer), for the analyses that need all of it.
   type :: kinematics_t
     real(wp), allocatable :: x(:)        !< nodal coordinates at the last solution
     real(wp), allocatable :: q(:)        !< generalised coordinates of that solution
-    real(wp), allocatable :: lu(:, :)    !< LU factors of the kinematic Jacobian at x
-    !> d(residual)/d(q) through the nodal coordinates that are inputs, at x (n_c, n_q)
-    real(wp), allocatable :: jac_in(:, :)
+    logical :: sparse = .false.
+    real(wp), allocatable :: lu(:, :)    !< dense LU factors of J_c at x
     integer, allocatable :: ipiv(:)
-    real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q); rows of fixed coordinates are 0
-    logical :: has_df = .false.
+    type(sparse_lu_t) :: jac_sp          !< sparse J_c and its factors
+    !> d(residual)/d(q) through the nodal coordinates that are inputs: entries (in_row, in_q)
+    integer, allocatable :: in_row(:), in_q(:)
+    real(wp), allocatable :: in_val(:)
+    real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer; fixed rows are 0
+    logical :: has_df = .false.          !< df belongs to x
+    logical :: has_factors = .false.     !< the factors belong to x (up to the last correction)
     integer :: n_solves = 0, n_iterations = 0
   contains
     procedure :: init => kin_init
     procedure :: solve => kin_solve
     procedure :: transfer => kin_transfer
+    procedure :: apply_df => kin_apply_df
+    procedure :: apply_dft => kin_apply_dft
     procedure :: second => kin_second
     procedure :: residual => kin_residual
+    procedure :: jacobian_solve => kin_jacobian_solve
+    procedure :: save_state => kin_save_state
+    procedure :: restore_state => kin_restore_state
     procedure, private :: free_modes_moved => kin_free_modes_moved
+    procedure, private :: singular_message => kin_singular_message
   end type kinematics_t
 
 contains
 
-  subroutine kin_init(this, model)
+  !> Size the arrays for a model and record the entry patterns of J_c (sparse only) and of the
+  !> input-coordinate columns, in the order in which kin_residual visits them.
+  subroutine kin_init(this, model, sparse)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
-    if (allocated(this%q)) deallocate(this%q, this%lu, this%ipiv, this%df, this%jac_in)
+    logical, intent(in), optional :: sparse
+    integer, allocatable :: rows(:), cols(:), in_row(:), in_q(:)
+    integer :: iel, j, k, row
+    this%sparse = .false.
+    if (present(sparse)) this%sparse = sparse
+    if (allocated(this%q)) deallocate(this%q, this%df)
+    if (allocated(this%lu)) deallocate(this%lu, this%ipiv)
     this%x = model%x0
-    allocate(this%q(model%n_q), this%lu(model%n_c, model%n_c), this%ipiv(model%n_c))
-    allocate(this%jac_in(model%n_c, model%n_q))
-    this%jac_in = 0.0_wp
-    allocate(this%df(model%n_x, model%n_q))
+    allocate(this%q(model%n_q), this%df(model%n_x, model%n_q))
+    if (.not. this%sparse) allocate(this%lu(model%n_c, model%n_c), this%ipiv(model%n_c))
     this%q = 0.0_wp
     this%df = 0.0_wp
     this%has_df = .false.
+    this%has_factors = .false.
+    allocate(rows(0), cols(0), in_row(0), in_q(0))
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        do j = 1, el%n_modes()
+          row = model%modes(model%mode_first(iel) + j - 1)%row
+          if (row == 0) cycle
+          do k = 1, size(el%dofs)
+            if (model%calc_index(el%dofs(k)) > 0) then
+              rows = [rows, row]
+              cols = [cols, model%calc_index(el%dofs(k))]
+            end if
+            if (model%input_q(el%dofs(k)) > 0) then
+              in_row = [in_row, row]
+              in_q = [in_q, model%input_q(el%dofs(k))]
+            end if
+          end do
+        end do
+      end associate
+    end do
+    this%in_row = in_row
+    this%in_q = in_q
+    allocate(this%in_val(size(in_row)))
+    this%in_val = 0.0_wp
+    if (this%sparse) call this%jac_sp%setup(model%n_c, rows, cols)
   end subroutine kin_init
 
-  !> Residual r (n_c) of the kinematic equations at this%x and, if asked, their Jacobian with
-  !> respect to the calculable coordinates and (jac_in) to q through the input coordinates.
-  subroutine kin_residual(this, model, q, r, jac, jac_in)
-    class(kinematics_t), intent(in) :: this
+  !> Residual r (n_c) of the kinematic equations at this%x and, with `jacobian`, their
+  !> Jacobian J_c (into the dense or sparse storage) and the input-coordinate entries.
+  subroutine kin_residual(this, model, q, r, jacobian)
+    class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: q(:)
     real(wp), intent(out) :: r(:)
-    real(wp), intent(out), optional :: jac(:, :), jac_in(:, :)
+    logical, intent(in), optional :: jacobian
     real(wp), allocatable :: e(:), de(:, :)
-    integer :: iel, j, k, row, col, nm
+    integer :: iel, j, k, row, col, nm, n_entry, n_in
+    logical :: with_jac
+    with_jac = .false.
+    if (present(jacobian)) with_jac = jacobian
     r = 0.0_wp
-    if (present(jac)) jac = 0.0_wp
-    if (present(jac_in)) jac_in = 0.0_wp
+    if (with_jac) then
+      if (this%sparse) then
+        this%jac_sp%val = 0.0_wp
+      else
+        this%lu = 0.0_wp
+      end if
+      this%in_val = 0.0_wp
+    end if
+    n_entry = 0
+    n_in = 0
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
         nm = el%n_modes()
@@ -72,19 +132,57 @@ contains
           if (row == 0) cycle
           r(row) = e(j)
           if (model%row_q(row) > 0) r(row) = e(j) - q(model%row_q(row))
-          if (.not. present(jac)) cycle
+          if (.not. with_jac) cycle
           do k = 1, size(el%dofs)
             col = model%calc_index(el%dofs(k))
-            if (col > 0) jac(row, col) = jac(row, col) + de(j, k)
-            if (.not. present(jac_in)) cycle
-            col = model%input_q(el%dofs(k))
-            if (col > 0) jac_in(row, col) = jac_in(row, col) + de(j, k)
+            if (col > 0) then
+              if (this%sparse) then
+                n_entry = n_entry + 1
+                associate (slot => this%jac_sp%pos(n_entry))
+                  this%jac_sp%val(slot) = this%jac_sp%val(slot) + de(j, k)
+                end associate
+              else
+                this%lu(row, col) = this%lu(row, col) + de(j, k)
+              end if
+            end if
+            if (model%input_q(el%dofs(k)) > 0) then
+              n_in = n_in + 1
+              this%in_val(n_in) = de(j, k)
+            end if
           end do
         end do
         deallocate(e, de)
       end associate
     end do
   end subroutine kin_residual
+
+  !> Factorise the Jacobian just assembled; info /= 0 if it is singular, worst is then a
+  !> column that is not determined (0 if unknown).
+  subroutine factor_jacobian(this, info, worst)
+    type(kinematics_t), intent(inout) :: this
+    integer, intent(out) :: info, worst
+    real(wp) :: rcond
+    worst = 0
+    if (this%sparse) then
+      call this%jac_sp%factor(info, rcond)
+    else
+      call lu_factor(this%lu, this%ipiv, info, rcond, worst)
+    end if
+    if (rcond < SINGULAR_PIVOT) info = max(info, 1)
+  end subroutine factor_jacobian
+
+  !> b := J_c^-1 b (transposed: J_c^-T b) with the factors of the last solution.
+  subroutine kin_jacobian_solve(this, b, transposed)
+    class(kinematics_t), intent(inout) :: this
+    real(wp), intent(inout), contiguous :: b(:, :)
+    logical, intent(in), optional :: transposed
+    if (size(b, 1) == 0) return
+    if (this%sparse) then
+      call this%jac_sp%solve_many(b, transposed)
+    else
+      call lu_solve(this%lu, this%ipiv, b, transposed)
+    end if
+  end subroutine kin_jacobian_solve
 
   !> Solve the kinematic equations for q, starting from the last solution moved along the
   !> first-order transfer function (a cheap predictor that keeps Newton on the right branch).
@@ -94,48 +192,62 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: q(:)
     type(error_t), intent(out) :: err
-    real(wp) :: r(model%n_c), dx(model%n_c, 1), rmax, rcond, rprev
+    real(wp) :: r(model%n_c), dx(model%n_c, 1), rmax, rprev, dxp(model%n_x)
     real(wp) :: x_start(model%n_x)
     integer :: it, info, worst
+    logical :: stale
     character(len=200) :: msg
     this%n_solves = this%n_solves + 1
-    if (this%has_df) this%x = this%x + matmul(this%df, q - this%q)
+    ! The factors of the previous solution serve for the predictor and for one chord step:
+    ! close to it they contract nearly as well as fresh ones, and the solution then needs one
+    ! factorisation (at the final x, for the transfer functions) instead of two.
+    stale = this%has_factors
+    if (this%has_factors) then
+      call this%apply_df(model, q - this%q, dxp)
+      this%x = this%x + dxp
+    end if
     do it = 1, model%n_q
       if (model%q_coord(it) > 0) this%x(model%q_coord(it)) = model%x0(model%q_coord(it)) + q(it)
     end do
     x_start = this%x
+    this%has_df = .false.
+    this%has_factors = .false.
     rprev = huge(1.0_wp)
     do it = 1, MAX_NEWTON
-      call this%residual(model, q, r, this%lu, this%jac_in)
+      call this%residual(model, q, r, jacobian=.not. stale)
       rmax = 0.0_wp
       if (model%n_c > 0) rmax = maxval(abs(r))
       if (rmax /= rmax) exit
-      call lu_factor(this%lu, this%ipiv, info, rcond, worst)
-      if (info /= 0 .or. rcond < SINGULAR_PIVOT) then
-        call err%set(ERR_MODEL, 'the kinematic Jacobian is singular: coordinate ' // &
-          trim(model%coord_name(model%calc_coord(worst))) // ' is not determined by ' // &
-          'the rigid, prescribed and dynamic modes (check the mode classes and supports; ' // &
-          'elastic and released modes follow from the others and determine nothing)' // &
-          this%free_modes_moved(model, worst))
+      if (stale) then
+        stale = .false.
+        if (rmax > model%newton_tol) then
+          dx(:, 1) = -r
+          call this%jacobian_solve(dx)
+          this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
+          cycle
+        end if
+        call this%residual(model, q, r, jacobian=.true.)
+      end if
+      call factor_jacobian(this, info, worst)
+      if (info /= 0) then
+        call err%set(ERR_MODEL, this%singular_message(model, q))
         this%x = x_start
         return
       end if
+      dx(:, 1) = -r
+      call this%jacobian_solve(dx)
       if (rmax <= model%newton_tol) then
         ! One more correction with these factors takes the error from rmax to about rmax^2:
         ! the stress of a stiff elastic mode is EA/l0 times its error, and statics
         ! differences such stresses.
-        dx(:, 1) = -r
-        call lu_solve(this%lu, this%ipiv, dx)
         this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
         this%q = q
-        this%has_df = .false.
+        this%has_factors = .true.
         this%n_iterations = this%n_iterations + it - 1
         return
       end if
       if (it > 3 .and. rmax > rprev) exit
       rprev = rmax
-      dx(:, 1) = -r
-      call lu_solve(this%lu, this%ipiv, dx)
       this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
     end do
     write(msg, '(a,i0,a,es10.3)') 'kinematic Newton iteration did not converge in ', it - 1, &
@@ -143,6 +255,46 @@ contains
     call err%set(ERR_NUMERIC, trim(msg))
     this%x = x_start
   end subroutine kin_solve
+
+  !> Why J_c is singular, from a dense factorisation (also in sparse mode: this is the error
+  !> path, and the dense factors name the undetermined coordinate and the modes it moves).
+  function kin_singular_message(this, model, q) result(msg)
+    class(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: q(:)
+    character(len=:), allocatable :: msg
+    type(kinematics_t) :: dense
+    real(wp) :: r(model%n_c), rcond
+    integer :: info, worst
+    call dense%init(model, sparse=.false.)
+    dense%x = this%x
+    call dense%residual(model, q, r, jacobian=.true.)
+    call lu_factor(dense%lu, dense%ipiv, info, rcond, worst)
+    msg = 'the kinematic Jacobian is singular'
+    if (worst < 1) return
+    msg = msg // ': coordinate ' // trim(model%coord_name(model%calc_coord(worst))) // &
+      ' is not determined by the rigid, prescribed and dynamic modes (check the mode ' // &
+      'classes and supports; elastic and released modes follow from the others and ' // &
+      'determine nothing)' // dense%free_modes_moved(model, worst)
+  end function kin_singular_message
+
+  !> Keep the solution (x, q) to go on from it later with restore_state.
+  subroutine kin_save_state(this, state)
+    class(kinematics_t), intent(in) :: this
+    type(kin_state_t), intent(out) :: state
+    state%x = this%x
+    state%q = this%q
+  end subroutine kin_save_state
+
+  !> Go back to a saved solution; the next solve starts there without a predictor.
+  subroutine kin_restore_state(this, state)
+    class(kinematics_t), intent(inout) :: this
+    type(kin_state_t), intent(in) :: state
+    this%x = state%x
+    this%q = state%q
+    this%has_factors = .false.
+    this%has_df = .false.
+  end subroutine kin_restore_state
 
   !> The elastic and released modes that the undetermined motion changes. With the smallest
   !> pivot k of the factors J_c = P L U treated as zero, z_k = 1, z_(>k) = 0 and
@@ -190,17 +342,73 @@ contains
       'dynamic and another mode of the same loop elastic'
   end function kin_free_modes_moved
 
-  !> First-order transfer function DF_x = dx/dq at the last solution.
+  !> Right-hand sides of J_c DF_c = (selection of q) - J_in for the columns dq (n_q, n).
+  subroutine transfer_rhs(this, model, dq, b)
+    type(kinematics_t), intent(in) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: dq(:, :)
+    real(wp), intent(out) :: b(:, :)
+    integer :: row, k
+    b = 0.0_wp
+    do row = 1, model%n_c
+      if (model%row_q(row) > 0) b(row, :) = dq(model%row_q(row), :)
+    end do
+    do k = 1, size(this%in_row)
+      b(this%in_row(k), :) = b(this%in_row(k), :) - this%in_val(k) * dq(this%in_q(k), :)
+    end do
+  end subroutine transfer_rhs
+
+  !> dx = DF_x dq (n_x) at the last solution, by one solve.
+  subroutine kin_apply_df(this, model, dq, dx)
+    class(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: dq(:)
+    real(wp), intent(out) :: dx(:)
+    real(wp) :: b(model%n_c, 1)
+    integer :: iq
+    call transfer_rhs(this, model, reshape(dq, [size(dq), 1]), b)
+    call this%jacobian_solve(b)
+    dx = 0.0_wp
+    dx(model%calc_coord) = b(:, 1)
+    do iq = 1, model%n_q
+      if (model%q_coord(iq) > 0) dx(model%q_coord(iq)) = dq(iq)
+    end do
+  end subroutine kin_apply_df
+
+  !> g_q = DF_x^T g (n_q) for nodal forces g (n_x), by one transposed solve.
+  subroutine kin_apply_dft(this, model, g, g_q)
+    class(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: g(:)
+    real(wp), intent(out) :: g_q(:)
+    real(wp) :: z(model%n_c, 1)
+    integer :: row, k, iq
+    z(:, 1) = g(model%calc_coord)
+    call this%jacobian_solve(z, transposed=.true.)
+    g_q = 0.0_wp
+    do row = 1, model%n_c
+      if (model%row_q(row) > 0) g_q(model%row_q(row)) = z(row, 1)
+    end do
+    do k = 1, size(this%in_row)
+      g_q(this%in_q(k)) = g_q(this%in_q(k)) - this%in_val(k) * z(this%in_row(k), 1)
+    end do
+    do iq = 1, model%n_q
+      if (model%q_coord(iq) > 0) g_q(iq) = g_q(iq) + g(model%q_coord(iq))
+    end do
+  end subroutine kin_apply_dft
+
+  !> First-order transfer function DF_x = dx/dq at the last solution, as a dense matrix.
   subroutine kin_transfer(this, model)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
-    real(wp) :: b(model%n_c, model%n_q)
-    integer :: row, iq
-    b = -this%jac_in
-    do row = 1, model%n_c
-      if (model%row_q(row) > 0) b(row, model%row_q(row)) = 1.0_wp
+    real(wp) :: b(model%n_c, model%n_q), unit(model%n_q, model%n_q)
+    integer :: iq
+    unit = 0.0_wp
+    do iq = 1, model%n_q
+      unit(iq, iq) = 1.0_wp
     end do
-    call lu_solve(this%lu, this%ipiv, b)
+    call transfer_rhs(this, model, unit, b)
+    call this%jacobian_solve(b)
     this%df = 0.0_wp
     this%df(model%calc_coord, :) = b
     do iq = 1, model%n_q
@@ -210,16 +418,22 @@ contains
   end subroutine kin_transfer
 
   !> Second-order transfer function contracted twice with qd: D2F_x qd qd (n_x).
-  !> With x_dot = DF qd, J_c (D2F qd qd) = -D2D(x_dot, x_dot) over the kinematic rows.
-  subroutine kin_second(this, model, qd, d2x)
-    class(kinematics_t), intent(in) :: this
+  !> With x_dot = DF qd (given as xd when known), J_c (D2F qd qd) = -D2D(x_dot, x_dot) over
+  !> the kinematic rows.
+  subroutine kin_second(this, model, qd, d2x, xd_known)
+    class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: qd(:)
     real(wp), intent(out) :: d2x(:)
-    real(wp) :: xd(model%n_x), rhs(model%n_c, 1)
+    real(wp), intent(in), optional :: xd_known(:)
+    real(wp) :: rhs(model%n_c, 1), xd(model%n_x)
     real(wp), allocatable :: d2e(:)
     integer :: iel, j, row
-    xd = matmul(this%df, qd)
+    if (present(xd_known)) then
+      xd = xd_known
+    else
+      call this%apply_df(model, qd, xd)
+    end if
     rhs = 0.0_wp
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
@@ -232,7 +446,7 @@ contains
         deallocate(d2e)
       end associate
     end do
-    call lu_solve(this%lu, this%ipiv, rhs)
+    call this%jacobian_solve(rhs)
     d2x = 0.0_wp
     d2x(model%calc_coord) = rhs(:, 1)
   end subroutine kin_second

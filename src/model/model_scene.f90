@@ -129,6 +129,7 @@ module model_scene
   type :: scene_t
     character(len=:), allocatable :: title
     real(wp) :: gravity(2) = 0.0_wp
+    character(len=:), allocatable :: linear_solver   !< 'auto', 'dense' or 'sparse'
     type(node_rec_t), allocatable :: nodes(:)
     type(link_rec_t), allocatable :: links(:)
     type(hinge_rec_t), allocatable :: hinges(:)

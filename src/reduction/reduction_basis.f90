@@ -7,7 +7,7 @@ module reduction_basis
   use core_strings, only: int_str, real_str
   use core_linalg, only: chol_factor
   use dynamics_system, only: dynamics_t
-  use model_kinematics, only: kinematics_t
+  use model_kinematics, only: kin_state_t
   use reduction_modal, only: modal_result_t, modal_analysis
   implicit none
   private
@@ -60,7 +60,7 @@ contains
     type(basis_t), intent(out) :: basis
     type(error_t), intent(out) :: err
     type(modal_result_t) :: modes
-    type(kinematics_t) :: kin_saved
+    type(kin_state_t) :: kin_saved
     real(wp) :: cutoff
     integer :: k, n_dy, nev, info
 
@@ -70,8 +70,8 @@ contains
         ' must be between 1 and the number of dynamic coordinates (' // int_str(n_dy) // ')')
       return
     end if
-    ! The whole kinematic state, not only x: the Newton predictor starts from its q and DF.
-    kin_saved = dyn%kin
+    ! The solution (x, q) the run goes on from; the factors are renewed by its next solve.
+    call dyn%kin%save_state(kin_saved)
     if (present(held)) dyn%held_rh = held
     call choose_cutoff(dyn, spec, basis, err)
     if (.not. err%ok()) return
@@ -87,9 +87,7 @@ contains
       nev = min(n_dy, 2 * nev)
     end do
     if (allocated(dyn%held_rh)) deallocate(dyn%held_rh)
-    kin_saved%n_solves = dyn%kin%n_solves
-    kin_saved%n_iterations = dyn%kin%n_iterations
-    dyn%kin = kin_saved
+    call dyn%kin%restore_state(kin_saved)
     if (.not. err%ok()) return
 
     select case (spec%selection)

@@ -65,22 +65,39 @@ contains
     this%estimate = 0.0_wp
   end subroutine red_allocate_history
 
-  !> Reduced accelerations; leaves the full model's mbar and gen_force of this state.
-  subroutine reduced_accel(this, t, eta, eta_dot, a, err)
+  !> Nodal shapes of the basis at the last evaluation, W = DF_dy V (n_x, k): k solves with
+  !> the factors of the kinematic Jacobian, no dense DF.
+  subroutine basis_shapes(this, w)
+    class(reduced_t), intent(inout) :: this
+    real(wp), intent(out) :: w(:, :)
+    real(wp) :: dq(this%dyn%model%n_q)
+    integer :: j, nr
+    nr = this%dyn%model%n_rh
+    do j = 1, size(w, 2)
+      dq = 0.0_wp
+      dq(nr + 1:) = this%basis%v(:, j)
+      call this%dyn%kin%apply_df(this%dyn%model, dq, w(:, j))
+    end do
+  end subroutine basis_shapes
+
+  !> Reduced accelerations from (W^T M W) eta'' = W^T f - V^T sigma_dy, with W = DF_dy V:
+  !> O(n k) work and memory (docs/theory.md section 9). Leaves the reduced mass matrix in mr.
+  subroutine reduced_accel(this, t, eta, eta_dot, a, err, mr_out)
     class(reduced_t), intent(inout) :: this
     real(wp), intent(in) :: t, eta(:), eta_dot(:)
     real(wp), intent(out) :: a(:)
     type(error_t), intent(out) :: err
+    real(wp), intent(out), optional :: mr_out(:, :)
     real(wp) :: q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
-    real(wp) :: mr(size(eta), size(eta))
+    real(wp) :: mr(size(eta), size(eta)), w(this%dyn%model%n_x, size(eta))
     integer :: info
     call this%full_state(eta, eta_dot, q_dy, v_dy)
-    call this%dyn%assemble(t, q_dy, v_dy, err)
+    call this%dyn%prepare(t, q_dy, v_dy, err)
     if (.not. err%ok()) return
-    associate (v => this%basis%v)
-      mr = matmul(transpose(v), matmul(this%dyn%mbar, v))
-      a = matmul(this%dyn%gen_force, v)
-    end associate
+    call basis_shapes(this, w)
+    mr = matmul(transpose(w), this%dyn%mass%times(this%dyn%model, w))
+    a = matmul(this%dyn%nodal_force, w) - matmul(this%dyn%sigma_now, this%basis%v)
+    if (present(mr_out)) mr_out = mr
     call chol_factor(mr, info)
     if (info /= 0) then
       call err%set(ERR_MODEL, 'the reduced mass matrix V^T Mbar V is singular')
@@ -101,28 +118,31 @@ contains
     if (status /= 0) a = 0.0_wp
   end subroutine red_accel
 
-  !> V^T of the full model's linearised Jacobian: -(V^T Mbar V)^-1 V^T [K0, D0] V.
+  !> V^T of the full model's linearised Jacobian: -(V^T Mbar V)^-1 V^T [K0, D0] V, with the
+  !> constant K0 of the dynamic modes applied element by element and that of elastic elements
+  !> through W = DF_dy V.
   subroutine red_jacobian(this, t, q, v, dadq, dadv, status)
     class(reduced_t), intent(inout) :: this
     real(wp), intent(in) :: t, q(:), v(:)
     real(wp), intent(out) :: dadq(:, :), dadv(:, :)
     integer, intent(out) :: status
     real(wp) :: a(size(q)), mr(size(q), size(q))
-    real(wp), allocatable :: k0(:, :), d0(:, :)
+    real(wp), allocatable :: kv(:, :), dv(:, :), w(:, :)
     integer :: j, info
+    type(error_t) :: err
     if (this%dyn%jacobian_kind == 'fd') then
       call system_fd_jacobian(this, t, q, v, dadq, dadv, status)
       return
     end if
-    call this%accel(t, q, v, a, status)
+    call reduced_accel(this, t, q, v, a, err, mr)
+    call this%dyn%report(err, status)
     if (status /= 0) return
-    associate (b => this%basis%v)
-      mr = matmul(transpose(b), matmul(this%dyn%mbar, b))
-      allocate(k0, d0, mold=this%dyn%mbar)
-      call this%dyn%structural_stiffness(k0, d0)
-      dadq = -matmul(transpose(b), matmul(k0, b))
-      dadv = -matmul(transpose(b), matmul(d0, b))
-    end associate
+    allocate(kv, dv, mold=this%basis%v)
+    allocate(w(this%dyn%model%n_x, size(q)))
+    call basis_shapes(this, w)
+    call this%dyn%structural_action(this%basis%v, w, kv, dv)
+    dadq = -matmul(transpose(this%basis%v), kv)
+    dadv = -matmul(transpose(this%basis%v), dv)
     call chol_factor(mr, info)
     do j = 1, size(q)
       call chol_solve(mr, dadq(:, j))
@@ -146,16 +166,15 @@ contains
     status = 0
     kg = this%out_index(k)
     if (kg == 0) return
+    call this%full_state(q, v, q_dy, v_dy)
     call reduced_accel(this, t, q, v, a, err)
-    if (err%ok()) call full_residual(this, a, r, this%residual(kg), err)
+    if (err%ok()) call full_residual(this, t, q_dy, v_dy, a, r, this%residual(kg), err)
     call this%dyn%report(err, status)
     if (status /= 0) return
-    call this%full_state(q, v, q_dy, v_dy)
     if (allocated(this%basis%k_chol)) then
       dq = r
       call chol_solve(this%basis%k_chol, dq)
-      this%estimate(kg) = largest_translation(this%dyn%model, matmul(this%dyn%kin%df(:, &
-        this%dyn%model%n_rh + 1:), dq))
+      this%estimate(kg) = largest_translation(this%dyn%model, nodal_motion(this, dq))
       if (this%static_correction) q_dy = q_dy + dq
     else
       this%has_estimate = .false.
@@ -169,25 +188,37 @@ contains
     end if
   end subroutine red_record
 
-  !> r = gen_force - Mbar V a_eta and its norm sqrt(r^T Mbar^-1 r), from the last assembly.
-  subroutine full_residual(this, a_eta, r, norm, err)
-    type(reduced_t), intent(in) :: this
-    real(wp), intent(in) :: a_eta(:)
+  !> The residual of the full equations r = DF_dy^T (f - M W a_eta) - sigma_dy (W = DF_dy V)
+  !> just after reduced_accel, by one transposed solve, and its norm sqrt(r^T Mbar^-1 r):
+  !> Mbar^-1 r = a_full - V a_eta with the full model's accelerations a_full at this state.
+  subroutine full_residual(this, t, q_dy, v_dy, a_eta, r, norm, err)
+    type(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q_dy(:), v_dy(:), a_eta(:)
     real(wp), intent(out) :: r(:), norm
     type(error_t), intent(inout) :: err
-    real(wp) :: chol(size(r), size(r)), s(size(r))
-    integer :: info
-    r = this%dyn%gen_force - matmul(this%dyn%mbar, matmul(this%basis%v, a_eta))
-    chol = this%dyn%mbar
-    call chol_factor(chol, info)
-    if (info /= 0) then
-      call err%set(ERR_MODEL, 'error indicator: the full mass matrix is singular')
+    real(wp) :: g(this%dyn%model%n_x, 1), r_q(this%dyn%model%n_q), a_full(size(r))
+    real(wp) :: w(this%dyn%model%n_x, size(a_eta))
+    call basis_shapes(this, w)
+    g = this%dyn%mass%times(this%dyn%model, matmul(w, reshape(a_eta, [size(a_eta), 1])))
+    call this%dyn%kin%apply_dft(this%dyn%model, this%dyn%nodal_force - g(:, 1), r_q)
+    r = r_q(this%dyn%model%n_rh + 1:) - this%dyn%sigma_now
+    call this%dyn%evaluate(t, q_dy, v_dy, a_full, err)
+    if (.not. err%ok()) then
+      call err%prefix('error indicator: ')
       return
     end if
-    s = r
-    call chol_solve(chol, s)
-    norm = sqrt(max(0.0_wp, dot_product(r, s)))
+    norm = sqrt(max(0.0_wp, dot_product(r, a_full - matmul(this%basis%v, a_eta))))
   end subroutine full_residual
+
+  !> Nodal displacement DF_dy dq of a change dq of the dynamic coordinates.
+  function nodal_motion(this, dq) result(dx)
+    type(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: dq(:)
+    real(wp) :: dx(this%dyn%model%n_x), dq_full(this%dyn%model%n_q)
+    dq_full = 0.0_wp
+    dq_full(this%dyn%model%n_rh + 1:) = dq
+    call this%dyn%kin%apply_df(this%dyn%model, dq_full, dx)
+  end function nodal_motion
 
   !> Largest translation sqrt(dx^2 + dy^2) over the nodes of a nodal displacement dx.
   pure real(wp) function largest_translation(model, dx) result(d)

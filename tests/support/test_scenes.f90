@@ -64,7 +64,7 @@ contains
     allocate(q(model%n_dy))
     q = 0.0_wp
     if (present(q0)) q = q0
-    call dyn%init(model, 0.0_wp, q, err)
+    call dyn%init(model, 0.0_wp, q, err, scene%linear_solver)
   end subroutine make_dynamics_from
 
   !> Parse scene text, then as make_dynamics_from.

@@ -1,0 +1,230 @@
+!> Sparse matrices with a fixed pattern and their LU factors (SuiteSparse KLU, through the C
+!> handle of core_sparse_klu.c). The pattern is given once as a list of (row, column) entries,
+!> repeats allowed: entry k then adds into value slot pos(k), so an assembly loop that visits
+!> the entries in the same order only sums into `val`. The symbolic analysis is done once per
+!> pattern; each `factor` refactors the current values (KLU keeps the pivot order while it stays
+!> well conditioned).
+!>
+!> The C handle belongs to the object that made it, recognised by its address: an intrinsic copy
+!> of a containing object (which Fortran cannot prevent) neither uses nor frees the original's
+!> factors but analyses its own pattern on its first factorisation.
+module core_sparse
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_null_ptr, c_int, c_double, c_associated, &
+    c_loc, c_intptr_t
+  use core_kinds, only: wp
+  implicit none
+  private
+  public :: sparse_lu_t
+
+  type :: sparse_lu_t
+    integer :: n = 0
+    integer :: n_entries = 0                  !< entries given to setup, repeats included
+    integer, allocatable :: pos(:)            !< entry -> value slot
+    real(wp), allocatable :: val(:)           !< values in compressed-column order
+    integer(c_int), allocatable, private :: colptr(:), rowind(:)   ! 0-based for KLU
+    type(c_ptr), private :: handle = c_null_ptr
+    integer(c_intptr_t), private :: owner = 0
+  contains
+    procedure :: setup => sparse_setup
+    procedure :: factor => sparse_factor
+    procedure :: solve => sparse_solve
+    procedure :: solve_many => sparse_solve_many
+    procedure :: multiply => sparse_multiply
+    final :: sparse_final
+  end type sparse_lu_t
+
+  interface
+    function klu_new(n, ap, ai) result(h) bind(C, name='flexmor_klu_new')
+      import :: c_ptr, c_int
+      integer(c_int), value :: n
+      integer(c_int), intent(in) :: ap(*), ai(*)
+      type(c_ptr) :: h
+    end function klu_new
+    function klu_factor(h, ax, rcond) result(info) bind(C, name='flexmor_klu_factor')
+      import :: c_ptr, c_int, c_double
+      type(c_ptr), value :: h
+      real(c_double), intent(in) :: ax(*)
+      real(c_double), intent(out) :: rcond
+      integer(c_int) :: info
+    end function klu_factor
+    function klu_solve(h, nrhs, b, transposed) result(info) bind(C, name='flexmor_klu_solve')
+      import :: c_ptr, c_int, c_double
+      type(c_ptr), value :: h
+      integer(c_int), value :: nrhs, transposed
+      real(c_double), intent(inout) :: b(*)
+      integer(c_int) :: info
+    end function klu_solve
+    subroutine klu_free(h) bind(C, name='flexmor_klu_free')
+      import :: c_ptr
+      type(c_ptr), value :: h
+    end subroutine klu_free
+  end interface
+
+contains
+
+  !> The pattern of an n x n matrix from its entries (rows(k), cols(k)); repeats share a slot.
+  !> Values are zero afterwards.
+  subroutine sparse_setup(this, n, rows, cols)
+    class(sparse_lu_t), intent(inout) :: this
+    integer, intent(in) :: n, rows(:), cols(:)
+    integer :: order(size(rows)), count_in_col(n), k, j, slot, prev_row, prev_col
+    call release(this)
+    this%n = n
+    this%n_entries = size(rows)
+    ! Counting sort by column, then insertion by row within each (short) column.
+    count_in_col = 0
+    do k = 1, size(rows)
+      count_in_col(cols(k)) = count_in_col(cols(k)) + 1
+    end do
+    block
+      integer :: start(n + 1), fill(n)
+      start(1) = 1
+      do j = 1, n
+        start(j + 1) = start(j) + count_in_col(j)
+      end do
+      fill = start(1:n)
+      do k = 1, size(rows)
+        order(fill(cols(k))) = k
+        fill(cols(k)) = fill(cols(k)) + 1
+      end do
+      do j = 1, n
+        call sort_by_row(order(start(j):start(j + 1) - 1), rows)
+      end do
+    end block
+    allocate(this%pos(size(rows)), this%colptr(n + 1), this%rowind(size(rows)))
+    slot = 0
+    prev_row = -1
+    prev_col = -1
+    this%colptr = 0
+    do k = 1, size(rows)
+      associate (e => order(k))
+        if (rows(e) /= prev_row .or. cols(e) /= prev_col) then
+          slot = slot + 1
+          this%rowind(slot) = rows(e) - 1
+          this%colptr(cols(e) + 1) = slot
+          prev_row = rows(e)
+          prev_col = cols(e)
+        end if
+        this%pos(e) = slot
+      end associate
+    end do
+    ! colptr(j + 1) holds the last slot of column j (or 0 if empty): make it cumulative.
+    do j = 2, n + 1
+      this%colptr(j) = max(this%colptr(j), this%colptr(j - 1))
+    end do
+    this%rowind = this%rowind(1:slot)
+    allocate(this%val(slot))
+    this%val = 0.0_wp
+  end subroutine sparse_setup
+
+  pure subroutine sort_by_row(idx, rows)
+    integer, intent(inout) :: idx(:)
+    integer, intent(in) :: rows(:)
+    integer :: i, j, key
+    do i = 2, size(idx)
+      key = idx(i)
+      j = i - 1
+      do while (j >= 1)
+        if (rows(idx(j)) <= rows(key)) exit
+        idx(j + 1) = idx(j)
+        j = j - 1
+      end do
+      idx(j + 1) = key
+    end do
+  end subroutine sort_by_row
+
+  !> LU factors of the current values. info = 0 on success, 1 if singular (or the pattern
+  !> could not be analysed); rcond is min|u_ii| / max|u_ii|.
+  subroutine sparse_factor(this, info, rcond)
+    class(sparse_lu_t), intent(inout), target :: this
+    integer, intent(out) :: info
+    real(wp), intent(out) :: rcond
+    rcond = 0.0_wp
+    info = 1
+    if (.not. owns_handle(this)) then
+      this%handle = klu_new(int(this%n, c_int), this%colptr, this%rowind)
+      if (.not. c_associated(this%handle)) return
+      this%owner = address_of(this)
+    end if
+    info = klu_factor(this%handle, this%val, rcond)
+  end subroutine sparse_factor
+
+  !> b := A^-1 b (transposed: A^-T b) with the last factors.
+  subroutine sparse_solve(this, b, transposed)
+    class(sparse_lu_t), intent(inout), target :: this
+    real(wp), intent(inout), contiguous :: b(:)
+    logical, intent(in), optional :: transposed
+    integer :: info
+    if (this%n == 0) return
+    call ensure_own_factors(this)
+    info = klu_solve(this%handle, 1_c_int, b, merge(1_c_int, 0_c_int, optional_true(transposed)))
+  end subroutine sparse_solve
+
+  subroutine sparse_solve_many(this, b, transposed)
+    class(sparse_lu_t), intent(inout), target :: this
+    real(wp), intent(inout), contiguous :: b(:, :)
+    logical, intent(in), optional :: transposed
+    integer :: info
+    if (this%n == 0 .or. size(b, 2) == 0) return
+    call ensure_own_factors(this)
+    info = klu_solve(this%handle, int(size(b, 2), c_int), b, &
+      merge(1_c_int, 0_c_int, optional_true(transposed)))
+  end subroutine sparse_solve_many
+
+  !> y = A x with the current values.
+  pure function sparse_multiply(this, x) result(y)
+    class(sparse_lu_t), intent(in) :: this
+    real(wp), intent(in) :: x(:)
+    real(wp) :: y(this%n)
+    integer :: j, s
+    y = 0.0_wp
+    do j = 1, this%n
+      do s = this%colptr(j) + 1, this%colptr(j + 1)
+        y(this%rowind(s) + 1) = y(this%rowind(s) + 1) + this%val(s) * x(j)
+      end do
+    end do
+  end function sparse_multiply
+
+  !> A copy refactors its own values (those of the original's last factorisation) once.
+  subroutine ensure_own_factors(this)
+    class(sparse_lu_t), intent(inout), target :: this
+    integer :: info
+    real(wp) :: rcond
+    if (.not. owns_handle(this)) call this%factor(info, rcond)
+  end subroutine ensure_own_factors
+
+  pure logical function optional_true(flag)
+    logical, intent(in), optional :: flag
+    optional_true = .false.
+    if (present(flag)) optional_true = flag
+  end function optional_true
+
+  logical function owns_handle(this)
+    class(sparse_lu_t), intent(in), target :: this
+    owns_handle = c_associated(this%handle)
+    if (owns_handle) owns_handle = this%owner == address_of(this)
+  end function owns_handle
+
+  integer(c_intptr_t) function address_of(this)
+    class(sparse_lu_t), intent(in), target :: this
+    select type (this)
+    type is (sparse_lu_t)
+      address_of = transfer(c_loc(this), 0_c_intptr_t)
+    class default
+      address_of = 0
+    end select
+  end function address_of
+
+  subroutine release(this)
+    class(sparse_lu_t), intent(inout), target :: this
+    if (owns_handle(this)) call klu_free(this%handle)
+    this%handle = c_null_ptr
+    this%owner = 0
+    if (allocated(this%pos)) deallocate(this%pos, this%val, this%colptr, this%rowind)
+  end subroutine release
+
+  subroutine sparse_final(this)
+    type(sparse_lu_t), intent(inout) :: this
+    call release(this)
+  end subroutine sparse_final
+end module core_sparse

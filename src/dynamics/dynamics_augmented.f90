@@ -1,0 +1,282 @@
+!> Accelerations of the dynamic coordinates from the sparse system in nodal accelerations and
+!> constraint multipliers (docs/theory.md section 5.4):
+!>     [ M    J_k^T ] [ y      ]   [ f - J_d^T sigma_dy ]
+!>     [ J_k  0     ] [ lambda ] = [ 0                  ]
+!> over the free nodal coordinates (calculable ones and those that are degrees of freedom).
+!> J_k are the rows of the rigid and prescribed modes, J_d those of the dynamic modes, f the
+!> nodal forces of eq. (1) (loads, weight, -M (D2F qd qd + DF_rh qdd_rh), -h, elastic stresses)
+!> and y = DF_dy qdd_dy the part of the nodal accelerations due to the dynamic coordinates. Its
+!> solution is that of Mbar qdd_dy = DF_dy^T f - sigma_dy: y spans the null space of J_k, which
+!> is the range of DF_dy, and DF_dy^T J_d^T sigma_dy = sigma_dy. Then qdd of a dynamic mode is
+!> J_d y on its row and that of a dynamic coordinate its entry of y. The matrix has a few
+!> entries per element, so KLU factors it in O(n) where forming Mbar costs O(n^3).
+module dynamics_augmented
+  use core_kinds, only: wp
+  use core_sparse, only: sparse_lu_t
+  use elements_base, only: MODE_DYNAMIC, MODE_RIGID, MODE_PRESCRIBED
+  use model_system, only: model_t
+  implicit none
+  private
+  public :: augmented_t, element_mass_t
+
+  !> Element mass matrices of the last evaluation, one flat array (offset per element).
+  type :: element_mass_t
+    integer, allocatable :: offset(:)         !< start of element i's block, 0 if no inertia
+    real(wp), allocatable :: val(:)
+  contains
+    procedure :: init => mass_init
+    procedure :: times => mass_times
+  end type element_mass_t
+
+  type :: augmented_t
+    integer :: n_free = 0, n_con = 0
+    integer, allocatable :: free_index(:)     !< coordinate -> unknown (0 if not free)
+    integer, allocatable :: con_index(:)      !< kinematic row -> multiplier unknown (0: none)
+    !> Element Jacobians dD/dx of the last factorisation, flat (offset per element)
+    integer, allocatable :: de_offset(:)
+    real(wp), allocatable :: de_val(:)
+    type(sparse_lu_t) :: lu
+  contains
+    procedure :: init => aug_init
+    procedure :: factor => aug_factor
+    procedure :: accelerations => aug_accelerations
+    procedure :: nodal_equivalent => aug_nodal_equivalent
+    procedure, private :: element_jacobian => aug_element_jacobian
+  end type augmented_t
+
+contains
+
+  subroutine mass_init(this, model)
+    class(element_mass_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    integer :: iel, n
+    allocate(this%offset(model%n_elements))
+    n = 0
+    do iel = 1, model%n_elements
+      this%offset(iel) = 0
+      associate (el => model%elements(iel)%e)
+        if (.not. el%has_inertia()) cycle
+        this%offset(iel) = n + 1
+        n = n + size(el%dofs)**2
+      end associate
+    end do
+    allocate(this%val(n))
+    this%val = 0.0_wp
+  end subroutine mass_init
+
+  !> M w for nodal vectors w (n_x, k): the lumped masses and the element blocks.
+  function mass_times(this, model, w) result(mw)
+    class(element_mass_t), intent(in) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: w(:, :)
+    real(wp) :: mw(size(w, 1), size(w, 2))
+    integer :: iel, nd
+    mw = spread(model%lumped, 2, size(w, 2)) * w
+    do iel = 1, model%n_elements
+      if (this%offset(iel) == 0) cycle
+      associate (dofs => model%elements(iel)%e%dofs)
+        nd = size(dofs)
+        mw(dofs, :) = mw(dofs, :) + matmul(reshape(this%val(this%offset(iel): &
+          this%offset(iel) + nd * nd - 1), [nd, nd]), w(dofs, :))
+      end associate
+    end do
+  end function mass_times
+
+  !> Number the unknowns and record the pattern, in the order aug_factor visits the entries.
+  subroutine aug_init(this, model)
+    class(augmented_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    integer, allocatable :: rows(:), cols(:)
+    integer :: i, iel, j, k, l, row, n
+    allocate(this%free_index(model%n_x), this%con_index(model%n_c))
+    allocate(this%de_offset(model%n_elements))
+    n = 0
+    do iel = 1, model%n_elements
+      this%de_offset(iel) = n + 1
+      n = n + model%elements(iel)%e%n_modes() * size(model%elements(iel)%e%dofs)
+    end do
+    allocate(this%de_val(n))
+    this%free_index = 0
+    this%n_free = 0
+    do i = 1, model%n_x
+      if (model%calc_index(i) > 0 .or. model%coord_input(i) == MODE_DYNAMIC) then
+        this%n_free = this%n_free + 1
+        this%free_index(i) = this%n_free
+      end if
+    end do
+    this%con_index = 0
+    this%n_con = 0
+    do i = 1, size(model%modes)
+      if (model%modes(i)%row == 0) cycle
+      if (model%modes(i)%class /= MODE_RIGID .and. model%modes(i)%class /= MODE_PRESCRIBED) cycle
+      this%n_con = this%n_con + 1
+      this%con_index(model%modes(i)%row) = this%n_free + this%n_con
+    end do
+    n = this%n_free + this%n_con
+    ! Every diagonal entry is in the pattern (zeros for multipliers and massless coordinates)
+    ! so that KLU may pivot on it when the values allow.
+    rows = [(i, i = 1, n)]
+    cols = rows
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        if (el%has_inertia()) then
+          do l = 1, size(el%dofs)
+            do k = 1, size(el%dofs)
+              rows = [rows, this%free_index(el%dofs(k))]
+              cols = [cols, this%free_index(el%dofs(l))]
+            end do
+          end do
+        end if
+        do j = 1, el%n_modes()
+          row = model%modes(model%mode_first(iel) + j - 1)%row
+          if (row == 0) cycle
+          if (this%con_index(row) == 0) cycle
+          do k = 1, size(el%dofs)
+            rows = [rows, this%con_index(row), this%free_index(el%dofs(k))]
+            cols = [cols, this%free_index(el%dofs(k)), this%con_index(row)]
+          end do
+        end do
+      end associate
+    end do
+    ! Entries of fixed or prescribed coordinates (index 0) stay out of the pattern.
+    call this%lu%setup(n, pack(rows, rows > 0 .and. cols > 0), pack(cols, rows > 0 .and. cols > 0))
+  end subroutine aug_init
+
+  !> Assemble the matrix at the configuration x (element mass blocks given) and factor it.
+  !> info /= 0 when it is singular: Mbar is then singular too.
+  subroutine aug_factor(this, model, x, mass, info)
+    class(augmented_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: x(:)
+    type(element_mass_t), intent(in) :: mass
+    integer, intent(out) :: info
+    real(wp), allocatable :: e(:), de(:, :)
+    real(wp) :: rcond
+    integer :: i, iel, j, k, l, row, n, next
+    n = this%n_free + this%n_con
+    this%lu%val = 0.0_wp
+    next = 0
+    do i = 1, n
+      next = next + 1
+      call add(this%lu, next, 0.0_wp)
+    end do
+    do i = 1, model%n_x
+      if (this%free_index(i) > 0) call add(this%lu, this%free_index(i), model%lumped(i))
+    end do
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        if (el%has_inertia()) then
+          do l = 1, size(el%dofs)
+            do k = 1, size(el%dofs)
+              if (this%free_index(el%dofs(k)) == 0 .or. this%free_index(el%dofs(l)) == 0) cycle
+              next = next + 1
+              call add(this%lu, next, &
+                mass%val(mass%offset(iel) + (l - 1) * size(el%dofs) + k - 1))
+            end do
+          end do
+        end if
+        allocate(e(el%n_modes()), de(el%n_modes(), size(el%dofs)))
+        call el%evaluate(x(el%dofs), e, de)
+        this%de_val(this%de_offset(iel):this%de_offset(iel) + size(de) - 1) = reshape(de, [size(de)])
+        do j = 1, el%n_modes()
+          row = model%modes(model%mode_first(iel) + j - 1)%row
+          if (row == 0) cycle
+          if (this%con_index(row) == 0) cycle
+          do k = 1, size(el%dofs)
+            if (this%free_index(el%dofs(k)) == 0) cycle
+            call add(this%lu, next + 1, de(j, k))
+            call add(this%lu, next + 2, de(j, k))
+            next = next + 2
+          end do
+        end do
+        deallocate(e, de)
+      end associate
+    end do
+    call this%lu%factor(info, rcond)
+    if (rcond < 1.0e-14_wp) info = max(info, 1)
+  contains
+    subroutine add(lu, k, v)
+      type(sparse_lu_t), intent(inout) :: lu
+      integer, intent(in) :: k
+      real(wp), intent(in) :: v
+      lu%val(lu%pos(k)) = lu%val(lu%pos(k)) + v
+    end subroutine add
+  end subroutine aug_factor
+
+  !> Nodal forces whose projection DF_dy^T is the generalised force g (n_dy, k columns):
+  !> J_d^T g on the modes, g itself on the dynamic coordinates.
+  function aug_nodal_equivalent(this, model, g) result(f)
+    class(augmented_t), intent(in) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: g(:, :)
+    real(wp) :: f(model%n_x, size(g, 2))
+    real(wp), allocatable :: de(:, :)
+    integer :: iel, j, k, iq
+    f = 0.0_wp
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        de = this%element_jacobian(model, iel)
+        do j = 1, el%n_modes()
+          iq = model%modes(model%mode_first(iel) + j - 1)%q
+          if (model%modes(model%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
+          do k = 1, size(el%dofs)
+            f(el%dofs(k), :) = f(el%dofs(k), :) + de(j, k) * g(iq - model%n_rh, :)
+          end do
+        end do
+      end associate
+    end do
+    do iq = model%n_rh + 1, model%n_q
+      if (model%q_coord(iq) > 0) f(model%q_coord(iq), :) = f(model%q_coord(iq), :) + &
+        g(iq - model%n_rh, :)
+    end do
+  end function aug_nodal_equivalent
+
+  !> Accelerations a (n_dy, k) for nodal forces f (n_x, k) with the last factors: the solution
+  !> of Mbar a = DF_dy^T f.
+  subroutine aug_accelerations(this, model, f, a)
+    class(augmented_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: f(:, :)
+    real(wp), intent(out) :: a(:, :)
+    real(wp) :: b(this%n_free + this%n_con, size(f, 2)), y(model%n_x, size(f, 2))
+    real(wp), allocatable :: de(:, :)
+    integer :: i, iel, j, k, iq
+    b = 0.0_wp
+    do i = 1, model%n_x
+      if (this%free_index(i) > 0) b(this%free_index(i), :) = f(i, :)
+    end do
+    call this%lu%solve_many(b)
+    y = 0.0_wp
+    do i = 1, model%n_x
+      if (this%free_index(i) > 0) y(i, :) = b(this%free_index(i), :)
+    end do
+    a = 0.0_wp
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        de = this%element_jacobian(model, iel)
+        do j = 1, el%n_modes()
+          if (model%modes(model%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
+          iq = model%modes(model%mode_first(iel) + j - 1)%q - model%n_rh
+          do k = 1, size(el%dofs)
+            a(iq, :) = a(iq, :) + de(j, k) * y(el%dofs(k), :)
+          end do
+        end do
+      end associate
+    end do
+    do iq = model%n_rh + 1, model%n_q
+      if (model%q_coord(iq) > 0) a(iq - model%n_rh, :) = y(model%q_coord(iq), :)
+    end do
+  end subroutine aug_accelerations
+
+  !> dD/dx of element iel at the last factorisation.
+  pure function aug_element_jacobian(this, model, iel) result(de)
+    class(augmented_t), intent(in) :: this
+    type(model_t), intent(in) :: model
+    integer, intent(in) :: iel
+    real(wp), allocatable :: de(:, :)
+    integer :: nm, nd
+    nm = model%elements(iel)%e%n_modes()
+    nd = size(model%elements(iel)%e%dofs)
+    de = reshape(this%de_val(this%de_offset(iel):this%de_offset(iel) + nm * nd - 1), [nm, nd])
+  end function aug_element_jacobian
+end module dynamics_augmented
