@@ -37,6 +37,8 @@ contains
     if (err%ok()) call h5%write_int_attr('/', 'n_dynamic_coordinates', this%dyn%model%n_dy, err)
     if (err%ok()) call h5%write_int_attr('/', 'n_elements', this%dyn%model%n_elements, err)
     if (err%ok()) call h5%write_int_attr('/', 'n_kinematic_solves', this%dyn%kin%n_solves, err)
+    if (err%ok()) call h5%write_string_attr('/', 'linear_solver', &
+      trim(merge('sparse', 'dense ', this%dyn%sparse)), err)
     if (.not. this%scene%dynamic%active) return
     associate (s => this%stats, d => this%scene%dynamic)
       if (err%ok()) call h5%write_string_attr('/', 'integrator', d%integrator, err)

@@ -13,7 +13,7 @@
 module dynamics_augmented
   use core_kinds, only: wp
   use core_sparse, only: sparse_lu_t
-  use elements_base, only: MODE_DYNAMIC, MODE_RIGID, MODE_PRESCRIBED
+  use elements_base, only: MODE_DYNAMIC, MODE_RIGID, MODE_PRESCRIBED, mode_has_stress
   use model_system, only: model_t
   implicit none
   private
@@ -36,9 +36,13 @@ module dynamics_augmented
     integer, allocatable :: de_offset(:)
     real(wp), allocatable :: de_val(:)
     type(sparse_lu_t) :: lu
+    !> The iteration matrix of implicit integrators in the same form, M replaced by
+    !> M + D_x^T (c_q S + c_v S_d) D_x over the stressed modes (see aug_factor_newton).
+    type(sparse_lu_t) :: newton
   contains
     procedure :: init => aug_init
     procedure :: factor => aug_factor
+    procedure :: factor_newton => aug_factor_newton
     procedure :: accelerations => aug_accelerations
     procedure :: nodal_equivalent => aug_nodal_equivalent
     procedure, private :: element_jacobian => aug_element_jacobian
@@ -140,6 +144,30 @@ contains
     end do
     ! Entries of fixed or prescribed coordinates (index 0) stay out of the pattern.
     call this%lu%setup(n, pack(rows, rows > 0 .and. cols > 0), pack(cols, rows > 0 .and. cols > 0))
+    ! The iteration matrix: every element's block (stiffness where there is no mass).
+    rows = [(i, i = 1, n)]
+    cols = rows
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        do l = 1, size(el%dofs)
+          do k = 1, size(el%dofs)
+            rows = [rows, this%free_index(el%dofs(k))]
+            cols = [cols, this%free_index(el%dofs(l))]
+          end do
+        end do
+        do j = 1, el%n_modes()
+          row = model%modes(model%mode_first(iel) + j - 1)%row
+          if (row == 0) cycle
+          if (this%con_index(row) == 0) cycle
+          do k = 1, size(el%dofs)
+            rows = [rows, this%con_index(row), this%free_index(el%dofs(k))]
+            cols = [cols, this%free_index(el%dofs(k)), this%con_index(row)]
+          end do
+        end do
+      end associate
+    end do
+    call this%newton%setup(n, pack(rows, rows > 0 .and. cols > 0), &
+      pack(cols, rows > 0 .and. cols > 0))
   end subroutine aug_init
 
   !> Assemble the matrix at the configuration x (element mass blocks given) and factor it.
@@ -155,13 +183,9 @@ contains
     integer :: i, iel, j, k, l, row, n, next
     n = this%n_free + this%n_con
     this%lu%val = 0.0_wp
-    next = 0
-    do i = 1, n
-      next = next + 1
-      call add(this%lu, next, 0.0_wp)
-    end do
+    next = n
     do i = 1, model%n_x
-      if (this%free_index(i) > 0) call add(this%lu, this%free_index(i), model%lumped(i))
+      if (this%free_index(i) > 0) call add_entry(this%lu, this%free_index(i), model%lumped(i))
     end do
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
@@ -170,7 +194,7 @@ contains
             do k = 1, size(el%dofs)
               if (this%free_index(el%dofs(k)) == 0 .or. this%free_index(el%dofs(l)) == 0) cycle
               next = next + 1
-              call add(this%lu, next, &
+              call add_entry(this%lu, next, &
                 mass%val(mass%offset(iel) + (l - 1) * size(el%dofs) + k - 1))
             end do
           end do
@@ -184,8 +208,8 @@ contains
           if (this%con_index(row) == 0) cycle
           do k = 1, size(el%dofs)
             if (this%free_index(el%dofs(k)) == 0) cycle
-            call add(this%lu, next + 1, de(j, k))
-            call add(this%lu, next + 2, de(j, k))
+            call add_entry(this%lu, next + 1, de(j, k))
+            call add_entry(this%lu, next + 2, de(j, k))
             next = next + 2
           end do
         end do
@@ -194,14 +218,76 @@ contains
     end do
     call this%lu%factor(info, rcond)
     if (rcond < 1.0e-14_wp) info = max(info, 1)
-  contains
-    subroutine add(lu, k, v)
-      type(sparse_lu_t), intent(inout) :: lu
-      integer, intent(in) :: k
-      real(wp), intent(in) :: v
-      lu%val(lu%pos(k)) = lu%val(lu%pos(k)) + v
-    end subroutine add
   end subroutine aug_factor
+
+  !> The iteration matrix Mbar + c_q K0 + c_v D0 of an implicit step in augmented form (for
+  !> I - c_q da/dq - c_v da/dv = Mbar^-1 (Mbar + c_q K0 + c_v D0) with the linearised Jacobian):
+  !> K0 = DF_dy^T K_x DF_dy with the element stiffness K_x = D_x^T S D_x over the stressed modes
+  !> (the dynamic ones; dynamic and elastic ones of elements with elastic modes), because
+  !> D_x DF_dy is the unit row on a dynamic mode. The element Jacobians and masses are those of
+  !> the last aug_factor.
+  subroutine aug_factor_newton(this, model, mass, c_q, c_v, info)
+    class(augmented_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    type(element_mass_t), intent(in) :: mass
+    real(wp), intent(in) :: c_q, c_v
+    integer, intent(out) :: info
+    real(wp), allocatable :: de(:, :), s(:, :), block(:, :)
+    logical, allocatable :: stressed(:)
+    real(wp) :: rcond
+    integer :: i, iel, j, k, l, row, n, next, nd, nm
+    n = this%n_free + this%n_con
+    this%newton%val = 0.0_wp
+    next = n
+    do i = 1, model%n_x
+      if (this%free_index(i) > 0) call add_entry(this%newton, this%free_index(i), model%lumped(i))
+    end do
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        nd = size(el%dofs)
+        nm = el%n_modes()
+        de = this%element_jacobian(model, iel)
+        allocate(s(nm, nm), block(nd, nd))
+        call el%stiffness(s)
+        stressed = model%modes(model%mode_first(iel):model%mode_first(iel) + nm - 1)%class &
+          == MODE_DYNAMIC .or. (model%elastic_element(iel) .and. mode_has_stress( &
+          model%modes(model%mode_first(iel):model%mode_first(iel) + nm - 1)%class))
+        where (.not. spread(stressed, 2, nd)) de = 0.0_wp
+        block = (c_q + c_v * el%damping) * matmul(transpose(de), matmul(s, de))
+        if (mass%offset(iel) > 0) block = block + reshape(mass%val(mass%offset(iel): &
+          mass%offset(iel) + nd * nd - 1), [nd, nd])
+        do l = 1, nd
+          do k = 1, nd
+            if (this%free_index(el%dofs(k)) == 0 .or. this%free_index(el%dofs(l)) == 0) cycle
+            next = next + 1
+            call add_entry(this%newton, next, block(k, l))
+          end do
+        end do
+        de = this%element_jacobian(model, iel)
+        do j = 1, nm
+          row = model%modes(model%mode_first(iel) + j - 1)%row
+          if (row == 0) cycle
+          if (this%con_index(row) == 0) cycle
+          do k = 1, nd
+            if (this%free_index(el%dofs(k)) == 0) cycle
+            call add_entry(this%newton, next + 1, de(j, k))
+            call add_entry(this%newton, next + 2, de(j, k))
+            next = next + 2
+          end do
+        end do
+        deallocate(s, block)
+      end associate
+    end do
+    call this%newton%factor(info, rcond)
+    if (rcond < 1.0e-14_wp) info = max(info, 1)
+  end subroutine aug_factor_newton
+
+  pure subroutine add_entry(lu, k, v)
+    type(sparse_lu_t), intent(inout) :: lu
+    integer, intent(in) :: k
+    real(wp), intent(in) :: v
+    lu%val(lu%pos(k)) = lu%val(lu%pos(k)) + v
+  end subroutine add_entry
 
   !> Nodal forces whose projection DF_dy^T is the generalised force g (n_dy, k columns):
   !> J_d^T g on the modes, g itself on the dynamic coordinates.
@@ -233,11 +319,12 @@ contains
 
   !> Accelerations a (n_dy, k) for nodal forces f (n_x, k) with the last factors: the solution
   !> of Mbar a = DF_dy^T f.
-  subroutine aug_accelerations(this, model, f, a)
+  subroutine aug_accelerations(this, model, f, a, newton)
     class(augmented_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: f(:, :)
     real(wp), intent(out) :: a(:, :)
+    logical, intent(in), optional :: newton
     real(wp) :: b(this%n_free + this%n_con, size(f, 2)), y(model%n_x, size(f, 2))
     real(wp), allocatable :: de(:, :)
     integer :: i, iel, j, k, iq
@@ -245,7 +332,15 @@ contains
     do i = 1, model%n_x
       if (this%free_index(i) > 0) b(this%free_index(i), :) = f(i, :)
     end do
-    call this%lu%solve_many(b)
+    if (present(newton)) then
+      if (newton) then
+        call this%newton%solve_many(b)
+      else
+        call this%lu%solve_many(b)
+      end if
+    else
+      call this%lu%solve_many(b)
+    end if
     y = 0.0_wp
     do i = 1, model%n_x
       if (this%free_index(i) > 0) y(i, :) = b(this%free_index(i), :)

@@ -67,6 +67,9 @@ module dynamics_system
     procedure :: record => dyn_record
     procedure :: store => dyn_store
     procedure :: jacobian => dyn_jacobian
+    procedure :: has_iteration_solver => dyn_has_iteration_solver
+    procedure :: iteration_factor => dyn_iteration_factor
+    procedure :: iteration_solve => dyn_iteration_solve
     procedure :: energy => dyn_energy
     procedure :: stresses => dyn_stresses
     procedure :: loads_at => dyn_loads_at
@@ -520,6 +523,38 @@ contains
       call chol_solve(chol, dadv(:, j))
     end do
   end subroutine dyn_jacobian
+
+  !> The sparse path solves the Newton systems of implicit integrators itself, in O(n)
+  !> (docs/theory.md 5.2), instead of handing them a dense n_dy x n_dy Jacobian.
+  logical function dyn_has_iteration_solver(this)
+    class(dynamics_t), intent(in) :: this
+    dyn_has_iteration_solver = this%sparse .and. this%jacobian_kind == 'linearised'
+  end function dyn_has_iteration_solver
+
+  !> Factor I - c_q da/dq - c_v da/dv = Mbar^-1 (Mbar + c_q K0 + c_v D0) (linearised Jacobian)
+  !> at the state of the last evaluation.
+  subroutine dyn_iteration_factor(this, c_q, c_v, status)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: c_q, c_v
+    integer, intent(out) :: status
+    integer :: info
+    call this%aug%factor_newton(this%model, this%mass, c_q, c_v, info)
+    status = 0
+    if (info /= 0) status = 1
+  end subroutine dyn_iteration_factor
+
+  !> r := (I - c_q da/dq - c_v da/dv)^-1 r with the last factors: the solution a of
+  !> (Mbar + c_q K0 + c_v D0) a = Mbar r, with Mbar r = DF_dy^T M DF_dy r at the last evaluation.
+  subroutine dyn_iteration_solve(this, r)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(inout) :: r(:)
+    real(wp) :: dq(this%model%n_q), w(this%model%n_x, 1), a(size(r), 1)
+    dq = 0.0_wp
+    dq(this%model%n_rh + 1:) = r
+    call this%kin%apply_df(this%model, dq, w(:, 1))
+    call this%aug%accelerations(this%model, this%mass%times(this%model, w), a, newton=.true.)
+    r = a(:, 1)
+  end subroutine dyn_iteration_solve
 
   subroutine dyn_allocate_history(this, nt)
     class(dynamics_t), intent(inout) :: this

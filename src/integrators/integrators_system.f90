@@ -20,6 +20,13 @@ module integrators_system
     !> Jacobians da/dq and da/dv (n x n). The default is forward differences of `accel`;
     !> a model may override it with its linearised matrices.
     procedure :: jacobian => system_fd_jacobian
+    !> A model may solve the Newton systems of implicit steps itself, e.g. sparse where a
+    !> dense n x n Jacobian would cost O(n^2) memory and O(n^3) work. Then, after an `accel`
+    !> at the Jacobian's state, iteration_factor(c_q, c_v) factors I - c_q da/dq - c_v da/dv,
+    !> and iteration_solve(r) overwrites r with its inverse times r. Default: not offered.
+    procedure :: has_iteration_solver => system_no_iteration_solver
+    procedure :: iteration_factor => system_iteration_factor
+    procedure :: iteration_solve => system_iteration_solve
   end type ode2_system_t
 
   abstract interface
@@ -70,6 +77,24 @@ module integrators_system
   end type integrator_stats_t
 
 contains
+
+  logical function system_no_iteration_solver(this)
+    class(ode2_system_t), intent(in) :: this
+    system_no_iteration_solver = .false.
+  end function system_no_iteration_solver
+
+  !> Never called when has_iteration_solver is false; reports failure if it is.
+  subroutine system_iteration_factor(this, c_q, c_v, status)
+    class(ode2_system_t), intent(inout) :: this
+    real(wp), intent(in) :: c_q, c_v
+    integer, intent(out) :: status
+    status = -1
+  end subroutine system_iteration_factor
+
+  subroutine system_iteration_solve(this, r)
+    class(ode2_system_t), intent(inout) :: this
+    real(wp), intent(inout) :: r(:)
+  end subroutine system_iteration_solve
 
   subroutine system_fd_jacobian(this, t, q, v, dadq, dadv, status)
     class(ode2_system_t), intent(inout) :: this
