@@ -14,7 +14,16 @@ module core_sparse
   use core_kinds, only: wp
   implicit none
   private
-  public :: sparse_lu_t
+  public :: sparse_lu_t, entries_t
+
+  !> A growing list of (row, column) entries, for building patterns in one pass (capacity
+  !> doubles, so n entries cost O(n)).
+  type :: entries_t
+    integer :: n = 0
+    integer, allocatable :: rows(:), cols(:)
+  contains
+    procedure :: add => entries_add
+  end type entries_t
 
   type :: sparse_lu_t
     integer :: n = 0
@@ -61,6 +70,26 @@ module core_sparse
   end interface
 
 contains
+
+  !> Append entry (row, col); entries with a row or column 0 (not an unknown) are skipped.
+  pure subroutine entries_add(this, row, col)
+    class(entries_t), intent(inout) :: this
+    integer, intent(in) :: row, col
+    integer, allocatable :: grown(:)
+    if (row < 1 .or. col < 1) return
+    if (.not. allocated(this%rows)) allocate(this%rows(64), this%cols(64))
+    if (this%n == size(this%rows)) then
+      allocate(grown(2 * this%n))
+      grown(1:this%n) = this%rows
+      call move_alloc(grown, this%rows)
+      allocate(grown(2 * this%n))
+      grown(1:this%n) = this%cols
+      call move_alloc(grown, this%cols)
+    end if
+    this%n = this%n + 1
+    this%rows(this%n) = row
+    this%cols(this%n) = col
+  end subroutine entries_add
 
   !> The pattern of an n x n matrix from its entries (rows(k), cols(k)); repeats share a slot.
   !> Values are zero afterwards.

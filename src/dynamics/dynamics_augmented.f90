@@ -12,7 +12,7 @@
 !> entries per element, so KLU factors it in O(n) where forming Mbar costs O(n^3).
 module dynamics_augmented
   use core_kinds, only: wp
-  use core_sparse, only: sparse_lu_t
+  use core_sparse, only: sparse_lu_t, entries_t
   use elements_base, only: MODE_DYNAMIC, MODE_RIGID, MODE_PRESCRIBED, mode_has_stress
   use model_system, only: model_t
   implicit none
@@ -90,7 +90,7 @@ contains
   subroutine aug_init(this, model)
     class(augmented_t), intent(inout) :: this
     type(model_t), intent(in) :: model
-    integer, allocatable :: rows(:), cols(:)
+    type(entries_t) :: mass_pattern, newton_pattern
     integer :: i, iel, j, k, l, row, n
     allocate(this%free_index(model%n_x), this%con_index(model%n_c))
     allocate(this%de_offset(model%n_elements))
@@ -118,41 +118,20 @@ contains
     end do
     n = this%n_free + this%n_con
     ! Every diagonal entry is in the pattern (zeros for multipliers and massless coordinates)
-    ! so that KLU may pivot on it when the values allow.
-    rows = [(i, i = 1, n)]
-    cols = rows
-    do iel = 1, model%n_elements
-      associate (el => model%elements(iel)%e)
-        if (el%has_inertia()) then
-          do l = 1, size(el%dofs)
-            do k = 1, size(el%dofs)
-              rows = [rows, this%free_index(el%dofs(k))]
-              cols = [cols, this%free_index(el%dofs(l))]
-            end do
-          end do
-        end if
-        do j = 1, el%n_modes()
-          row = model%modes(model%mode_first(iel) + j - 1)%row
-          if (row == 0) cycle
-          if (this%con_index(row) == 0) cycle
-          do k = 1, size(el%dofs)
-            rows = [rows, this%con_index(row), this%free_index(el%dofs(k))]
-            cols = [cols, this%free_index(el%dofs(k)), this%con_index(row)]
-          end do
-        end do
-      end associate
+    ! so that KLU may pivot on it when the values allow. The iteration matrix has every
+    ! element's block (stiffness where there is no mass). Entries of fixed or prescribed
+    ! coordinates (index 0) stay out.
+    do i = 1, n
+      call mass_pattern%add(i, i)
+      call newton_pattern%add(i, i)
     end do
-    ! Entries of fixed or prescribed coordinates (index 0) stay out of the pattern.
-    call this%lu%setup(n, pack(rows, rows > 0 .and. cols > 0), pack(cols, rows > 0 .and. cols > 0))
-    ! The iteration matrix: every element's block (stiffness where there is no mass).
-    rows = [(i, i = 1, n)]
-    cols = rows
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
         do l = 1, size(el%dofs)
           do k = 1, size(el%dofs)
-            rows = [rows, this%free_index(el%dofs(k))]
-            cols = [cols, this%free_index(el%dofs(l))]
+            if (el%has_inertia()) call mass_pattern%add(this%free_index(el%dofs(k)), &
+              this%free_index(el%dofs(l)))
+            call newton_pattern%add(this%free_index(el%dofs(k)), this%free_index(el%dofs(l)))
           end do
         end do
         do j = 1, el%n_modes()
@@ -160,14 +139,18 @@ contains
           if (row == 0) cycle
           if (this%con_index(row) == 0) cycle
           do k = 1, size(el%dofs)
-            rows = [rows, this%con_index(row), this%free_index(el%dofs(k))]
-            cols = [cols, this%free_index(el%dofs(k)), this%con_index(row)]
+            if (this%free_index(el%dofs(k)) == 0) cycle
+            call mass_pattern%add(this%con_index(row), this%free_index(el%dofs(k)))
+            call mass_pattern%add(this%free_index(el%dofs(k)), this%con_index(row))
+            call newton_pattern%add(this%con_index(row), this%free_index(el%dofs(k)))
+            call newton_pattern%add(this%free_index(el%dofs(k)), this%con_index(row))
           end do
         end do
       end associate
     end do
-    call this%newton%setup(n, pack(rows, rows > 0 .and. cols > 0), &
-      pack(cols, rows > 0 .and. cols > 0))
+    call this%lu%setup(n, mass_pattern%rows(1:mass_pattern%n), mass_pattern%cols(1:mass_pattern%n))
+    call this%newton%setup(n, newton_pattern%rows(1:newton_pattern%n), &
+      newton_pattern%cols(1:newton_pattern%n))
   end subroutine aug_init
 
   !> Assemble the matrix at the configuration x (element mass blocks given) and factor it.

@@ -2,7 +2,7 @@ module model_kinematics
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC, ERR_MODEL
   use core_linalg, only: lu_factor, lu_solve
-  use core_sparse, only: sparse_lu_t
+  use core_sparse, only: sparse_lu_t, entries_t
   use model_system, only: model_t
   implicit none
   private
@@ -59,7 +59,7 @@ contains
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     logical, intent(in), optional :: sparse
-    integer, allocatable :: rows(:), cols(:), in_row(:), in_q(:)
+    type(entries_t) :: jac, inputs
     integer :: iel, j, k, row
     this%sparse = .false.
     if (present(sparse)) this%sparse = sparse
@@ -72,30 +72,23 @@ contains
     this%df = 0.0_wp
     this%has_df = .false.
     this%has_factors = .false.
-    allocate(rows(0), cols(0), in_row(0), in_q(0))
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
         do j = 1, el%n_modes()
           row = model%modes(model%mode_first(iel) + j - 1)%row
           if (row == 0) cycle
           do k = 1, size(el%dofs)
-            if (model%calc_index(el%dofs(k)) > 0) then
-              rows = [rows, row]
-              cols = [cols, model%calc_index(el%dofs(k))]
-            end if
-            if (model%input_q(el%dofs(k)) > 0) then
-              in_row = [in_row, row]
-              in_q = [in_q, model%input_q(el%dofs(k))]
-            end if
+            call jac%add(row, model%calc_index(el%dofs(k)))
+            call inputs%add(row, model%input_q(el%dofs(k)))
           end do
         end do
       end associate
     end do
-    this%in_row = in_row
-    this%in_q = in_q
-    allocate(this%in_val(size(in_row)))
+    this%in_row = inputs%rows(1:inputs%n)
+    this%in_q = inputs%cols(1:inputs%n)
+    allocate(this%in_val(inputs%n))
     this%in_val = 0.0_wp
-    if (this%sparse) call this%jac_sp%setup(model%n_c, rows, cols)
+    if (this%sparse) call this%jac_sp%setup(model%n_c, jac%rows(1:jac%n), jac%cols(1:jac%n))
   end subroutine kin_init
 
   !> Residual r (n_c) of the kinematic equations at this%x and, with `jacobian`, their
