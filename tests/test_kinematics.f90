@@ -384,7 +384,7 @@ contains
     real(wp) :: q(dyn%model%n_q), a(size(q_dy)), sigma(size(q_dy)), mb(size(q_dy), size(q_dy))
     real(wp) :: dffd(dyn%model%n_x, dyn%model%n_q), b(size(q_dy))
     integer :: nfail, info, nr
-    call dyn%evaluate(t, q_dy, 0 * q_dy, a, err)
+    call dyn%evaluate_dense(t, q_dy, 0 * q_dy, a, err)
     call expect_ok(err, what // ' evaluate at rest')
     if (.not. err%ok()) return
     nr = dyn%model%n_rh
@@ -431,7 +431,7 @@ contains
     n = dyn%model%n_x
     nr = dyn%model%n_rh
     nd = dyn%model%n_dy
-    call dyn%evaluate(t, q_dy, v_dy, a, err)
+    call dyn%evaluate_dense(t, q_dy, v_dy, a, err)
     call expect_ok(err, what // ' evaluate')
     if (.not. err%ok()) return
     call dyn%prescribed(t, q(1:nr), qd(1:nr), qdd(1:nr))
@@ -483,7 +483,7 @@ contains
     integer :: k
     do k = 1, 8
       s = real(k, wp) / 8
-      call dyn%evaluate(t0 + s * (t - t0), s * q_dy, 0 * q_dy, a, err)
+      call dyn%evaluate_dense(t0 + s * (t - t0), s * q_dy, 0 * q_dy, a, err)
       if (.not. err%ok()) return
     end do
   end subroutine walk

@@ -153,15 +153,16 @@ contains
       newton_pattern%cols(1:newton_pattern%n))
   end subroutine aug_init
 
-  !> Assemble the matrix at the configuration x (element mass blocks given) and factor it.
+  !> Assemble the matrix from the element Jacobians de_val (flat, as kept by the kinematics
+  !> at its last factorisation: same layout as this%de_val) and mass blocks, and factor it.
   !> info /= 0 when it is singular: Mbar is then singular too.
-  subroutine aug_factor(this, model, x, mass, info)
+  subroutine aug_factor(this, model, de_val, mass, info)
     class(augmented_t), intent(inout) :: this
     type(model_t), intent(in) :: model
-    real(wp), intent(in) :: x(:)
+    real(wp), intent(in) :: de_val(:)
     type(element_mass_t), intent(in) :: mass
     integer, intent(out) :: info
-    real(wp), allocatable :: e(:), de(:, :)
+    real(wp), allocatable :: de(:, :)
     real(wp) :: rcond
     integer :: i, iel, j, k, l, row, n, next
     n = this%n_free + this%n_con
@@ -182,9 +183,9 @@ contains
             end do
           end do
         end if
-        allocate(e(el%n_modes()), de(el%n_modes(), size(el%dofs)))
-        call el%evaluate(x(el%dofs), e, de)
-        this%de_val(this%de_offset(iel):this%de_offset(iel) + size(de) - 1) = reshape(de, [size(de)])
+        this%de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1) &
+          = de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1)
+        de = this%element_jacobian(model, iel)
         do j = 1, el%n_modes()
           row = model%modes(model%mode_first(iel) + j - 1)%row
           if (row == 0) cycle
@@ -196,7 +197,6 @@ contains
             next = next + 2
           end do
         end do
-        deallocate(e, de)
       end associate
     end do
     call this%lu%factor(info, rcond)

@@ -19,8 +19,9 @@ module dynamics_system
   private
   public :: dynamics_t, check_finite
 
-  !> Above this many nodal coordinates `auto` takes the sparse path (see dyn_init).
-  integer, parameter :: SPARSE_ABOVE = 60
+  !> Above this many nodal coordinates `auto` takes the sparse path (see dyn_init): measured on
+  !> the two-link benchmark, it is faster from 2 beam elements per link (17 coordinates) on.
+  integer, parameter :: SPARSE_ABOVE = 12
 
   type, extends(ode2_system_t) :: dynamics_t
     type(model_t) :: model
@@ -85,8 +86,7 @@ contains
   !> Take ownership of a finalised model and solve the kinematics in its initial state, which
   !> also checks that the coordinate classes determine every calculable coordinate.
   !> linear_solver: 'dense' (LAPACK on J_c and Mbar), 'sparse' (KLU on J_c and the augmented
-  !> system) or 'auto' (the default: sparse above SPARSE_ABOVE nodal coordinates, where it is
-  !> faster; docs/bench/scaling.md).
+  !> system) or 'auto' (the default: sparse above SPARSE_ABOVE nodal coordinates).
   subroutine dyn_init(this, model, t0, q_dy0, err, linear_solver)
     class(dynamics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
@@ -417,11 +417,11 @@ contains
     end if
     call this%prepare(t, q_dy, v_dy, err)
     if (.not. err%ok()) return
-    call this%aug%factor(this%model, this%kin%x, this%mass, info)
+    call this%aug%factor(this%model, this%kin%de_val, this%mass, info)
     if (info /= 0) then
-      call err%set(ERR_MODEL, 'the mass matrix is singular: a dynamic coordinate has ' // &
-        'no inertia (add mass or rotary inertia, or make that mode rigid; a run with ' // &
-        '&dynamic linear_solver = ''dense'' names the coordinate)')
+      ! Singular means Mbar is singular (or nearly): the dense path names the coordinate
+      ! without inertia, or, if Cholesky gets through, gives the accelerations after all.
+      call this%evaluate_dense(t, q_dy, v_dy, a, err)
       return
     end if
     f(:, 1) = this%nodal_force

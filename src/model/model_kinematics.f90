@@ -32,6 +32,10 @@ module model_kinematics
     !> d(residual)/d(q) through the nodal coordinates that are inputs: entries (in_row, in_q)
     integer, allocatable :: in_row(:), in_q(:)
     real(wp), allocatable :: in_val(:)
+    !> Sparse mode: the element Jacobians dD/dx of the last factorisation, flat (element iel
+    !> from de_offset(iel), n_modes x n_dofs), for the sparse equations of motion to reuse.
+    integer, allocatable :: de_offset(:)
+    real(wp), allocatable :: de_val(:)
     real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer; fixed rows are 0
     logical :: has_df = .false.          !< df belongs to x
     logical :: has_factors = .false.     !< the factors belong to x (up to the last correction)
@@ -88,7 +92,16 @@ contains
     this%in_q = inputs%cols(1:inputs%n)
     allocate(this%in_val(inputs%n))
     this%in_val = 0.0_wp
-    if (this%sparse) call this%jac_sp%setup(model%n_c, jac%rows(1:jac%n), jac%cols(1:jac%n))
+    if (.not. this%sparse) return
+    call this%jac_sp%setup(model%n_c, jac%rows(1:jac%n), jac%cols(1:jac%n))
+    if (allocated(this%de_offset)) deallocate(this%de_offset, this%de_val)
+    allocate(this%de_offset(model%n_elements))
+    k = 0
+    do iel = 1, model%n_elements
+      this%de_offset(iel) = k + 1
+      k = k + model%elements(iel)%e%n_modes() * size(model%elements(iel)%e%dofs)
+    end do
+    allocate(this%de_val(k))
   end subroutine kin_init
 
   !> Residual r (n_c) of the kinematic equations at this%x and, with `jacobian`, their
@@ -120,6 +133,8 @@ contains
         nm = el%n_modes()
         allocate(e(nm), de(nm, size(el%dofs)))
         call el%evaluate(this%x(el%dofs), e, de)
+        if (with_jac .and. this%sparse) this%de_val(this%de_offset(iel):this%de_offset(iel) + &
+          size(de) - 1) = reshape(de, [size(de)])
         do j = 1, nm
           row = model%modes(model%mode_first(iel) + j - 1)%row
           if (row == 0) cycle
