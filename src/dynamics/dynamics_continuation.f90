@@ -184,13 +184,12 @@ contains
     type(error_t), intent(out) :: err
     real(wp) :: a(size(q)), f0(size(q))
     dyn%load_factor = 0.0_wp
-    call dyn%evaluate_dense(t, q, 0.0_wp * q, a, err)
+    call dyn%generalised_force(t, q, 0.0_wp * q, f0, err)
     if (.not. err%ok()) return
-    f0 = dyn%gen_force
     dyn%load_factor = 1.0_wp
-    call dyn%evaluate_dense(t, q, 0.0_wp * q, a, err)
+    call dyn%generalised_force(t, q, 0.0_wp * q, a, err)
     if (.not. err%ok()) return
-    p = dyn%gen_force - f0
+    p = a - f0
     f = f0 + lambda * p
   end subroutine load_and_force
 

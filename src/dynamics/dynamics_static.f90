@@ -53,10 +53,10 @@ contains
     real(wp), intent(in) :: t, q_dy(:)
     real(wp), intent(out) :: fl(:)
     type(error_t), intent(out) :: err
-    real(wp) :: a(size(q_dy)), q(dyn%model%n_q)
+    real(wp) :: q(dyn%model%n_q)
     q = dyn%full_q(t, q_dy)
-    call dyn%evaluate_dense(t, q_dy, 0.0_wp * q_dy, a, err)
-    fl = dyn%gen_force + dyn%stresses(q, 0.0_wp * q)
+    call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, fl, err)
+    fl = fl + dyn%stresses(q, 0.0_wp * q)
   end subroutine load_force
 
   !> Tangent stiffness K_T at (t, q_dy); leaves the mass matrix of that state in dyn%mbar.
@@ -195,7 +195,7 @@ contains
           end if
           refresh = .false.
         else
-          call dyn%evaluate_dense(t, q_dy, v0, a, err)
+          call dyn%generalised_force(t, q_dy, v0, a, err)
           if (.not. err%ok()) then
             ! A correction with old factors that leaves the kinematics unsolvable: take it
             ! back and go on with a fresh tangent.

@@ -36,7 +36,7 @@ module model_kinematics
     !> from de_offset(iel), n_modes x n_dofs), for the sparse equations of motion to reuse.
     integer, allocatable :: de_offset(:)
     real(wp), allocatable :: de_val(:)
-    real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer; fixed rows are 0
+    real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer (allocated there)
     logical :: has_df = .false.          !< df belongs to x
     logical :: has_factors = .false.     !< the factors belong to x (up to the last correction)
     integer :: n_solves = 0, n_iterations = 0
@@ -67,13 +67,13 @@ contains
     integer :: iel, j, k, row
     this%sparse = .false.
     if (present(sparse)) this%sparse = sparse
-    if (allocated(this%q)) deallocate(this%q, this%df)
+    if (allocated(this%q)) deallocate(this%q)
+    if (allocated(this%df)) deallocate(this%df)
     if (allocated(this%lu)) deallocate(this%lu, this%ipiv)
     this%x = model%x0
-    allocate(this%q(model%n_q), this%df(model%n_x, model%n_q))
+    allocate(this%q(model%n_q))
     if (.not. this%sparse) allocate(this%lu(model%n_c, model%n_c), this%ipiv(model%n_c))
     this%q = 0.0_wp
-    this%df = 0.0_wp
     this%has_df = .false.
     this%has_factors = .false.
     do iel = 1, model%n_elements
@@ -417,6 +417,8 @@ contains
     end do
     call transfer_rhs(this, model, unit, b)
     call this%jacobian_solve(b)
+    ! Allocated here, on first use: dense (n_x by n_q), it is what the sparse path avoids.
+    if (.not. allocated(this%df)) allocate(this%df(model%n_x, model%n_q))
     this%df = 0.0_wp
     this%df(model%calc_coord, :) = b
     do iq = 1, model%n_q
