@@ -87,19 +87,16 @@ contains
   end function mass_times
 
   !> Number the unknowns and record the pattern, in the order aug_factor visits the entries.
-  subroutine aug_init(this, model)
+  !> de_offset: the layout of the element Jacobians as the sparse kinematics keeps them.
+  subroutine aug_init(this, model, de_offset, n_de)
     class(augmented_t), intent(inout) :: this
     type(model_t), intent(in) :: model
+    integer, intent(in) :: de_offset(:), n_de
     type(entries_t) :: mass_pattern, newton_pattern
     integer :: i, iel, j, k, l, row, n
     allocate(this%free_index(model%n_x), this%con_index(model%n_c))
-    allocate(this%de_offset(model%n_elements))
-    n = 0
-    do iel = 1, model%n_elements
-      this%de_offset(iel) = n + 1
-      n = n + model%elements(iel)%e%n_modes() * size(model%elements(iel)%e%dofs)
-    end do
-    allocate(this%de_val(n))
+    this%de_offset = de_offset
+    allocate(this%de_val(n_de))
     this%free_index = 0
     this%n_free = 0
     do i = 1, model%n_x
@@ -164,13 +161,8 @@ contains
     integer, intent(out) :: info
     real(wp), allocatable :: de(:, :)
     real(wp) :: rcond
-    integer :: i, iel, j, k, l, row, n, next
-    n = this%n_free + this%n_con
-    this%lu%val = 0.0_wp
-    next = n
-    do i = 1, model%n_x
-      if (this%free_index(i) > 0) call add_entry(this%lu, this%free_index(i), model%lumped(i))
-    end do
+    integer :: iel, k, l, next
+    call start_assembly(this, model, this%lu, next)
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
         if (el%has_inertia()) then
@@ -186,17 +178,7 @@ contains
         this%de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1) &
           = de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1)
         de = this%element_jacobian(model, iel)
-        do j = 1, el%n_modes()
-          row = model%modes(model%mode_first(iel) + j - 1)%row
-          if (row == 0) cycle
-          if (this%con_index(row) == 0) cycle
-          do k = 1, size(el%dofs)
-            if (this%free_index(el%dofs(k)) == 0) cycle
-            call add_entry(this%lu, next + 1, de(j, k))
-            call add_entry(this%lu, next + 2, de(j, k))
-            next = next + 2
-          end do
-        end do
+        call add_constraint_rows(this, model, iel, de, this%lu, next)
       end associate
     end do
     call this%lu%factor(info, rcond)
@@ -218,13 +200,8 @@ contains
     real(wp), allocatable :: de(:, :), s(:, :), block(:, :)
     logical, allocatable :: stressed(:)
     real(wp) :: rcond
-    integer :: i, iel, j, k, l, row, n, next, nd, nm
-    n = this%n_free + this%n_con
-    this%newton%val = 0.0_wp
-    next = n
-    do i = 1, model%n_x
-      if (this%free_index(i) > 0) call add_entry(this%newton, this%free_index(i), model%lumped(i))
-    end do
+    integer :: iel, k, l, next, nd, nm
+    call start_assembly(this, model, this%newton, next)
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
         nd = size(el%dofs)
@@ -246,24 +223,54 @@ contains
             call add_entry(this%newton, next, block(k, l))
           end do
         end do
-        de = this%element_jacobian(model, iel)
-        do j = 1, nm
-          row = model%modes(model%mode_first(iel) + j - 1)%row
-          if (row == 0) cycle
-          if (this%con_index(row) == 0) cycle
-          do k = 1, nd
-            if (this%free_index(el%dofs(k)) == 0) cycle
-            call add_entry(this%newton, next + 1, de(j, k))
-            call add_entry(this%newton, next + 2, de(j, k))
-            next = next + 2
-          end do
-        end do
+        call add_constraint_rows(this, model, iel, this%element_jacobian(model, iel), &
+          this%newton, next)
         deallocate(s, block)
       end associate
     end do
     call this%newton%factor(info, rcond)
     if (rcond < 1.0e-14_wp) info = max(info, 1)
   end subroutine aug_factor_newton
+
+  !> Zero the values, put the lumped masses on the diagonal (the first n entries of both
+  !> patterns) and point next at the last diagonal entry.
+  subroutine start_assembly(this, model, lu, next)
+    type(augmented_t), intent(in) :: this
+    type(model_t), intent(in) :: model
+    type(sparse_lu_t), intent(inout) :: lu
+    integer, intent(out) :: next
+    integer :: i
+    lu%val = 0.0_wp
+    do i = 1, model%n_x
+      if (this%free_index(i) > 0) call add_entry(lu, this%free_index(i), model%lumped(i))
+    end do
+    next = this%n_free + this%n_con
+  end subroutine start_assembly
+
+  !> The entries of element iel's rigid and prescribed rows, J_k and J_k^T, in pattern order
+  !> from entry next + 1 on; next is left at the last one.
+  subroutine add_constraint_rows(this, model, iel, de, lu, next)
+    type(augmented_t), intent(in) :: this
+    type(model_t), intent(in) :: model
+    integer, intent(in) :: iel
+    real(wp), intent(in) :: de(:, :)
+    type(sparse_lu_t), intent(inout) :: lu
+    integer, intent(inout) :: next
+    integer :: j, k, row
+    associate (el => model%elements(iel)%e)
+      do j = 1, el%n_modes()
+        row = model%modes(model%mode_first(iel) + j - 1)%row
+        if (row == 0) cycle
+        if (this%con_index(row) == 0) cycle
+        do k = 1, size(el%dofs)
+          if (this%free_index(el%dofs(k)) == 0) cycle
+          call add_entry(lu, next + 1, de(j, k))
+          call add_entry(lu, next + 2, de(j, k))
+          next = next + 2
+        end do
+      end do
+    end associate
+  end subroutine add_constraint_rows
 
   pure subroutine add_entry(lu, k, v)
     type(sparse_lu_t), intent(inout) :: lu

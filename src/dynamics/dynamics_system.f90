@@ -105,7 +105,7 @@ contains
       if (linear_solver == 'sparse') this%sparse = .true.
     end if
     call this%kin%init(this%model, this%sparse)
-    if (this%sparse) call this%aug%init(this%model)
+    if (this%sparse) call this%aug%init(this%model, this%kin%de_offset, size(this%kin%de_val))
     call this%mass%init(this%model)
     if (allocated(this%gen_force)) deallocate(this%gen_force)
     if (allocated(this%mbar)) deallocate(this%mbar)
