@@ -23,6 +23,7 @@ module integrators_arkode
   use core_strings, only: int_str, real_str
   use core_error, only: error_t, ERR_NUMERIC, ERR_INTERNAL
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use integrators_base, only: integrator_t
   use core_progress, only: progress_t
   use integrators_sundials, only: sundials_bridge_t, new_bridge, open_sundials, close_sundials, &
     sundials_rhs, sundials_error_handler, put_state, get_state, check, set_failure, &
@@ -50,7 +51,7 @@ module integrators_arkode
 
   !> One ERKStep integration of one system. Call `finish` when done (gfortran 12 does not
   !> finalize local variables reliably, so there is no final procedure to rely on).
-  type :: erk_solver_t
+  type, extends(integrator_t) :: erk_solver_t
     private
     type(c_ptr) :: ctx = c_null_ptr
     type(c_ptr) :: mem = c_null_ptr
@@ -121,8 +122,9 @@ contains
   end subroutine erk_start
 
   !> Integrate to t_target (at most the stop time) and return the state there.
-  subroutine erk_advance(this, t_target, q, v, err)
+  subroutine erk_advance(this, sys, t_target, q, v, err)
     class(erk_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
     real(wp), intent(in) :: t_target
     real(wp), intent(out) :: q(:), v(:)
     type(error_t), intent(inout) :: err
@@ -204,8 +206,9 @@ contains
 
   !> Start again at (t, q, v) after a jump of a(t, ...): the step size chosen for the old
   !> segment says nothing about the new one.
-  subroutine erk_restart(this, t, q, v, t_stop, t_lo, t_hi, err)
+  subroutine erk_restart(this, sys, t, q, v, t_stop, t_lo, t_hi, err)
     class(erk_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
     real(wp), intent(in) :: t, q(:), v(:), t_stop, t_lo, t_hi
     type(error_t), intent(inout) :: err
     this%bridge%t_lo = t_lo

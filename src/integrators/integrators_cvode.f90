@@ -12,6 +12,7 @@ module integrators_cvode
   use core_strings, only: real_str
   use core_error, only: error_t, ERR_NUMERIC, ERR_INTERNAL
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use integrators_base, only: integrator_t
   use integrators_sundials, only: sundials_bridge_t, new_bridge, open_sundials, close_sundials, &
     sundials_rhs, sundials_error_handler, clamped, note_status, sundials_status, put_state, &
     get_state, check, set_failure, cvode_return_flag_name
@@ -34,7 +35,7 @@ module integrators_cvode
 
   !> One CVODE integration of one system. Call `finish` when done (gfortran 12 does not
   !> finalize local variables reliably, so there is no final procedure to rely on).
-  type :: cvode_solver_t
+  type, extends(integrator_t) :: cvode_solver_t
     private
     type(c_ptr) :: ctx = c_null_ptr
     type(c_ptr) :: mem = c_null_ptr
@@ -117,8 +118,9 @@ contains
   end subroutine attach_dense_solver
 
   !> Integrate to t_target (at most the stop time) and return the state there.
-  subroutine cvode_advance(this, t_target, q, v, err)
+  subroutine cvode_advance(this, sys, t_target, q, v, err)
     class(cvode_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
     real(wp), intent(in) :: t_target
     real(wp), intent(out) :: q(:), v(:)
     type(error_t), intent(inout) :: err
@@ -149,8 +151,9 @@ contains
   end subroutine cvode_advance
 
   !> Start again at (t, q, v) after a jump of a(t, ...): CVODE's history is no longer valid.
-  subroutine cvode_restart(this, t, q, v, t_stop, t_lo, t_hi, err)
+  subroutine cvode_restart(this, sys, t, q, v, t_stop, t_lo, t_hi, err)
     class(cvode_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
     real(wp), intent(in) :: t, q(:), v(:), t_stop, t_lo, t_hi
     type(error_t), intent(inout) :: err
     type(integrator_stats_t) :: so_far

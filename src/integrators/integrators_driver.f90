@@ -5,20 +5,13 @@ module integrators_driver
   use core_strings, only: int_str, real_str
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use integrators_base, only: integrator_t
   use integrators_cvode, only: cvode_solver_t
   use integrators_galpha, only: galpha_solver_t
   use integrators_arkode, only: erk_solver_t
   implicit none
   private
-  public :: integrate
-
-  !> The method chosen by opts%method behind one set of calls for the segment loop.
-  type :: stepper_t
-    character(len=16) :: method = ''
-    type(cvode_solver_t) :: bdf
-    type(galpha_solver_t) :: galpha
-    type(erk_solver_t) :: erk
-  end type stepper_t
+  public :: integrate, new_integrator
 
 contains
 
@@ -35,7 +28,7 @@ contains
     real(wp), intent(in) :: breakpoints(:)
     type(integrator_stats_t), intent(out) :: stats
     type(error_t), intent(out) :: err
-    type(stepper_t) :: stepper
+    class(integrator_t), allocatable :: stepper
     real(wp) :: q(size(q0)), v(size(v0))
 
     call check_options(opts, t_out, q0, v0, err)
@@ -45,18 +38,33 @@ contains
     call record_output(sys, 1, t_out(1), q, v, err)
     if (.not. err%ok() .or. size(t_out) == 1) return
 
-    stepper%method = opts%method
+    call new_integrator(opts%method, stepper)
     call run_segments(stepper, sys, opts, t_out, &
       breakpoints_inside(breakpoints, t_out(1), t_out(size(t_out))), q, v, err)
-    call stepper_stats(stepper, stats)
-    call stepper_finish(stepper)
+    call stepper%get_stats(stats)
+    call stepper%finish()
     ! The next integration (a reduced run's next segment) counts on from here.
     if (associated(opts%progress)) opts%progress%steps_done = opts%progress%steps_done + &
       stats%n_steps
   end subroutine integrate
 
+  !> The integrator for a method name (checked by check_options): the one place that knows
+  !> the methods.
+  subroutine new_integrator(method, integrator)
+    character(len=*), intent(in) :: method
+    class(integrator_t), allocatable, intent(out) :: integrator
+    select case (method)
+    case ('bdf')
+      allocate(cvode_solver_t :: integrator)
+    case ('erk')
+      allocate(erk_solver_t :: integrator)
+    case default
+      allocate(galpha_solver_t :: integrator)
+    end select
+  end subroutine new_integrator
+
   subroutine run_segments(stepper, sys, opts, t_out, bps, q, v, err)
-    type(stepper_t), intent(inout) :: stepper
+    class(integrator_t), intent(inout) :: stepper
     class(ode2_system_t), intent(inout), target :: sys
     type(integrator_options_t), intent(in) :: opts
     real(wp), intent(in) :: t_out(:), bps(:)
@@ -68,24 +76,24 @@ contains
     t = t_out(1)
     t_end = t_out(size(t_out))
     ib = 1
-    call stepper_start(stepper, sys, opts, t, q, v, segment_end(bps, ib, t_end), &
+    call stepper%start(sys, opts, t, q, v, segment_end(bps, ib, t_end), &
       -huge(1.0_wp), eval_limit(bps, ib), err)
     if (.not. err%ok()) return
     do k = 2, size(t_out)
       do while (ib <= size(bps))
         if (bps(ib) > t_out(k)) exit
         if (.not. reached(t, bps(ib))) then
-          call stepper_advance(stepper, sys, bps(ib), q, v, err)
+          call stepper%advance(sys, bps(ib), q, v, err)
           if (.not. err%ok()) return
         end if
         t = bps(ib)
         ib = ib + 1
-        call stepper_restart(stepper, sys, t, q, v, segment_end(bps, ib, t_end), &
+        call stepper%restart(sys, t, q, v, segment_end(bps, ib, t_end), &
           nearest(t, 1.0_wp), eval_limit(bps, ib), err)
         if (.not. err%ok()) return
       end do
       if (.not. reached(t, t_out(k))) then
-        call stepper_advance(stepper, sys, t_out(k), q, v, err)
+        call stepper%advance(sys, t_out(k), q, v, err)
         if (.not. err%ok()) return
         t = t_out(k)
       end if
@@ -178,14 +186,15 @@ contains
       if (all(opts%erk_order /= [2, 3, 4, 5, 6, 8])) call err%set(ERR_INPUT, ctx // &
         'erk_order must be 2, 3, 4, 5, 6 or 8, got ' // int_str(opts%erk_order))
       call check_max_step(opts, err)
-    case ('galpha')
+    case ('galpha', 'galpha_adaptive')
       if (.not. opts%dt > 0) call err%set(ERR_INPUT, ctx // 'dt must be > 0, got ' // &
         real_str(opts%dt))
+      if (opts%method == 'galpha_adaptive') call check_max_step(opts, err)
       if (.not. (opts%rho_inf >= 0 .and. opts%rho_inf <= 1)) call err%set(ERR_INPUT, ctx // &
         'rho_inf must be in [0, 1], got ' // real_str(opts%rho_inf))
     case default
       call err%set(ERR_INPUT, ctx // "unknown method '" // trim(opts%method) // &
-        "' (expected 'bdf', 'galpha' or 'erk')")
+        "' (expected 'bdf', 'galpha', 'galpha_adaptive' or 'erk')")
     end select
   end subroutine check_options
 
@@ -195,74 +204,5 @@ contains
     if (.not. opts%max_step >= 0) call err%set(ERR_INPUT, 'integrator options: ' // &
       'max_step must be >= 0 (0: no limit), got ' // real_str(opts%max_step))
   end subroutine check_max_step
-
-  ! ---- dispatch to the chosen method --------------------------------------------------------
-
-  subroutine stepper_start(s, sys, opts, t0, q, v, t_stop, t_lo, t_hi, err)
-    type(stepper_t), intent(inout) :: s
-    class(ode2_system_t), intent(inout), target :: sys
-    type(integrator_options_t), intent(in) :: opts
-    real(wp), intent(in) :: t0, q(:), v(:), t_stop, t_lo, t_hi
-    type(error_t), intent(inout) :: err
-    select case (s%method)
-    case ('bdf')
-      call s%bdf%start(sys, opts, t0, q, v, t_stop, t_lo, t_hi, err)
-    case ('galpha')
-      call s%galpha%start(sys, opts, t0, q, v, t_lo, t_hi, err)
-    case ('erk')
-      call s%erk%start(sys, opts, t0, q, v, t_stop, t_lo, t_hi, err)
-    end select
-  end subroutine stepper_start
-
-  subroutine stepper_advance(s, sys, t_target, q, v, err)
-    type(stepper_t), intent(inout) :: s
-    class(ode2_system_t), intent(inout) :: sys
-    real(wp), intent(in) :: t_target
-    real(wp), intent(inout) :: q(:), v(:)
-    type(error_t), intent(inout) :: err
-    select case (s%method)
-    case ('bdf')
-      call s%bdf%advance(t_target, q, v, err)
-    case ('galpha')
-      call s%galpha%advance(sys, t_target, q, v, err)
-    case ('erk')
-      call s%erk%advance(t_target, q, v, err)
-    end select
-  end subroutine stepper_advance
-
-  subroutine stepper_restart(s, sys, t, q, v, t_stop, t_lo, t_hi, err)
-    type(stepper_t), intent(inout) :: s
-    class(ode2_system_t), intent(inout) :: sys
-    real(wp), intent(in) :: t, q(:), v(:), t_stop, t_lo, t_hi
-    type(error_t), intent(inout) :: err
-    select case (s%method)
-    case ('bdf')
-      call s%bdf%restart(t, q, v, t_stop, t_lo, t_hi, err)
-    case ('galpha')
-      call s%galpha%restart(sys, t, q, v, t_lo, t_hi, err)
-    case ('erk')
-      call s%erk%restart(t, q, v, t_stop, t_lo, t_hi, err)
-    end select
-  end subroutine stepper_restart
-
-  subroutine stepper_stats(s, stats)
-    type(stepper_t), intent(in) :: s
-    type(integrator_stats_t), intent(out) :: stats
-    select case (s%method)
-    case ('bdf')
-      call s%bdf%get_stats(stats)
-    case ('galpha')
-      call s%galpha%get_stats(stats)
-    case ('erk')
-      call s%erk%get_stats(stats)
-    end select
-  end subroutine stepper_stats
-
-  subroutine stepper_finish(s)
-    type(stepper_t), intent(inout) :: s
-    call s%bdf%finish()
-    call s%erk%finish()
-  end subroutine stepper_finish
-
 
 end module integrators_driver

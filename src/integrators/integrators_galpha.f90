@@ -1,5 +1,5 @@
-!> Fixed-step generalized-alpha method (Chung & Hulbert 1993) for q'' = a(t, q, v), in the
-!> form of Arnold & Brüls (2007) with the acceleration-like variable `acc`:
+!> Generalized-alpha method (Chung & Hulbert 1993) for q'' = a(t, q, v), in the form of
+!> Arnold & Brüls (2007) with the acceleration-like variable `acc`:
 !>
 !>     q+   = q + h v + h^2 (1/2 - beta) acc + h^2 beta acc+
 !>     v+   = v + h (1 - gamma) acc + h gamma acc+
@@ -10,18 +10,25 @@
 !> rho = rho_inf is the spectral radius at h omega -> infinity (1: no numerical damping, 0:
 !> unresolved modes annihilated in one step). Newton iterates on qdd+.
 !>
-!> Steps are dt, shortened evenly so that output times and breakpoints are landed on exactly.
-!> The Newton matrix I - c_q da/dq - c_v da/dv comes from sys%jacobian (opts%jacobian does not
-!> apply) and is kept across iterations and steps: the Jacobian is re-evaluated only after a
-!> slow or failed Newton solve or a restart, the matrix refactored when h changes. Newton stops
-!> when its update of q and v is below a tenth of rtol/atol. A step that still fails is halved,
-!> locally and at most max_halvings times.
+!> Two step controls ('galpha' and 'galpha_adaptive'):
+!> - fixed: steps are dt, shortened evenly so that output times and breakpoints are landed on
+!>   exactly; a step whose Newton fails is halved, locally and at most max_halvings times;
+!> - adaptive: the local error of q is estimated in every step (docs/theory.md section 6) and
+!>   the step chosen to keep its weighted RMS norm below 1 (rtol, atol), dt being the first
+!>   step; output times inside a step are interpolated (cubic Hermite), breakpoints landed on.
+!>
+!> The Newton matrix I - c_q da/dq - c_v da/dv comes from sys%jacobian, or from the system
+!> itself when it offers an iteration solver (the sparse path: no dense n x n matrices), and
+!> is kept across iterations and steps: the Jacobian is re-evaluated only after a slow or
+!> failed Newton solve or a restart, the matrix refactored when h changes (adaptive: by more
+!> than refactor_ratio). Newton stops when its update of q and v is below a tenth of rtol/atol.
 module integrators_galpha
   use core_kinds, only: wp, i8
   use core_strings, only: int_str, real_str
   use core_linalg, only: lu_factor, lu_solve_vector
   use core_error, only: error_t, ERR_NUMERIC
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use integrators_base, only: integrator_t
   use core_progress, only: progress_t
   implicit none
   private
@@ -34,29 +41,45 @@ module integrators_galpha
   real(wp), parameter :: newton_tol = 0.1_wp
   !> A contraction rate above this counts as divergence.
   real(wp), parameter :: max_newton_rate = 0.9_wp
-  !> Local step halvings after failed steps before giving up.
+  !> Local step halvings after failed steps before giving up (fixed step).
   integer, parameter :: max_halvings = 10
-  !> Successful steps at a halved step size before trying the double again.
+  !> Successful steps at a halved step size before trying the double again (fixed step).
   integer, parameter :: steps_before_growth = 2
   !> A shortened step this close to the distance left (relative) lands on the target.
   real(wp), parameter :: landing_slack = 1.0e-8_wp
+  !> Adaptive step: safety factor, limits of the step ratio, and the relative change of h that
+  !> makes the Newton matrix be refactored (as CVODE's 0.3 on gamma).
+  real(wp), parameter :: safety = 0.85_wp, grow_max = 2.0_wp, shrink_min = 0.2_wp
+  real(wp), parameter :: refactor_ratio = 0.25_wp
+  !> Adaptive step: consecutive failures (error test or Newton) at one time before giving up.
+  integer, parameter :: max_failures = 15
 
   integer, parameter :: STEP_OK = 0, STEP_NEWTON_FAILED = 1, STEP_RECOVERABLE = 2, &
     STEP_FATAL = 3
 
-  type :: galpha_solver_t
+  type, extends(integrator_t) :: galpha_solver_t
     private
+    logical :: adaptive = .false.
     integer :: n = 0
-    real(wp) :: dt = 0, rtol = 0, atol = 0
+    real(wp) :: dt = 0, rtol = 0, atol = 0, max_step = 0
     real(wp) :: alpha_m = 0, alpha_f = 0, beta = 0, gamma = 0
+    !> The local error of q is err_coef h^2 (qdd+ - qdd) (docs/theory.md section 6).
+    real(wp) :: err_coef = 0
     integer(i8) :: max_steps = 0
     !> Accepted state: time, position, velocity, true and acceleration-like accelerations.
     real(wp) :: t = 0
     real(wp), allocatable :: q(:), v(:), qdd(:), acc(:)
+    !> The accepted state before the last step (for interpolation).
+    real(wp) :: t_prev = 0, h_last_prev = 0
+    real(wp), allocatable :: q_prev(:), v_prev(:), qdd_prev(:), acc_prev(:)
     !> Step that produced `acc`: acc approximates qdd at t + (alpha_m - alpha_f) h_last.
     real(wp) :: h_last = 0
-    !> accel is evaluated at times clamped into [t_lo, t_hi] (see the driver).
-    real(wp) :: t_lo = -huge(1.0_wp), t_hi = huge(1.0_wp)
+    !> Adaptive: the next step to try.
+    real(wp) :: h_next = 0
+    !> accel is evaluated at times clamped into [t_lo, t_hi] (see the driver); no step goes
+    !> past t_stop.
+    real(wp) :: t_lo = -huge(1.0_wp), t_hi = huge(1.0_wp), t_stop = huge(1.0_wp)
+    logical :: system_solver = .false.        !< the system solves the Newton systems
     real(wp), allocatable :: dadq(:, :), dadv(:, :)
     !> LU factors of the iteration matrix I - c_q da/dq - c_v da/dv for the step h_lu.
     real(wp), allocatable :: lu(:, :)
@@ -78,18 +101,20 @@ module integrators_galpha
 
 contains
 
-  subroutine galpha_start(this, sys, opts, t0, q, v, t_lo, t_hi, err)
+  subroutine galpha_start(this, sys, opts, t0, q, v, t_stop, t_lo, t_hi, err)
     class(galpha_solver_t), intent(inout) :: this
-    class(ode2_system_t), intent(inout) :: sys
+    class(ode2_system_t), intent(inout), target :: sys
     type(integrator_options_t), intent(in) :: opts
-    real(wp), intent(in) :: t0, q(:), v(:), t_lo, t_hi
+    real(wp), intent(in) :: t0, q(:), v(:), t_stop, t_lo, t_hi
     type(error_t), intent(inout) :: err
     real(wp) :: rho
 
+    this%adaptive = opts%method == 'galpha_adaptive'
     this%n = size(q)
     this%dt = opts%dt
     this%rtol = opts%rtol
     this%atol = opts%atol
+    this%max_step = opts%max_step
     this%max_steps = opts%max_steps
     this%progress => opts%progress
     rho = opts%rho_inf
@@ -97,28 +122,37 @@ contains
     this%alpha_f = rho / (rho + 1)
     this%gamma = 0.5_wp + this%alpha_f - this%alpha_m
     this%beta = 0.25_wp * (this%gamma + 0.5_wp)**2
+    this%err_coef = abs(this%beta - 0.5_wp * this%gamma + 1.0_wp / 12)
     this%stats = integrator_stats_t()
     allocate(this%q(this%n), this%v(this%n), this%qdd(this%n), this%acc(this%n))
-    allocate(this%dadq(this%n, this%n), this%dadv(this%n, this%n), this%lu(this%n, this%n))
-    allocate(this%pivots(this%n))
+    allocate(this%q_prev(this%n), this%v_prev(this%n), this%qdd_prev(this%n))
+    allocate(this%acc_prev(this%n))
+    this%system_solver = sys%has_iteration_solver()
+    if (.not. this%system_solver) then
+      allocate(this%dadq(this%n, this%n), this%dadv(this%n, this%n), this%lu(this%n, this%n))
+      allocate(this%pivots(this%n))
+    end if
     this%have_jac = .false.
-    call set_initial_state(this, sys, t0, q, v, t_lo, t_hi, err)
+    this%h_next = this%dt
+    call set_initial_state(this, sys, t0, q, v, t_stop, t_lo, t_hi, err)
   end subroutine galpha_start
 
   !> Start again after a jump of a(t, ...) at t: the acceleration history is no longer valid.
-  subroutine galpha_restart(this, sys, t, q, v, t_lo, t_hi, err)
+  subroutine galpha_restart(this, sys, t, q, v, t_stop, t_lo, t_hi, err)
     class(galpha_solver_t), intent(inout) :: this
     class(ode2_system_t), intent(inout) :: sys
-    real(wp), intent(in) :: t, q(:), v(:), t_lo, t_hi
+    real(wp), intent(in) :: t, q(:), v(:), t_stop, t_lo, t_hi
     type(error_t), intent(inout) :: err
     this%stats%n_restarts = this%stats%n_restarts + 1
-    call set_initial_state(this, sys, t, q, v, t_lo, t_hi, err)
+    ! The step that suited the end of the old segment is no guide after a jump.
+    this%h_next = min(this%h_next, this%dt)
+    call set_initial_state(this, sys, t, q, v, t_stop, t_lo, t_hi, err)
   end subroutine galpha_restart
 
-  subroutine set_initial_state(this, sys, t, q, v, t_lo, t_hi, err)
+  subroutine set_initial_state(this, sys, t, q, v, t_stop, t_lo, t_hi, err)
     type(galpha_solver_t), intent(inout) :: this
     class(ode2_system_t), intent(inout) :: sys
-    real(wp), intent(in) :: t, q(:), v(:), t_lo, t_hi
+    real(wp), intent(in) :: t, q(:), v(:), t_stop, t_lo, t_hi
     type(error_t), intent(inout) :: err
     integer :: status
 
@@ -127,6 +161,7 @@ contains
     this%v = v
     this%t_lo = t_lo
     this%t_hi = t_hi
+    this%t_stop = t_stop
     call sys%accel(clamped(this, t), q, v, this%qdd, status)
     this%stats%n_rhs_evals = this%stats%n_rhs_evals + 1
     if (status /= 0) then
@@ -140,9 +175,21 @@ contains
     this%refresh_jac = .true.
     this%halvings = 0
     this%steps_at_level = 0
+    call keep_previous(this)
   end subroutine set_initial_state
 
-  !> Step to t_target exactly and return the state there.
+  subroutine keep_previous(this)
+    type(galpha_solver_t), intent(inout) :: this
+    this%t_prev = this%t
+    this%q_prev = this%q
+    this%v_prev = this%v
+    this%qdd_prev = this%qdd
+    this%acc_prev = this%acc
+    this%h_last_prev = this%h_last
+  end subroutine keep_previous
+
+  !> Step to t_target and return the state there: landed on (fixed step, or a breakpoint), or
+  !> interpolated within the last step (adaptive).
   subroutine galpha_advance(this, sys, t_target, q, v, err)
     class(galpha_solver_t), intent(inout) :: this
     class(ode2_system_t), intent(inout) :: sys
@@ -158,29 +205,149 @@ contains
         call err%set(ERR_NUMERIC, 'galpha: max_steps reached at t = ' // real_str(this%t))
         return
       end if
+      if (this%adaptive) then
+        call adaptive_step(this, sys, err)
+        if (.not. err%ok()) return
+        cycle
+      end if
       call choose_step(this, t_target, h, lands)
       call refresh_iteration_matrix(this, sys, h, err)
       if (.not. err%ok()) return
+      call keep_previous(this)
       call take_step(this, sys, h, merge(t_target, this%t + h, lands), outcome)
       select case (outcome)
       case (STEP_OK)
         call after_success(this)
-        if (associated(this%progress)) then
-          if (this%progress%due()) call this%progress%report_time(this%t, this%stats%n_steps)
-        end if
       case (STEP_FATAL)
-        call err%set(ERR_NUMERIC, 'galpha: accel returned status ' // &
-          int_str(this%bad_status) // ' in the step from t = ' // real_str(this%t) // &
-          ' to ' // real_str(this%t + h))
+        call fatal_status(this, h, err)
         return
       case default
         call after_failure(this, outcome, h, err)
         if (.not. err%ok()) return
       end select
     end do
-    q = this%q
-    v = this%v
+    if (this%t > t_target) then
+      call interpolate(this, t_target, q, v)
+    else
+      q = this%q
+      v = this%v
+    end if
   end subroutine galpha_advance
+
+  subroutine fatal_status(this, h, err)
+    type(galpha_solver_t), intent(in) :: this
+    real(wp), intent(in) :: h
+    type(error_t), intent(inout) :: err
+    call err%set(ERR_NUMERIC, 'galpha: accel returned status ' // int_str(this%bad_status) // &
+      ' in the step from t = ' // real_str(this%t) // ' to ' // real_str(this%t + h))
+  end subroutine fatal_status
+
+  !> One accepted adaptive step (after as many rejected tries as it takes). The step is the
+  !> proposed one, at most max_step, and stretched or cut to land on t_stop rather than leave
+  !> a sliver before it.
+  subroutine adaptive_step(this, sys, err)
+    type(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    type(error_t), intent(inout) :: err
+    real(wp) :: h, left, error_norm, t_new
+    integer :: outcome, failures
+
+    failures = 0
+    do
+      h = this%h_next
+      if (this%max_step > 0) h = min(h, this%max_step)
+      left = this%t_stop - this%t
+      t_new = this%t + h
+      if (h >= left * (1 - landing_slack) .or. left - h < 0.25_wp * h) then
+        h = left
+        t_new = this%t_stop
+      end if
+      if (h <= 16 * spacing(max(abs(this%t), 1.0_wp))) then
+        call err%set(ERR_NUMERIC, 'galpha_adaptive: the step became too small at t = ' // &
+          real_str(this%t) // ' (' // int_str(failures) // ' failed tries)')
+        return
+      end if
+      call refresh_iteration_matrix(this, sys, h, err)
+      if (.not. err%ok()) return
+      call keep_previous(this)
+      call take_step(this, sys, h, t_new, outcome)
+      if (outcome == STEP_FATAL) then
+        call fatal_status(this, h, err)
+        return
+      end if
+      if (outcome == STEP_OK) then
+        error_norm = local_error(this, h)
+        if (error_norm <= 1) then
+          this%stats%n_steps = this%stats%n_steps + 1
+          this%jac_is_current = .false.
+          this%h_next = h * min(grow_max, max(shrink_min, safety * error_norm**(-1.0_wp / 3)))
+          call report_progress(this)
+          return
+        end if
+        ! Rejected: back to the state before the step, shorter step.
+        call restore_previous(this)
+        this%stats%n_err_test_fails = this%stats%n_err_test_fails + 1
+        this%h_next = h * max(shrink_min, safety * error_norm**(-1.0_wp / 3))
+      else
+        this%stats%n_nonlin_fails = this%stats%n_nonlin_fails + 1
+        if (outcome == STEP_NEWTON_FAILED .and. .not. this%jac_is_current) then
+          this%refresh_jac = .true.
+        else
+          this%h_next = 0.25_wp * h
+        end if
+      end if
+      failures = failures + 1
+      if (failures > max_failures) then
+        call err%set(ERR_NUMERIC, 'galpha_adaptive: ' // int_str(max_failures) // &
+          ' failed tries of the step at t = ' // real_str(this%t) // ' (last h = ' // &
+          real_str(h) // ')')
+        return
+      end if
+    end do
+  end subroutine adaptive_step
+
+  !> Weighted RMS norm of the local error estimate of q of the step just taken:
+  !> err_coef h^2 (qdd+ - qdd), weights atol + rtol max(|q|, |q+|).
+  real(wp) function local_error(this, h) result(norm)
+    type(galpha_solver_t), intent(in) :: this
+    real(wp), intent(in) :: h
+    norm = sqrt(sum((this%err_coef * h**2 * (this%qdd - this%qdd_prev) / (this%atol + &
+      this%rtol * max(abs(this%q), abs(this%q_prev))))**2) / this%n)
+  end function local_error
+
+  subroutine restore_previous(this)
+    type(galpha_solver_t), intent(inout) :: this
+    this%t = this%t_prev
+    this%q = this%q_prev
+    this%v = this%v_prev
+    this%qdd = this%qdd_prev
+    this%acc = this%acc_prev
+    this%h_last = this%h_last_prev
+  end subroutine restore_previous
+
+  !> The state at t in (t_prev, t] of the last step: cubic Hermite interpolation of q from
+  !> (q, v) and of v from (v, qdd) at both ends, third-order accurate like the step itself.
+  subroutine interpolate(this, t, q, v)
+    type(galpha_solver_t), intent(in) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(out) :: q(:), v(:)
+    real(wp) :: h, s, h00, h10, h01, h11
+    h = this%t - this%t_prev
+    s = (t - this%t_prev) / h
+    h00 = (1 + 2 * s) * (1 - s)**2
+    h10 = s * (1 - s)**2
+    h01 = s**2 * (3 - 2 * s)
+    h11 = s**2 * (s - 1)
+    q = h00 * this%q_prev + h10 * h * this%v_prev + h01 * this%q + h11 * h * this%v
+    v = h00 * this%v_prev + h10 * h * this%qdd_prev + h01 * this%v + h11 * h * this%qdd
+  end subroutine interpolate
+
+  subroutine report_progress(this)
+    type(galpha_solver_t), intent(inout) :: this
+    if (associated(this%progress)) then
+      if (this%progress%due()) call this%progress%report_time(this%t, this%stats%n_steps)
+    end if
+  end subroutine report_progress
 
   !> The nominal step (dt, halved after failures), shortened evenly over the distance left so
   !> that the target is hit exactly without a tiny last step.
@@ -215,6 +382,7 @@ contains
         this%steps_at_level = 0
       end if
     end if
+    call report_progress(this)
   end subroutine after_success
 
   !> A stale Jacobian gets one more try with a fresh one; otherwise halve the step.
@@ -249,10 +417,16 @@ contains
     class(ode2_system_t), intent(inout) :: sys
     real(wp), intent(in) :: h
     type(error_t), intent(inout) :: err
+    real(wp) :: a(this%n), tolerance
     integer :: status
 
     if (this%refresh_jac .or. .not. this%have_jac) then
-      call sys%jacobian(clamped(this, this%t), this%q, this%v, this%dadq, this%dadv, status)
+      if (this%system_solver) then
+        ! The system factors at the state of its last evaluation: put it here.
+        call sys%accel(clamped(this, this%t), this%q, this%v, a, status)
+      else
+        call sys%jacobian(clamped(this, this%t), this%q, this%v, this%dadq, this%dadv, status)
+      end if
       this%stats%n_jac_evals = this%stats%n_jac_evals + 1
       if (status < 0 .or. (status > 0 .and. .not. this%have_jac)) then
         call err%set(ERR_NUMERIC, 'galpha: jacobian returned status ' // int_str(status) // &
@@ -267,22 +441,29 @@ contains
       this%jac_is_current = .true.
       this%refresh_jac = .false.
     end if
-    if (.not. this%lu_valid .or. abs(h - this%h_lu) > 1.0e-6_wp * h) then
-      call factor_iteration_matrix(this, h)
+    tolerance = 1.0e-6_wp
+    if (this%adaptive) tolerance = refactor_ratio
+    if (.not. this%lu_valid .or. abs(h - this%h_lu) > tolerance * h) then
+      call factor_iteration_matrix(this, sys, h)
     end if
   end subroutine refresh_iteration_matrix
 
-  subroutine factor_iteration_matrix(this, h)
+  subroutine factor_iteration_matrix(this, sys, h)
     type(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
     real(wp), intent(in) :: h
     real(wp) :: c_q, c_v
     integer :: i, info
     call newton_coefficients(this, h, c_q, c_v)
-    this%lu = -c_q * this%dadq - c_v * this%dadv
-    do i = 1, this%n
-      this%lu(i, i) = this%lu(i, i) + 1
-    end do
-    call lu_factor(this%lu, this%pivots, info)
+    if (this%system_solver) then
+      call sys%iteration_factor(c_q, c_v, info)
+    else
+      this%lu = -c_q * this%dadq - c_v * this%dadv
+      do i = 1, this%n
+        this%lu(i, i) = this%lu(i, i) + 1
+      end do
+      call lu_factor(this%lu, this%pivots, info)
+    end if
     this%lu_valid = info == 0
     this%h_lu = h
   end subroutine factor_iteration_matrix
@@ -330,7 +511,11 @@ contains
         return
       end if
       dx = f - x
-      call lu_solve_vector(this%lu, this%pivots, dx)
+      if (this%system_solver) then
+        call sys%iteration_solve(dx)
+      else
+        call lu_solve_vector(this%lu, this%pivots, dx)
+      end if
       x = x + dx
       dnorm = max(weighted_norm(this, c_q * dx, q1), weighted_norm(this, c_v * dx, v1))
       if (dnorm <= newton_tol) exit
@@ -368,7 +553,4 @@ contains
     type(integrator_stats_t), intent(out) :: stats
     stats = this%stats
   end subroutine galpha_get_stats
-
-
-
 end module integrators_galpha

@@ -412,11 +412,14 @@ contains
       call rd_choice(g, 'integrator', d%integrator, err)
       if (err%ok()) then
         associate (m => d%integrator, when => 'with integrator = ')
-          call only_with(g, ['dt     ', 'rho_inf'], m == 'galpha', when // '''galpha''', err)
+          call only_with(g, ['dt     ', 'rho_inf'], m(1:min(6, len(m))) == 'galpha', &
+            when // '''galpha'' or ''galpha_adaptive''', err)
           call only_with(g, ['max_order'], m == 'bdf', when // '''bdf''', err)
           call only_with(g, ['erk_order'], m == 'erk', when // '''erk''', err)
-          call only_with(g, ['max_step'], m /= 'galpha', when // '''bdf'' or ''erk''', err)
-          call only_with(g, ['jacobian'], m /= 'erk', when // '''bdf'' or ''galpha''', err)
+          call only_with(g, ['max_step'], m /= 'galpha', &
+            when // '''bdf'', ''galpha_adaptive'' or ''erk''', err)
+          call only_with(g, ['jacobian'], m /= 'erk', &
+            when // '''bdf'', ''galpha'' or ''galpha_adaptive''', err)
         end associate
       end if
       call rd_choice(g, 'jacobian', d%jacobian, err)

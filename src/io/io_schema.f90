@@ -315,7 +315,7 @@ module io_schema
       '', 'output interval'), &
     var_spec_t('dynamic', 'integrator', VK_CHOICE, '', 'bdf', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      'bdf|galpha|erk', 'time integrator'), &
+      'bdf|galpha|galpha_adaptive|erk', 'time integrator'), &
     var_spec_t('dynamic', 'jacobian', VK_CHOICE, '', 'linearised', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       'linearised|fd|internal', 'Jacobian of the implicit integrators'), &

@@ -10,7 +10,7 @@ module test_oscillators
   implicit none
   private
   public :: oscillator_t, oscillator_error, run_oscillator, switched_oscillator_t, &
-    failing_oscillator_t
+    failing_oscillator_t, stiff_follower_t
 
   real(wp), parameter :: pi = acos(-1.0_wp)
 
@@ -19,6 +19,7 @@ module test_oscillators
     real(wp) :: omega = 2 * pi
     real(wp) :: max_error = 0       !< largest |q - q_exact| + |v - v_exact| / omega at outputs
     integer :: n_records = 0
+    real(wp) :: last_q = 0          !< q at the last output
     logical :: times_exact = .true.
     real(wp), allocatable :: t_expected(:)
   contains
@@ -50,6 +51,18 @@ module test_oscillators
     procedure :: record => failing_record
     procedure :: jacobian => failing_jacobian
   end type failing_oscillator_t
+
+  !> A slow oscillator q1'' = -q1 driving a stiff follower q2'' = -k (q2 - q1^2): q2 stays
+  !> within O(1/k) of q1^2, while its own frequency sqrt(k) = 1e4 would limit an explicit
+  !> method to steps below 2e-4.
+  type, extends(ode2_system_t) :: stiff_follower_t
+    real(wp) :: k = 1.0e8_wp
+    real(wp) :: worst = 0    !< largest |q1 - cos t| + |q2 - q1^2| at the outputs
+  contains
+    procedure :: accel => follower_accel
+    procedure :: record => follower_record
+    procedure :: jacobian => follower_jacobian
+  end type stiff_follower_t
 
 contains
 
@@ -99,6 +112,7 @@ contains
     integer, intent(out) :: status
     this%max_error = max(this%max_error, oscillator_error(this%omega, t, q(1), v(1)))
     this%n_records = this%n_records + 1
+    this%last_q = q(1)
     if (allocated(this%t_expected)) then
       this%times_exact = this%times_exact .and. .not. abs(t - this%t_expected(k)) > 0
     end if
@@ -173,4 +187,34 @@ contains
     call this%oscillator_t%record(k, t, q, v, status)
     if (k == this%k_record_fail) status = this%record_status
   end subroutine failing_record
+  subroutine follower_accel(this, t, q, v, a, status)
+    class(stiff_follower_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: a(:)
+    integer, intent(out) :: status
+    a(1) = -q(1)
+    a(2) = -this%k * (q(2) - q(1)**2)
+    status = 0
+  end subroutine follower_accel
+
+  subroutine follower_jacobian(this, t, q, v, dadq, dadv, status)
+    class(stiff_follower_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
+    integer, intent(out) :: status
+    dadq = reshape([-1.0_wp, 2 * this%k * q(1), 0.0_wp, -this%k], [2, 2])
+    dadv = 0
+    status = 0
+  end subroutine follower_jacobian
+
+  subroutine follower_record(this, k, t, q, v, status)
+    class(stiff_follower_t), intent(inout) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t, q(:), v(:)
+    integer, intent(out) :: status
+    ! q2 lags q1^2 by about (d2/dt2 q1^2) / k = 2 cos(2t) / k = 2e-8: far below the bound.
+    this%worst = max(this%worst, abs(q(1) - cos(t)) + abs(q(2) - q(1)**2))
+    status = 0
+  end subroutine follower_record
+
 end module test_oscillators
