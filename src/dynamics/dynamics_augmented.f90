@@ -177,7 +177,7 @@ contains
         end if
         this%de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1) &
           = de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1)
-        de = this%element_jacobian(model, iel)
+        call this%element_jacobian(model, iel, de)
         call add_constraint_rows(this, model, iel, de, this%lu, next)
       end associate
     end do
@@ -206,7 +206,7 @@ contains
       associate (el => model%elements(iel)%e)
         nd = size(el%dofs)
         nm = el%n_modes()
-        de = this%element_jacobian(model, iel)
+        call this%element_jacobian(model, iel, de)
         allocate(s(nm, nm), block(nd, nd))
         call el%stiffness(s)
         stressed = model%modes(model%mode_first(iel):model%mode_first(iel) + nm - 1)%class &
@@ -223,8 +223,8 @@ contains
             call add_entry(this%newton, next, block(k, l))
           end do
         end do
-        call add_constraint_rows(this, model, iel, this%element_jacobian(model, iel), &
-          this%newton, next)
+        call this%element_jacobian(model, iel, de)
+        call add_constraint_rows(this, model, iel, de, this%newton, next)
         deallocate(s, block)
       end associate
     end do
@@ -291,7 +291,7 @@ contains
     f = 0.0_wp
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
-        de = this%element_jacobian(model, iel)
+        call this%element_jacobian(model, iel, de)
         do j = 1, el%n_modes()
           iq = model%modes(model%mode_first(iel) + j - 1)%q
           if (model%modes(model%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
@@ -338,7 +338,7 @@ contains
     a = 0.0_wp
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
-        de = this%element_jacobian(model, iel)
+        call this%element_jacobian(model, iel, de)
         do j = 1, el%n_modes()
           if (model%modes(model%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
           iq = model%modes(model%mode_first(iel) + j - 1)%q - model%n_rh
@@ -354,14 +354,22 @@ contains
   end subroutine aug_accelerations
 
   !> dD/dx of element iel at the last factorisation.
-  pure function aug_element_jacobian(this, model, iel) result(de)
+  pure subroutine aug_element_jacobian(this, model, iel, de)
     class(augmented_t), intent(in) :: this
     type(model_t), intent(in) :: model
     integer, intent(in) :: iel
-    real(wp), allocatable :: de(:, :)
-    integer :: nm, nd
+    real(wp), allocatable, intent(inout) :: de(:, :)
+    integer :: nm, nd, k, first
     nm = model%elements(iel)%e%n_modes()
     nd = size(model%elements(iel)%e%dofs)
-    de = reshape(this%de_val(this%de_offset(iel):this%de_offset(iel) + nm * nd - 1), [nm, nd])
-  end function aug_element_jacobian
+    ! Reused across elements of one kind: no allocation per element.
+    if (allocated(de)) then
+      if (size(de, 1) /= nm .or. size(de, 2) /= nd) deallocate(de)
+    end if
+    if (.not. allocated(de)) allocate(de(nm, nd))
+    first = this%de_offset(iel)
+    do k = 1, nd
+      de(:, k) = this%de_val(first + (k - 1) * nm:first + k * nm - 1)
+    end do
+  end subroutine aug_element_jacobian
 end module dynamics_augmented

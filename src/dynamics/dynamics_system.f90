@@ -222,7 +222,8 @@ contains
     real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
     real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
     real(wp) :: dq(this%model%n_q), cr(this%model%n_x), pot
-    real(wp), allocatable :: me(:, :), he(:), fe(:)
+    real(wp) :: me_work(this%model%max_dofs, this%model%max_dofs)
+    real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
     integer :: iel, nr, nd
     this%n_evals = this%n_evals + 1
     associate (m => this%model)
@@ -242,10 +243,10 @@ contains
       end if
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
       do iel = 1, m%n_elements
-        associate (el => m%elements(iel)%e)
-          if (.not. el%has_inertia()) cycle
-          nd = size(el%dofs)
-          allocate(me(nd, nd), he(nd), fe(nd))
+        if (.not. m%elements(iel)%e%has_inertia()) cycle
+        nd = size(m%elements(iel)%e%dofs)
+        associate (el => m%elements(iel)%e, me => me_work(1:nd, 1:nd), he => he_work(1:nd), &
+                   fe => fe_work(1:nd))
           call el%inertia(this%kin%x(el%dofs), xd(el%dofs), me, he)
           fe = 0.0_wp
           if (any(m%gravity /= 0)) &
@@ -253,7 +254,6 @@ contains
           rhs(el%dofs) = rhs(el%dofs) - matmul(me, conv(el%dofs)) - he + fe
           this%mass%val(this%mass%offset(iel):this%mass%offset(iel) + nd * nd - 1) = &
             reshape(me, [nd * nd])
-          deallocate(me, he, fe)
         end associate
       end do
       this%xd_now = xd
@@ -586,8 +586,11 @@ contains
     integer, intent(in) :: k
     real(wp), intent(in) :: t, q(:), v(:)
     integer, intent(out) :: status
-    real(wp) :: a(size(q))
-    call this%accel(t, q, v, a, status)
+    type(error_t) :: err
+    ! An output needs the configuration only (the energy takes the velocities through DF):
+    ! a kinematic solution, not a whole evaluation of the equations of motion.
+    call this%kin%solve(this%model, this%full_q(t, q), err)
+    call this%report(err, status)
     if (status == 0) call this%store(k, t, q, v)
   end subroutine dyn_record
 

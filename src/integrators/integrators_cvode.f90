@@ -11,7 +11,8 @@ module integrators_cvode
   use core_kinds, only: wp, i8
   use core_strings, only: real_str
   use core_error, only: error_t, ERR_NUMERIC, ERR_INTERNAL
-  use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t, &
+    bdf_order
   use integrators_base, only: integrator_t
   use integrators_sundials, only: sundials_bridge_t, new_bridge, open_sundials, close_sundials, &
     sundials_rhs, sundials_error_handler, clamped, note_status, sundials_status, put_state, &
@@ -84,7 +85,7 @@ contains
     call check(solver, FCVodeSetErrHandlerFn(this%mem, c_funloc(sundials_error_handler), &
       c_loc(this%bridge)), 'CVodeSetErrHandlerFn', err)
     call check(solver, FCVodeSStolerances(this%mem, opts%rtol, opts%atol), 'CVodeSStolerances', err)
-    call check(solver, FCVodeSetMaxOrd(this%mem, int(opts%max_order, c_int)), 'CVodeSetMaxOrd', err)
+    call check(solver, FCVodeSetMaxOrd(this%mem, int(bdf_order(opts%max_order, opts%rtol), c_int)), 'CVodeSetMaxOrd', err)
     if (opts%max_step > 0) then
       call check(solver, FCVodeSetMaxStep(this%mem, opts%max_step), 'CVodeSetMaxStep', err)
     end if

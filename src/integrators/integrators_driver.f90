@@ -176,8 +176,8 @@ contains
     if (opts%max_steps < 1) call err%set(ERR_INPUT, ctx // 'max_steps must be >= 1')
     select case (opts%method)
     case ('bdf')
-      if (opts%max_order < 1 .or. opts%max_order > 5) call err%set(ERR_INPUT, ctx // &
-        'max_order must be in 1..5, got ' // int_str(opts%max_order))
+      if (opts%max_order < 0 .or. opts%max_order > 5) call err%set(ERR_INPUT, ctx // &
+        'max_order must be in 0..5 (0: by rtol), got ' // int_str(opts%max_order))
       call check_max_step(opts, err)
       if (opts%jacobian /= 'system' .and. opts%jacobian /= 'internal') call err%set(ERR_INPUT, &
         ctx // "jacobian must be 'system' or 'internal', got '" // trim(opts%jacobian) // "'")

@@ -258,7 +258,9 @@ contains
       if (this%max_step > 0) h = min(h, this%max_step)
       left = this%t_stop - this%t
       t_new = this%t + h
-      if (h >= left * (1 - landing_slack) .or. left - h < 0.25_wp * h) then
+      ! Stretch by up to 25 % to land rather than leave a sliver, but not a step that was just
+      ! cut after a failure (it would be stretched back to the failed one).
+      if (h >= left * (1 - landing_slack) .or. (failures == 0 .and. left - h < 0.25_wp * h)) then
         h = left
         t_new = this%t_stop
       end if
@@ -280,14 +282,14 @@ contains
         if (error_norm <= 1) then
           this%stats%n_steps = this%stats%n_steps + 1
           this%jac_is_current = .false.
-          this%h_next = h * min(grow_max, max(shrink_min, safety * error_norm**(-1.0_wp / 3)))
+          this%h_next = h * step_ratio(error_norm, grow_max)
           call report_progress(this)
           return
         end if
         ! Rejected: back to the state before the step, shorter step.
         call restore_previous(this)
         this%stats%n_err_test_fails = this%stats%n_err_test_fails + 1
-        this%h_next = h * max(shrink_min, safety * error_norm**(-1.0_wp / 3))
+        this%h_next = h * step_ratio(error_norm, 1.0_wp)
       else
         this%stats%n_nonlin_fails = this%stats%n_nonlin_fails + 1
         if (outcome == STEP_NEWTON_FAILED .and. .not. this%jac_is_current) then
@@ -305,6 +307,16 @@ contains
       end if
     end do
   end subroutine adaptive_step
+
+  !> The factor of the next step for an error norm: 0.85 norm^(-1/3) (local error O(h^3)),
+  !> kept in [shrink_min, largest]; a zero error (a step without acceleration change) grows
+  !> by the largest factor.
+  pure real(wp) function step_ratio(error_norm, largest) result(ratio)
+    real(wp), intent(in) :: error_norm, largest
+    ratio = largest
+    if (error_norm * (largest / safety)**3 > 1) ratio = safety * error_norm**(-1.0_wp / 3)
+    ratio = min(largest, max(shrink_min, ratio))
+  end function step_ratio
 
   !> Weighted RMS norm of the local error estimate of q of the step just taken:
   !> err_coef h^2 (qdd+ - qdd), weights atol + rtol max(|q|, |q+|).

@@ -10,8 +10,8 @@ module io_scene
   use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, &
     rd_classes, rd_label, only_with
-  use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
-    mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t
+  use model_scene, only: auto_integrator, scene_t, node_rec_t, link_rec_t, hinge_rec_t, &
+    truss_rec_t, mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t
   use motion_law, only: table_problem
   use io_table, only: read_table_csv, relative_to
   implicit none
@@ -409,7 +409,9 @@ contains
       d%active = .true.
       call rd_real(g, 't_end', d%t_end, err)
       call rd_real(g, 'output_dt', d%output_dt, err)
+      call rd_real(g, 'rtol', d%rtol, err)
       call rd_choice(g, 'integrator', d%integrator, err)
+      if (err%ok() .and. d%integrator == 'auto') d%integrator = auto_integrator(d%rtol)
       if (err%ok()) then
         associate (m => d%integrator, when => 'with integrator = ')
           call only_with(g, ['dt     ', 'rho_inf'], m(1:min(6, len(m))) == 'galpha', &
@@ -423,7 +425,6 @@ contains
         end associate
       end if
       call rd_choice(g, 'jacobian', d%jacobian, err)
-      call rd_real(g, 'rtol', d%rtol, err)
       call rd_real(g, 'atol', d%atol, err)
       call rd_real(g, 'max_step', d%max_step, err)
       call rd_int(g, 'max_order', d%max_order, err)

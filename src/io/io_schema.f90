@@ -32,7 +32,7 @@ module io_schema
     character(len=18) :: name
     integer :: kind
     character(len=12) :: units
-    character(len=14) :: default
+    character(len=16) :: default
     logical :: required
     real(wp) :: lower
     logical :: lower_open
@@ -313,9 +313,9 @@ module io_schema
     var_spec_t('dynamic', 'output_dt', VK_REAL, 's', '1e-3', .false., &
       0.0_wp, .true., huge(1.0_wp), .false., &
       '', 'output interval'), &
-    var_spec_t('dynamic', 'integrator', VK_CHOICE, '', 'bdf', .false., &
+    var_spec_t('dynamic', 'integrator', VK_CHOICE, '', 'auto', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      'bdf|galpha|galpha_adaptive|erk', 'time integrator'), &
+      'auto|bdf|galpha|galpha_adaptive|erk', 'time integrator'), &
     var_spec_t('dynamic', 'jacobian', VK_CHOICE, '', 'linearised', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       'linearised|fd|internal', 'Jacobian of the implicit integrators'), &
@@ -328,9 +328,9 @@ module io_schema
     var_spec_t('dynamic', 'max_step', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'largest step, 0 = no limit'), &
-    var_spec_t('dynamic', 'max_order', VK_INT, '', '5', .false., &
-      1.0_wp, .false., 5.0_wp, .false., &
-      '', 'largest BDF order'), &
+    var_spec_t('dynamic', 'max_order', VK_INT, '', '0', .false., &
+      0.0_wp, .false., 5.0_wp, .false., &
+      '', 'largest BDF order, 0 = by rtol'), &
     var_spec_t('dynamic', 'erk_order', VK_INT, '', '5', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '2|3|4|5|6|8', 'order of the Runge-Kutta pair'), &
@@ -479,7 +479,7 @@ contains
           merge(')', ']', s%upper_open .or. s%upper >= huge(1.0_wp))
         write(unit, '(a)') trim(s%group) // achar(9) // trim(s%name) // achar(9) // &
           kind_name(s%kind) // achar(9) // trim(s%units) // achar(9) // &
-          trim(merge('required      ', s%default, s%required)) // achar(9) // range // &
+          trim(merge('required        ', s%default, s%required)) // achar(9) // range // &
           achar(9) // trim(s%choices) // achar(9) // trim(s%doc)
     end do
   contains

@@ -112,8 +112,8 @@ contains
     real(wp), intent(in) :: q(:)
     real(wp), intent(out) :: r(:)
     logical, intent(in), optional :: jacobian
-    real(wp), allocatable :: e(:), de(:, :)
-    integer :: iel, j, k, row, col, nm, n_entry, n_in
+    real(wp) :: e_work(model%max_modes), de_work(model%max_modes, model%max_dofs)
+    integer :: iel, j, k, row, col, nm, nd, n_entry, n_in
     logical :: with_jac
     with_jac = .false.
     if (present(jacobian)) with_jac = jacobian
@@ -129,12 +129,12 @@ contains
     n_entry = 0
     n_in = 0
     do iel = 1, model%n_elements
-      associate (el => model%elements(iel)%e)
-        nm = el%n_modes()
-        allocate(e(nm), de(nm, size(el%dofs)))
+      nm = model%elements(iel)%e%n_modes()
+      nd = size(model%elements(iel)%e%dofs)
+      associate (el => model%elements(iel)%e, e => e_work(1:nm), de => de_work(1:nm, 1:nd))
         call el%evaluate(this%x(el%dofs), e, de)
         if (with_jac .and. this%sparse) this%de_val(this%de_offset(iel):this%de_offset(iel) + &
-          size(de) - 1) = reshape(de, [size(de)])
+          nm * nd - 1) = reshape(de, [nm * nd])
         do j = 1, nm
           row = model%modes(model%mode_first(iel) + j - 1)%row
           if (row == 0) cycle
@@ -159,7 +159,6 @@ contains
             end if
           end do
         end do
-        deallocate(e, de)
       end associate
     end do
   end subroutine kin_residual
@@ -436,9 +435,8 @@ contains
     real(wp), intent(in) :: qd(:)
     real(wp), intent(out) :: d2x(:)
     real(wp), intent(in), optional :: xd_known(:)
-    real(wp) :: rhs(model%n_c, 1), xd(model%n_x)
-    real(wp), allocatable :: d2e(:)
-    integer :: iel, j, row
+    real(wp) :: rhs(model%n_c, 1), xd(model%n_x), d2e_work(model%max_modes)
+    integer :: iel, j, row, nm
     if (present(xd_known)) then
       xd = xd_known
     else
@@ -446,14 +444,13 @@ contains
     end if
     rhs = 0.0_wp
     do iel = 1, model%n_elements
-      associate (el => model%elements(iel)%e)
-        allocate(d2e(el%n_modes()))
+      nm = model%elements(iel)%e%n_modes()
+      associate (el => model%elements(iel)%e, d2e => d2e_work(1:nm))
         call el%second(this%x(el%dofs), xd(el%dofs), d2e)
         do j = 1, size(d2e)
           row = model%modes(model%mode_first(iel) + j - 1)%row
           if (row > 0) rhs(row, 1) = -d2e(j)
         end do
-        deallocate(d2e)
       end associate
     end do
     call this%jacobian_solve(rhs)

@@ -66,6 +66,9 @@ module model_system
     !> Elements with an elastic mode: their stresses depend on x, not on q alone.
     logical, allocatable :: elastic_element(:)
     integer, allocatable :: lumped_rows(:)    !< coordinates that carry a lumped mass
+    !> Most modes and nodal coordinates of any element: the size of work arrays that element
+    !> loops reuse instead of allocating per element.
+    integer :: max_modes = 0, max_dofs = 0
     real(wp) :: newton_tol = 1.0e-11_wp       !< kinematic residual tolerance [m or rad]
     logical :: finalized = .false.
   contains
@@ -290,6 +293,12 @@ contains
         this%input_q(i) = iq_dy
       end if
       if (this%input_q(i) > 0) this%q_coord(this%input_q(i)) = i
+    end do
+    this%max_modes = 0
+    this%max_dofs = 0
+    do i = 1, this%n_elements
+      this%max_modes = max(this%max_modes, this%elements(i)%e%n_modes())
+      this%max_dofs = max(this%max_dofs, size(this%elements(i)%e%dofs))
     end do
     allocate(this%elastic_element(this%n_elements))
     do i = 1, this%n_elements

@@ -158,7 +158,8 @@ CASES.update({
                                   ["&hinge", "'motion'", "prescribed"]),
     "stiffness on a prescribed hinge": (GOOD.replace("motion = 'm1'", "motion = 'm1', stiffness = 5"),
                                         ["&hinge", "'stiffness'", "dynamic"]),
-    "dt with bdf": (GOOD.replace("t_end = 0.02", "t_end = 0.02, dt = 1e-4"),
+    "dt with bdf": (GOOD.replace("t_end = 0.02",
+                                 "t_end = 0.02, integrator = 'bdf', dt = 1e-4"),
                     ["&dynamic", "'dt'", "galpha"]),
     "max_order with erk": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'erk', "
                                         "max_order = 3"), ["'max_order'", "bdf"]),

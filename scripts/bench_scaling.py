@@ -1,0 +1,364 @@
+#!/usr/bin/env python3
+"""Cost per step against model size, and work against precision, on the two-link benchmark
+(``input/two_link.nml`` with n beam elements per link), flexmor beside Exudyn.
+
+Part 1, scaling: time per step for n = 2, 4, ..., 128 elements per link of
+
+- the full model and the reduced models k = 2 and 4 (``&reduction n_modes = k``), flexmor's
+  fixed-step generalized-alpha at dt = 1e-4 s (rho_inf 0.8);
+- Exudyn's model of the same benchmark (python/flexmor/exudyn_two_link.py: planar
+  geometrically exact beams, generalized-alpha at h = 1e-4 s, its sparse solver), when Exudyn
+  is installed (``pip install exudyn``; skipped otherwise) and up to --exudyn-max elements per
+  link.
+
+The time per step is the difference of two runs, to t1 and 2 t1 (--t-end), divided by the
+difference of their step counts: set-up, the reduced basis and output writing cancel. flexmor's
+time is its solve time (root attribute ``wall_time_s``), Exudyn's the process time of
+SolveDynamic. Peak memory is the maximum resident set of the longer flexmor run
+(/usr/bin/time). The exponent p of time ~ n^p is fitted by least squares in log-log over
+8 <= n <= 128.
+
+Part 2, work-precision (--work-precision): the largest distance over 0 <= t <= 0.7 s of the tip
+from a converged solution (flexmor, 32 elements per link, generalized-alpha at dt = 2e-5 s;
+the same at 16 elements per link shows how converged it is) against solve time, for flexmor
+meshes 2, 3, 4 and 8 per link with every integrator (bdf with max_order 2 and 5,
+galpha_adaptive and galpha at several tolerances/steps) and for Exudyn at 6, 12 and 24 per link
+with several h. For the tip error targets 1e-3, 1e-4 and 1e-5 m: the fastest configuration of
+each code and their ratio.
+
+Usage (the flexmor Python package installed, or PYTHONPATH=python):
+
+    python3 scripts/bench_scaling.py [--bin build/bin/flexmor] [--out-dir docs/bench] \\
+        [--meshes 2,4,8,16,32,64,128] [--t-end 0.1] [--exudyn-max 24] [--no-exudyn] \\
+        [--work-precision] [--quick]
+
+Writes scaling.csv, scaling.md and scaling.png (and work_precision.csv/.md/.png) into
+--out-dir, each with the command, date, machine, flexmor version and commit. --quick: meshes
+2 and 4, t_end 0.004 s, no work-precision, for the tests. A failing run is recorded with its
+error and the benchmark goes on (exit status 1 at the end); bad arguments exit with 2.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from datetime import datetime
+from pathlib import Path
+
+import numpy as np
+
+from flexmor import exudyn_two_link
+from flexmor.bench import command_line, cpu_model, git_commit, last_line, usable_cores, write_csv
+from flexmor.results import load_node_path, run_attributes
+
+ROOT = Path(__file__).resolve().parents[1]
+BASE = (ROOT / "input" / "two_link.nml").read_text()
+DT = 1.0e-4
+TARGETS = (1.0e-3, 1.0e-4, 1.0e-5)
+
+
+def scene(n: int, dynamic: str, k: int = 0, t_end: float = 0.02, output_dt: float = 1e-3) -> str:
+    """The benchmark with n elements per link, the given &dynamic settings and, for k > 0, a
+    reduced model of k modes."""
+    text = BASE.replace("n_elements = 3", f"n_elements = {n}")
+    text = re.sub(r"&modal[^/]*/", "", text)
+    text = re.sub(r"&dynamic[^/]*/",
+                  f"&dynamic t_end = {t_end!r}, output_dt = {output_dt!r}, {dynamic} /", text)
+    if k:
+        text += f"\n&reduction n_modes = {k} /\n"
+    return text
+
+
+class RunFailed(RuntimeError):
+    pass
+
+
+def run_flexmor(binary: Path, work: Path, name: str, text: str, timeout: float = 3600):
+    """Run a scene; returns (attributes, peak RSS in MiB, result path)."""
+    nml = work / f"{name}.nml"
+    out = work / f"{name}.h5"
+    nml.write_text(text)
+    cmd = [str(binary), "-q", str(nml), "-o", str(out)]
+    timer = Path("/usr/bin/time")
+    if timer.exists():
+        cmd = [str(timer), "-f", "maxrss_kb=%M"] + cmd
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    if proc.returncode != 0:
+        raise RunFailed(last_line(proc.stderr) or f"exit status {proc.returncode}")
+    match = re.search(r"maxrss_kb=(\d+)", proc.stderr)
+    rss = int(match.group(1)) / 1024 if match else float("nan")
+    return run_attributes(out), rss, out
+
+
+def per_step_flexmor(binary, work, name, n, dynamic, k, t1):
+    a1, _, _ = run_flexmor(binary, work, f"{name}_1", scene(n, dynamic, k, t1))
+    a2, rss, _ = run_flexmor(binary, work, f"{name}_2", scene(n, dynamic, k, 2 * t1))
+    steps = a2["n_steps"] - a1["n_steps"]
+    return (a2["wall_time_s"] - a1["wall_time_s"]) / steps, rss, int(a2["n_dynamic_coordinates"])
+
+
+def per_step_exudyn(n, t1):
+    r1 = exudyn_two_link.run(n, DT, t1)
+    r2 = exudyn_two_link.run(n, DT, 2 * t1)
+    return (r2["cpu_s"] - r1["cpu_s"]) / (r2["n_steps"] - r1["n_steps"])
+
+
+def fit_exponent(ns, times):
+    pts = [(math.log(n), math.log(t)) for n, t in zip(ns, times)
+           if 8 <= n <= 128 and t and t > 0 and math.isfinite(t)]
+    if len(pts) < 2:
+        return float("nan")
+    x, y = np.array(pts).T
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def header(args, argv) -> list[str]:
+    exu = exudyn_two_link.version() if exudyn_two_link.available() else "not installed"
+    version = (ROOT / "VERSION").read_text().strip()
+    return [f"Command: `{command_line('scripts/bench_scaling.py', argv)}`",
+            f"Date: {datetime.now().strftime('%Y-%m-%d %H:%M')}; machine: {cpu_model()}, "
+            f"{usable_cores()} cores; flexmor {version}, commit {git_commit(ROOT)}; Exudyn {exu}."]
+
+
+def ms(x):
+    return "–" if x is None or not math.isfinite(x) else f"{1e3 * x:.3f}"
+
+
+def scaling(args, binary, work, argv):
+    rows, failed = [], False
+    use_exudyn = not args.no_exudyn and exudyn_two_link.available()
+    galpha = f"integrator = 'galpha', dt = {DT!r}"
+    for n in args.meshes:
+        row = {"elements_per_link": n}
+        for k, label in ((0, "full"), (2, "k2"), (4, "k4")):
+            try:
+                t, rss, n_dy = per_step_flexmor(binary, work, f"s{n}_{label}", n, galpha, k,
+                                                args.t_end)
+                row[f"{label}_ms"] = 1e3 * t
+                row[f"{label}_rss_mib"] = rss
+                row["n_dy"] = n_dy
+            except (RunFailed, subprocess.TimeoutExpired) as e:
+                row[f"{label}_ms"] = float("nan")
+                row[f"{label}_error"] = str(e)
+                failed = True
+        row["exudyn_ms"] = float("nan")
+        if use_exudyn and n <= args.exudyn_max:
+            try:
+                row["exudyn_ms"] = 1e3 * per_step_exudyn(n, args.t_end)
+            except Exception as e:     # Exudyn raises its own SolverError
+                row["exudyn_error"] = last_line(str(e))
+        row["full_over_exudyn"] = row["full_ms"] / row["exudyn_ms"] if math.isfinite(
+            row["exudyn_ms"]) else float("nan")
+        rows.append(row)
+        print(f"n = {n:4d}: full {row['full_ms']:.4f} ms, k=2 {row.get('k2_ms', math.nan):.4f}, "
+              f"k=4 {row.get('k4_ms', math.nan):.4f}, Exudyn {row['exudyn_ms']:.4f} ms/step",
+              flush=True)
+    ns = [r["elements_per_link"] for r in rows]
+    expo = {key: fit_exponent(ns, [r.get(f"{key}_ms", math.nan) for r in rows])
+            for key in ("full", "k2", "k4", "exudyn")}
+    columns = ["elements_per_link", "n_dy", "full_ms", "k2_ms", "k4_ms", "exudyn_ms",
+               "full_over_exudyn", "full_rss_mib", "k2_rss_mib", "k4_rss_mib"]
+    write_csv(rows, columns, args.out_dir / "scaling.csv")
+    lines = ["# Time per step against model size (two-link benchmark)", "", *header(args, argv),
+             "", f"Generalized-alpha, fixed step {DT} s, rho_inf 0.8; time per step from runs to "
+             f"{args.t_end} and {2 * args.t_end} s (set-up cancels). Exudyn: planar geometrically "
+             "exact beams, its generalized-alpha at the same step, sparse solver "
+             "(python/flexmor/exudyn_two_link.py).", "",
+             "| elements per link | n_dy | full [ms] | k = 2 [ms] | k = 4 [ms] | Exudyn [ms] | "
+             "full / Exudyn | peak RSS full [MiB] |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        ratio = r["full_over_exudyn"]
+        lines.append(f"| {r['elements_per_link']} | {r.get('n_dy', '–')} | {ms(r['full_ms'] / 1e3)} | "
+                     f"{ms(r.get('k2_ms', math.nan) / 1e3)} | {ms(r.get('k4_ms', math.nan) / 1e3)} | "
+                     f"{ms(r['exudyn_ms'] / 1e3)} | "
+                     f"{'–' if not math.isfinite(ratio) else f'{ratio:.2f}'} | "
+                     f"{r.get('full_rss_mib', math.nan):.0f} |")
+    lines += ["", "Fitted exponent p of time per step ~ n^p over 8 <= n <= 128: " + ", ".join(
+        f"{k} {v:.2f}" for k, v in expo.items() if math.isfinite(v)) + "."]
+    errors = [(r["elements_per_link"], key, r[key]) for r in rows for key in r if key.endswith("_error")]
+    if errors:
+        lines += ["", "Failed runs:"] + [f"- n = {n}, {key[:-6]}: {msg}" for n, key, msg in errors]
+    (args.out_dir / "scaling.md").write_text("\n".join(lines) + "\n")
+    plot_scaling(rows, args.out_dir / "scaling.png")
+    return failed
+
+
+def plot_scaling(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    ns = [r["elements_per_link"] for r in rows]
+    for key, label in (("full_ms", "flexmor full"), ("k2_ms", "flexmor k = 2"),
+                       ("k4_ms", "flexmor k = 4"), ("exudyn_ms", "Exudyn")):
+        ys = [r.get(key, math.nan) for r in rows]
+        if any(math.isfinite(y) for y in ys):
+            ax.loglog(ns, ys, "o-", label=label)
+    ax.set_xlabel("beam elements per link")
+    ax.set_ylabel("time per step [ms]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def tip_error(t_ref, xy_ref, t, xy):
+    x = np.interp(t_ref, t, xy[:, 0])
+    y = np.interp(t_ref, t, xy[:, 1])
+    return float(np.max(np.hypot(x - xy_ref[:, 0], y - xy_ref[:, 1])))
+
+
+def work_precision(args, binary, work, argv):
+    t_end = 0.7
+    ref_dyn = "integrator = 'galpha', dt = 2e-5"
+    _, _, ref_path = run_flexmor(binary, work, "ref32", scene(32, ref_dyn, 0, t_end))
+    t_ref, xyz = load_node_path(ref_path, "tip")
+    xy_ref = xyz[:, :2]
+    _, _, check = run_flexmor(binary, work, "ref16", scene(16, ref_dyn, 0, t_end))
+    t16, xyz16 = load_node_path(check, "tip")
+    ref_check = tip_error(t_ref, xy_ref, t16, xyz16[:, :2])
+    configs = []
+    for n in (2, 3, 4, 8):
+        for order in (2, 5):
+            for rtol in (1e-3, 1e-4, 1e-5, 1e-6):
+                configs.append((n, f"bdf order {order}, rtol {rtol:g}",
+                                f"integrator = 'bdf', max_order = {order}, rtol = {rtol!r}, "
+                                f"atol = {rtol * 1e-2!r}"))
+        for rtol in (1e-3, 1e-4, 1e-5, 1e-6, 1e-7):
+            configs.append((n, f"galpha_adaptive, rtol {rtol:g}",
+                            f"integrator = 'galpha_adaptive', rtol = {rtol!r}, atol = {rtol * 1e-2!r}"))
+        for dt in (1e-3, 5e-4, 2e-4, 1e-4):
+            configs.append((n, f"galpha, dt {dt:g}", f"integrator = 'galpha', dt = {dt!r}"))
+    rows, failed = [], False
+    for n, label, dyn in configs:
+        try:
+            attrs, _, path = run_flexmor(binary, work, "wp", scene(n, dyn, 0, t_end))
+            t, xyz = load_node_path(path, "tip")
+            rows.append({"code": "flexmor", "elements_per_link": n, "settings": label,
+                         "time_s": attrs["wall_time_s"], "steps": attrs["n_steps"],
+                         "tip_error_m": tip_error(t_ref, xy_ref, t, xyz[:, :2])})
+        except (RunFailed, subprocess.TimeoutExpired) as e:
+            rows.append({"code": "flexmor", "elements_per_link": n, "settings": label,
+                         "error": str(e)})
+            failed = True
+        print(rows[-1], flush=True)
+    if not args.no_exudyn and exudyn_two_link.available():
+        for n in (6, 12, 24):
+            for h in (1e-3, 5e-4, 2e-4, 1e-4):
+                try:
+                    r = exudyn_two_link.run(n, h, t_end)
+                    rows.append({"code": "Exudyn", "elements_per_link": n,
+                                 "settings": f"generalized-alpha, h {h:g}", "time_s": r["cpu_s"],
+                                 "steps": r["n_steps"],
+                                 "tip_error_m": tip_error(t_ref, xy_ref, r["time"], r["tip"])})
+                except Exception as e:
+                    rows.append({"code": "Exudyn", "elements_per_link": n,
+                                 "settings": f"generalized-alpha, h {h:g}", "error": last_line(str(e))})
+                print(rows[-1], flush=True)
+    columns = ["code", "elements_per_link", "settings", "time_s", "steps", "tip_error_m", "error"]
+    write_csv(rows, columns, args.out_dir / "work_precision.csv")
+    lines = ["# Work against precision (two-link benchmark, 0.7 s)", "", *header(args, argv), "",
+             "Tip error: largest distance over time from a converged solution (flexmor, 32 "
+             f"elements per link, generalized-alpha dt 2e-5 s; the 16-element run is {ref_check:.1e} m "
+             "from it). Time: flexmor's solve time, Exudyn's SolveDynamic process time.", "",
+             "| target [m] | flexmor fastest | time [s] | Exudyn fastest | time [s] | Exudyn / flexmor |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for target in TARGETS:
+        best = {}
+        for code in ("flexmor", "Exudyn"):
+            ok = [r for r in rows if r["code"] == code and r.get("tip_error_m", math.inf) <= target]
+            best[code] = min(ok, key=lambda r: r["time_s"]) if ok else None
+        f, e = best["flexmor"], best["Exudyn"]
+        ratio = f"{e['time_s'] / f['time_s']:.1f}" if e and f else "–"
+        lines.append(f"| {target:g} | {config_text(f)} | {time_text(f)} | "
+                     f"{config_text(e) if e else 'none reached'} | {time_text(e)} | {ratio} |")
+    lines += ["", "All runs (sorted by code, mesh, time):", "",
+              "| code | elements per link | settings | time [s] | steps | tip error [m] |",
+              "| --- | --- | --- | --- | --- | --- |"]
+    for r in sorted(rows, key=lambda r: (r["code"], r["elements_per_link"], r.get("time_s", 1e9))):
+        lines.append(f"| {r['code']} | {r['elements_per_link']} | {r['settings']} | "
+                     f"{r.get('time_s', math.nan):.3f} | {r.get('steps', '–')} | "
+                     f"{r.get('tip_error_m', math.nan):.2e} |" if "error" not in r else
+                     f"| {r['code']} | {r['elements_per_link']} | {r['settings']} | failed: "
+                     f"{r['error']} | | |")
+    (args.out_dir / "work_precision.md").write_text("\n".join(lines) + "\n")
+    plot_work_precision(rows, args.out_dir / "work_precision.png")
+    return failed
+
+
+def config_text(row):
+    return f"{row['elements_per_link']} el., {row['settings']}" if row else "–"
+
+
+def time_text(row):
+    return f"{row['time_s']:.3f}" if row else "–"
+
+
+def plot_work_precision(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    groups = {}
+    for r in rows:
+        if "tip_error_m" not in r:
+            continue
+        method = r["settings"].split(",")[0]
+        groups.setdefault((r["code"], method), []).append(r)
+    for (code, method), rs in sorted(groups.items()):
+        ax.loglog([r["time_s"] for r in rs], [r["tip_error_m"] for r in rs],
+                  "o" if code == "flexmor" else "s", label=f"{code} {method}", alpha=0.7)
+    for target in TARGETS:
+        ax.axhline(target, color="gray", lw=0.5)
+    ax.set_xlabel("solve time [s]")
+    ax.set_ylabel("tip error [m]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def parse(argv):
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--bin", type=Path, default=ROOT / "build" / "bin" / "flexmor")
+    p.add_argument("--out-dir", type=Path, default=ROOT / "docs" / "bench")
+    p.add_argument("--meshes", default="2,4,8,16,32,64,128")
+    p.add_argument("--t-end", type=float, default=0.1)
+    p.add_argument("--exudyn-max", type=int, default=24)
+    p.add_argument("--no-exudyn", action="store_true")
+    p.add_argument("--work-precision", action="store_true")
+    p.add_argument("--quick", action="store_true")
+    args = p.parse_args(argv)
+    try:
+        args.meshes = [int(m) for m in args.meshes.split(",")]
+    except ValueError:
+        p.exit(2, f"bench_scaling.py: --meshes must be integers separated by commas, got "
+                  f"'{args.meshes}'\n")
+    if any(m < 1 for m in args.meshes) or not args.t_end > 0:
+        p.exit(2, "bench_scaling.py: meshes must be >= 1 and --t-end > 0\n")
+    if not args.bin.exists():
+        p.exit(2, f"bench_scaling.py: no flexmor binary at {args.bin} (build it or give --bin)\n")
+    if args.quick:
+        args.meshes, args.t_end, args.work_precision = [2, 4], 0.004, False
+    return args
+
+
+def main(argv=None):
+    args = parse(argv)
+    args.out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="flexmor_bench_") as tmp:
+        work = Path(tmp)
+        failed = scaling(args, args.bin, work, argv)
+        if args.work_precision:
+            failed = work_precision(args, args.bin, work, argv) or failed
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
