@@ -37,7 +37,7 @@ def read_rows(out_dir):
 
 def test_parse_group_of_the_base_scene():
     dyn = bt.parse_group(BASE, "dynamic")
-    assert dyn == {"t_end": "0.7", "output_dt": "1.0e-3", "integrator": "'bdf'",
+    assert dyn == {"t_end": "0.7", "output_dt": "1.0e-3",
                    "rtol": "1.0e-6", "atol": "1.0e-8"}
     assert bt.parse_group(BASE, "output") == {"nodes": "'tip', 'elbow'"}
     assert bt.parse_group(BASE, "static") == {}
