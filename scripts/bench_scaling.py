@@ -22,14 +22,14 @@ Part 2, work-precision (--work-precision): the largest distance over 0 <= t <= 0
 from a converged solution (flexmor, 32 elements per link, generalized-alpha at dt = 2e-5 s;
 the same at 16 elements per link shows how converged it is) against solve time, for flexmor
 meshes 2, 3, 4 and 8 per link with every integrator (bdf with max_order 2 and 5,
-galpha_adaptive and galpha at several tolerances/steps) and for Exudyn at 6, 12 and 24 per link
-with several h. For the tip error targets 1e-3, 1e-4 and 1e-5 m: the fastest configuration of
+galpha_adaptive and galpha at several tolerances/steps) and for Exudyn at 6, 12, 24 and 48 per
+link with several h (its beam needs about 48 per link for a 1e-5 m tip error). For the tip error targets 1e-3, 1e-4 and 1e-5 m: the fastest configuration of
 each code and their ratio.
 
 Usage (the flexmor Python package installed, or PYTHONPATH=python):
 
     python3 scripts/bench_scaling.py [--bin build/bin/flexmor] [--out-dir docs/bench] \\
-        [--meshes 2,4,8,16,32,64,128] [--t-end 0.1] [--exudyn-max 24] [--no-exudyn] \\
+        [--meshes 2,4,8,16,32,64,128] [--t-end 0.1] [--exudyn-max 64] [--no-exudyn] \\
         [--work-precision] [--quick]
 
 Writes scaling.csv, scaling.md and scaling.png (and work_precision.csv/.md/.png) into
@@ -248,7 +248,7 @@ def work_precision(args, binary, work, argv):
             failed = True
         print(rows[-1], flush=True)
     if not args.no_exudyn and exudyn_two_link.available():
-        for n in (6, 12, 24):
+        for n in (6, 12, 24, 48):
             for h in (1e-3, 5e-4, 2e-4, 1e-4):
                 try:
                     r = exudyn_two_link.run(n, h, t_end)
@@ -330,7 +330,7 @@ def parse(argv):
     p.add_argument("--out-dir", type=Path, default=ROOT / "docs" / "bench")
     p.add_argument("--meshes", default="2,4,8,16,32,64,128")
     p.add_argument("--t-end", type=float, default=0.1)
-    p.add_argument("--exudyn-max", type=int, default=24)
+    p.add_argument("--exudyn-max", type=int, default=64)
     p.add_argument("--no-exudyn", action="store_true")
     p.add_argument("--work-precision", action="store_true")
     p.add_argument("--quick", action="store_true")

@@ -157,7 +157,8 @@ contains
     class(dynamics_t), intent(in) :: this
     real(wp), intent(in) :: q(:), qd(:)
     real(wp) :: sigma(this%model%n_dy)
-    real(wp), allocatable :: e(:), ed(:), s(:, :)
+    real(wp) :: e_work(this%model%max_modes), ed_work(this%model%max_modes)
+    real(wp) :: s_work(this%model%max_modes, this%model%max_modes)
     integer :: iel, j, nm
     associate (m => this%model)
       sigma = 0.0_wp
@@ -166,17 +167,17 @@ contains
         nm = m%elements(iel)%e%n_modes()
         if (.not. any(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1)%class &
                       == MODE_DYNAMIC)) cycle
-        allocate(e(nm), ed(nm), s(nm, nm))
-        call m%mode_values(iel, q, e)
-        call m%mode_values(iel, qd, ed)
-        call m%elements(iel)%e%stiffness(s)
-        e = matmul(s, e + m%elements(iel)%e%damping * ed)
-        do j = 1, nm
-          associate (mode => m%modes(m%mode_first(iel) + j - 1))
-            if (mode%class == MODE_DYNAMIC) sigma(mode%q - m%n_rh) = e(j)
-          end associate
-        end do
-        deallocate(e, ed, s)
+        associate (e => e_work(1:nm), ed => ed_work(1:nm), s => s_work(1:nm, 1:nm))
+          call m%mode_values(iel, q, e)
+          call m%mode_values(iel, qd, ed)
+          call m%elements(iel)%e%stiffness(s)
+          e = matmul(s, e + m%elements(iel)%e%damping * ed)
+          do j = 1, nm
+            associate (mode => m%modes(m%mode_first(iel) + j - 1))
+              if (mode%class == MODE_DYNAMIC) sigma(mode%q - m%n_rh) = e(j)
+            end associate
+          end do
+        end associate
       end do
     end associate
   end function dyn_stresses

@@ -39,7 +39,7 @@ SCENES = {
 &hinge label = 'j1', node = 'base', link = 'arm', mode = 'prescribed', motion = 'm1' /
 &motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.05 /
 &mass node = 'tip', m = 0.1 /
-&dynamic t_end = 1.0e-3, output_dt = 1.0e-3 /
+&dynamic t_end = 1.0e-3, output_dt = 1.0e-3, integrator = 'bdf' /
 """),
     "galpha": ("dynamic", 0.2, TWO_LINK.format(n=8) + """
 &dynamic t_end = 0.2, output_dt = 0.01, integrator = 'galpha', dt = 1.0e-4 /
