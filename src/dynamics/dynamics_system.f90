@@ -72,6 +72,7 @@ module dynamics_system
     procedure :: has_iteration_solver => dyn_has_iteration_solver
     procedure :: iteration_factor => dyn_iteration_factor
     procedure :: iteration_solve => dyn_iteration_solve
+    procedure :: newton_correction => dyn_newton_correction
     procedure :: energy => dyn_energy
     procedure :: stresses => dyn_stresses
     procedure :: loads_at => dyn_loads_at
@@ -573,6 +574,38 @@ contains
     call this%aug%accelerations(this%model, this%mass%times(this%model, w), a, newton=.true.)
     r = a(:, 1)
   end subroutine dyn_iteration_solve
+
+  !> One Newton correction dx = (Mbar_s + c_q K0_s + c_v D0_s)^-1 r with the factors of the
+  !> last iteration_factor (state s) and the residual of eq. (1) at the current state,
+  !>   r = DF_dy^T (f - M DF_dy x) - sigma_dy,
+  !> by two solves with the kinematic factors: no factorisation of the augmented mass system
+  !> per iteration (the default, accelerations then a solve, needs one). r is projected with
+  !> the current DF (its zero is eq. 1); the stale factors only change how fast it converges.
+  subroutine dyn_newton_correction(this, t, q, v, x, dx, status)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:), x(:)
+    real(wp), intent(out) :: dx(:)
+    integer, intent(out) :: status
+    real(wp) :: dq(this%model%n_q), w(this%model%n_x, 1), r_q(this%model%n_q)
+    real(wp) :: r(size(x), 1), a(size(x), 1)
+    type(error_t) :: err
+    dx = 0.0_wp
+    call this%prepare(t, q, v, err)
+    if (err%ok()) then
+      dq = 0.0_wp
+      dq(this%model%n_rh + 1:) = x
+      call this%kin%apply_df(this%model, dq, w(:, 1))
+      w = this%mass%times(this%model, w)
+      call this%kin%apply_dft(this%model, this%nodal_force - w(:, 1), r_q)
+      r(:, 1) = r_q(this%model%n_rh + 1:) - this%sigma_now
+      call this%aug%accelerations(this%model, this%aug%nodal_equivalent(this%model, r), a, &
+        newton=.true.)
+      dx = a(:, 1)
+      call check_finite(dx, t, err)
+    end if
+    call this%report(err, status)
+    if (status /= 0) dx = 0.0_wp
+  end subroutine dyn_newton_correction
 
   subroutine dyn_allocate_history(this, nt)
     class(dynamics_t), intent(inout) :: this

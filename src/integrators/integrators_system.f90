@@ -28,6 +28,10 @@ module integrators_system
     procedure :: has_iteration_solver => system_no_iteration_solver
     procedure :: iteration_factor => system_iteration_factor
     procedure :: iteration_solve => system_iteration_solve
+    !> One Newton correction of an implicit step with those factors: dx = (I - c_q da/dq -
+    !> c_v da/dv)^-1 (a(t, q, v) - x). The default evaluates a and solves; a model may form the
+    !> residual without the accelerations (no factorisation of its mass matrix per iteration).
+    procedure :: newton_correction => system_newton_correction
   end type ode2_system_t
 
   abstract interface
@@ -109,6 +113,17 @@ contains
     class(ode2_system_t), intent(inout) :: this
     real(wp), intent(inout) :: r(:)
   end subroutine system_iteration_solve
+
+  subroutine system_newton_correction(this, t, q, v, x, dx, status)
+    class(ode2_system_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:), x(:)
+    real(wp), intent(out) :: dx(:)
+    integer, intent(out) :: status
+    call this%accel(t, q, v, dx, status)
+    if (status /= 0) return
+    dx = dx - x
+    call this%iteration_solve(dx)
+  end subroutine system_newton_correction
 
   subroutine system_fd_jacobian(this, t, q, v, dadq, dadv, status)
     class(ode2_system_t), intent(inout) :: this
