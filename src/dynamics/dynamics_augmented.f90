@@ -68,20 +68,31 @@ contains
     this%val = 0.0_wp
   end subroutine mass_init
 
-  !> M w for nodal vectors w (n_x, k): the lumped masses and the element blocks.
+  !> M w for nodal vectors w (n_x, k): the lumped masses and the element blocks (loops over
+  !> the flat blocks in place: no block copies or temporaries per element).
   function mass_times(this, model, w) result(mw)
     class(element_mass_t), intent(in) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: w(:, :)
     real(wp) :: mw(size(w, 1), size(w, 2))
-    integer :: iel, nd
-    mw = spread(model%lumped, 2, size(w, 2)) * w
+    integer :: iel, nd, c, k, l, first
+    real(wp) :: wl
+    do c = 1, size(w, 2)
+      mw(:, c) = model%lumped * w(:, c)
+    end do
     do iel = 1, model%n_elements
-      if (this%offset(iel) == 0) cycle
+      first = this%offset(iel)
+      if (first == 0) cycle
       associate (dofs => model%elements(iel)%e%dofs)
         nd = size(dofs)
-        mw(dofs, :) = mw(dofs, :) + matmul(reshape(this%val(this%offset(iel): &
-          this%offset(iel) + nd * nd - 1), [nd, nd]), w(dofs, :))
+        do c = 1, size(w, 2)
+          do l = 1, nd
+            wl = w(dofs(l), c)
+            do k = 1, nd
+              mw(dofs(k), c) = mw(dofs(k), c) + this%val(first + (l - 1) * nd + k - 1) * wl
+            end do
+          end do
+        end do
       end associate
     end do
   end function mass_times

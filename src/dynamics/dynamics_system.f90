@@ -223,7 +223,7 @@ contains
     type(error_t), intent(out) :: err
     real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
     real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
-    real(wp) :: dq(this%model%n_q), cr(this%model%n_x), pot
+    real(wp) :: dq(this%model%n_q), pot
     real(wp) :: me_work(this%model%max_dofs, this%model%max_dofs)
     real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
     integer :: iel, nr, nd
@@ -236,12 +236,12 @@ contains
       call this%kin%solve(m, q, err)
       if (.not. err%ok()) return
       call this%kin%apply_df(m, qd, xd)
-      call this%kin%second(m, qd, conv, xd)
       if (nr > 0) then
         dq = 0.0_wp
         dq(1:nr) = pdd
-        call this%kin%apply_df(m, dq, cr)
-        conv = conv + cr
+        call this%kin%second(m, qd, conv, xd, dq)
+      else
+        call this%kin%second(m, qd, conv, xd)
       end if
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
       do iel = 1, m%n_elements

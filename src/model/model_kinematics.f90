@@ -45,6 +45,7 @@ module model_kinematics
     procedure :: solve => kin_solve
     procedure :: transfer => kin_transfer
     procedure :: apply_df => kin_apply_df
+    procedure :: apply_df_many => kin_apply_df_many
     procedure :: apply_dft => kin_apply_dft
     procedure :: second => kin_second
     procedure :: residual => kin_residual
@@ -221,7 +222,10 @@ contains
     this%has_factors = .false.
     rprev = huge(1.0_wp)
     do it = 1, MAX_NEWTON
-      call this%residual(model, q, r, jacobian=.not. stale)
+      ! Sparse: the Jacobian's values go into the matrix while KLU's stale factors stay
+      ! usable, so where the predictor has already converged this element pass is the only
+      ! one. Dense factors overwrite the matrix: there the stale pass skips the Jacobian.
+      call this%residual(model, q, r, jacobian=this%sparse .or. .not. stale)
       rmax = 0.0_wp
       if (model%n_c > 0) rmax = maxval(abs(r))
       if (rmax /= rmax) exit
@@ -233,7 +237,7 @@ contains
           this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
           cycle
         end if
-        call this%residual(model, q, r, jacobian=.true.)
+        if (.not. this%sparse) call this%residual(model, q, r, jacobian=.true.)
       end if
       call factor_jacobian(this, info, worst)
       if (info /= 0) then
@@ -371,16 +375,28 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: dq(:)
     real(wp), intent(out) :: dx(:)
-    real(wp) :: b(model%n_c, 1)
+    real(wp) :: dx2(size(dx), 1)
+    call this%apply_df_many(model, reshape(dq, [size(dq), 1]), dx2)
+    dx = dx2(:, 1)
+  end subroutine kin_apply_df
+
+  !> dx = DF_x dq for several columns (n_q, k) -> (n_x, k), by one solve with k right-hand
+  !> sides (KLU takes them together, cheaper than k solves).
+  subroutine kin_apply_df_many(this, model, dq, dx)
+    class(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: dq(:, :)
+    real(wp), intent(out) :: dx(:, :)
+    real(wp) :: b(model%n_c, size(dq, 2))
     integer :: iq
-    call transfer_rhs(this, model, reshape(dq, [size(dq), 1]), b)
+    call transfer_rhs(this, model, dq, b)
     call this%jacobian_solve(b)
     dx = 0.0_wp
-    dx(model%calc_coord) = b(:, 1)
+    dx(model%calc_coord, :) = b
     do iq = 1, model%n_q
-      if (model%q_coord(iq) > 0) dx(model%q_coord(iq)) = dq(iq)
+      if (model%q_coord(iq) > 0) dx(model%q_coord(iq), :) = dq(iq, :)
     end do
-  end subroutine kin_apply_df
+  end subroutine kin_apply_df_many
 
   !> g_q = DF_x^T g (n_q) for nodal forces g (n_x), by one transposed solve.
   subroutine kin_apply_dft(this, model, g, g_q)
@@ -426,35 +442,41 @@ contains
     this%has_df = .true.
   end subroutine kin_transfer
 
-  !> Second-order transfer function contracted twice with qd: D2F_x qd qd (n_x).
+  !> Second-order transfer function contracted twice with qd: D2F_x qd qd (n_x), plus
+  !> DF_x qdd when qdd is given (the prescribed accelerations: one solve for both).
   !> With x_dot = DF qd (given as xd when known), J_c (D2F qd qd) = -D2D(x_dot, x_dot) over
   !> the kinematic rows.
-  subroutine kin_second(this, model, qd, d2x, xd_known)
+  subroutine kin_second(this, model, qd, d2x, xd_known, qdd)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: qd(:)
     real(wp), intent(out) :: d2x(:)
-    real(wp), intent(in), optional :: xd_known(:)
+    real(wp), intent(in), optional :: xd_known(:), qdd(:)
     real(wp) :: rhs(model%n_c, 1), xd(model%n_x), d2e_work(model%max_modes)
-    integer :: iel, j, row, nm
+    integer :: iel, j, row, nm, iq
     if (present(xd_known)) then
       xd = xd_known
     else
       call this%apply_df(model, qd, xd)
     end if
     rhs = 0.0_wp
+    if (present(qdd)) call transfer_rhs(this, model, reshape(qdd, [size(qdd), 1]), rhs)
     do iel = 1, model%n_elements
       nm = model%elements(iel)%e%n_modes()
       associate (el => model%elements(iel)%e, d2e => d2e_work(1:nm))
         call el%second(this%x(el%dofs), xd(el%dofs), d2e)
         do j = 1, size(d2e)
           row = model%modes(model%mode_first(iel) + j - 1)%row
-          if (row > 0) rhs(row, 1) = -d2e(j)
+          if (row > 0) rhs(row, 1) = rhs(row, 1) - d2e(j)
         end do
       end associate
     end do
     call this%jacobian_solve(rhs)
     d2x = 0.0_wp
     d2x(model%calc_coord) = rhs(:, 1)
+    if (.not. present(qdd)) return
+    do iq = 1, model%n_q
+      if (model%q_coord(iq) > 0) d2x(model%q_coord(iq)) = qdd(iq)
+    end do
   end subroutine kin_second
 end module model_kinematics

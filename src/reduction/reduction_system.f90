@@ -65,19 +65,17 @@ contains
     this%estimate = 0.0_wp
   end subroutine red_allocate_history
 
-  !> Nodal shapes of the basis at the last evaluation, W = DF_dy V (n_x, k): k solves with
-  !> the factors of the kinematic Jacobian, no dense DF.
+  !> Nodal shapes of the basis at the last evaluation, W = DF_dy V (n_x, k): one solve with
+  !> k right-hand sides and the factors of the kinematic Jacobian, no dense DF.
   subroutine basis_shapes(this, w)
     class(reduced_t), intent(inout) :: this
     real(wp), intent(out) :: w(:, :)
-    real(wp) :: dq(this%dyn%model%n_q)
-    integer :: j, nr
+    real(wp) :: dq(this%dyn%model%n_q, size(w, 2))
+    integer :: nr
     nr = this%dyn%model%n_rh
-    do j = 1, size(w, 2)
-      dq = 0.0_wp
-      dq(nr + 1:) = this%basis%v(:, j)
-      call this%dyn%kin%apply_df(this%dyn%model, dq, w(:, j))
-    end do
+    dq(1:nr, :) = 0.0_wp
+    dq(nr + 1:, :) = this%basis%v
+    call this%dyn%kin%apply_df_many(this%dyn%model, dq, w)
   end subroutine basis_shapes
 
   !> Reduced accelerations from (W^T M W) eta'' = W^T f - V^T sigma_dy, with W = DF_dy V:
