@@ -12,7 +12,10 @@
 !>   - consistent mass at the undeformed state = textbook, lumped option;
 !>   - convective term h(x, xd) against h_i = sum_jk (dM_ij/dx_k - 1/2 dM_jk/dx_i) xd_j xd_k
 !>     with FD of M at deformed states (this validates the inertia coupling);
-!>   - weight f = -d potential / dx by FD.
+!>   - weight f = -d potential / dx by FD;
+!>   - the beam's closed-form mass, convective force and weight against the direct Gauss-point
+!>     quadrature of its material points, and e against the closed-form definitions, on random
+!>     states with nodal angles many turns away from the chord angle.
 !> Achieved relative errors are printed with every check and summarised at the end.
 program test_elements
   use core_kinds, only: wp
@@ -28,14 +31,14 @@ program test_elements
 
   ! Categories of achieved errors (worst over all checks), reported at the end.
   integer, parameter :: C_E = 1, C_DE = 2, C_D2FD = 3, C_D2H = 4, C_POL = 5, C_INV = 6, &
-    C_K = 7, C_KG = 8, C_M = 9, C_H = 10, C_W = 11, C_OBJ = 12, N_CAT = 12
+    C_K = 7, C_KG = 8, C_M = 9, C_H = 10, C_W = 11, C_OBJ = 12, C_GAUSS = 13, N_CAT = 13
   character(len=44), parameter :: CAT_NAME(N_CAT) = [character(len=44) :: &
     'e vs closed form', 'de vs central FD of e', &
     'second vs 5-point FD d2/ds2 e(x+sv)', 'second vs v^T (FD Hessian) v', &
     'Hessian by polarisation vs FD Hessian', 'rigid-body invariance of e', &
     'de^T S de vs textbook stiffness', 'P Hess(e1_bar) vs textbook Kg', &
     'consistent mass vs textbook', 'h vs Lagrange FD of M', 'weight vs -FD of potential', &
-    'frame invariance of M and h']
+    'frame invariance of M and h', 'beam M, h, weight vs Gauss-point quadrature']
   real(wp) :: worst(N_CAT) = 0.0_wp
   type(lcg_t) :: rng = lcg_t(seed=20240611)
   type(suite_t) :: ts
@@ -45,6 +48,8 @@ program test_elements
 
   call beam_tests(BENDING_ANGLE, 'angle')
   call beam_tests(BENDING_SINE, 'sine')
+  call beam_closed_forms(BENDING_ANGLE, 'angle')
+  call beam_closed_forms(BENDING_SINE, 'sine')
   call beam_linear_limit()
   call beam_lumped()
   call truss_tests()
@@ -412,6 +417,101 @@ contains
         0.0_wp], 1.0_wp), 1.0e-14_wp, C_INV)
     end do
   end subroutine beam_tests
+
+  !> Direct 4-point Gauss quadrature over the beam's material points r(xi) = x_p + xi lv
+  !> + c perp(lv), c = (H2 e2 - H4 e3) / l0: m = rhoA l0 sum w J^T J, h = rhoA l0 sum w J^T
+  !> d2r, f = rhoA l0 sum w J^T g, V = -rhoA l0 sum w g . r, with J = dr/dx formed point by
+  !> point. The element evaluates these sums in closed form.
+  subroutine beam_gauss_reference(b, x, xd, g, m, h, f, pot)
+    type(beam_t), intent(in) :: b
+    real(wp), intent(in) :: x(6), xd(6), g(2)
+    real(wp), intent(out) :: m(6, 6), h(6), f(6), pot
+    real(wp) :: xi(4), w(4), e(3), de(3, 6), d2e(3), lv(2), dlv(2), u(2), jac(2, 6), dc(6)
+    real(wp) :: c, d2c, d2r(2), r(2), h2, h4, s, t
+    integer :: i, k
+    ! Gauss-Legendre nodes and weights on [0, 1] from their closed forms.
+    s = sqrt(3.0_wp / 7 - 2.0_wp / 7 * sqrt(6.0_wp / 5))
+    t = sqrt(3.0_wp / 7 + 2.0_wp / 7 * sqrt(6.0_wp / 5))
+    xi = [(1 - t) / 2, (1 - s) / 2, (1 + s) / 2, (1 + t) / 2]
+    w = [18 - sqrt(30.0_wp), 18 + sqrt(30.0_wp), 18 + sqrt(30.0_wp), 18 - sqrt(30.0_wp)] / 72
+    call b%evaluate(x, e, de)
+    call b%second(x, xd, d2e)
+    lv = x(4:5) - x(1:2)
+    dlv = xd(4:5) - xd(1:2)
+    u = [-lv(2), lv(1)]
+    m = 0.0_wp; h = 0.0_wp; f = 0.0_wp; pot = 0.0_wp
+    do i = 1, 4
+      h2 = xi(i) - 2 * xi(i)**2 + xi(i)**3
+      h4 = xi(i)**3 - xi(i)**2
+      c = (h2 * e(2) - h4 * e(3)) / b%l0
+      dc = (h2 * de(2, :) - h4 * de(3, :)) / b%l0
+      d2c = (h2 * d2e(2) - h4 * d2e(3)) / b%l0
+      r = x(1:2) + xi(i) * lv + c * u
+      jac = 0.0_wp
+      jac(:, 1) = [1 - xi(i), -c]
+      jac(:, 2) = [c, 1 - xi(i)]
+      jac(:, 4) = [xi(i), c]
+      jac(:, 5) = [-c, xi(i)]
+      do k = 1, 6
+        jac(:, k) = jac(:, k) + u * dc(k)
+      end do
+      d2r = d2c * u + 2 * dot_product(dc, xd) * [-dlv(2), dlv(1)]
+      m = m + w(i) * matmul(transpose(jac), jac)
+      h = h + w(i) * matmul(transpose(jac), d2r)
+      f = f + w(i) * matmul(g, jac)
+      pot = pot - w(i) * dot_product(g, r)
+    end do
+    m = b%rho_a * b%l0 * m
+    h = b%rho_a * b%l0 * h
+    f = b%rho_a * b%l0 * f
+    pot = b%rho_a * b%l0 * pot
+  end subroutine beam_gauss_reference
+
+  !> Closed forms of the beam against their definitions on random states: e against
+  !> beam_expected with nodal angles up to 20 turns off and tangent rotations close to +-pi
+  !> (the wrap into (-pi, pi]), mass, convective force and weight against the Gauss-point
+  !> quadrature.
+  subroutine beam_closed_forms(form, fname)
+    integer, intent(in) :: form
+    character(len=*), intent(in) :: fname
+    type(beam_t) :: b
+    real(wp) :: c(6), x(6), xd(6), g(2), m(6, 6), h(6), f(6), pot, mr(6, 6), hr(6), fr(6)
+    real(wp) :: potr, scale, err(5), e(3), de(3, 6)
+    integer :: k, turns(2)
+    character(len=48) :: what
+    err = 0.0_wp
+    do k = 1, 200
+      b = make_beam(form, rng%uniform(-PI, PI), [rng%uniform(-PI, PI), rng%uniform(-PI, PI)], &
+        rng%uniform(0.01_wp, 2.0_wp))
+      b%shear_p = 0.4_wp
+      c = [rng%uniform(-2.0_wp, 2.0_wp), rng%uniform(-2.0_wp, 2.0_wp), rng%uniform(-PI, PI), &
+           rng%uniform(0.9_wp, 1.1_wp), rng%uniform(-3.1_wp, 3.1_wp), rng%uniform(-3.1_wp, 3.1_wp)]
+      ! Every other state with bending as small as on a fine mesh.
+      if (mod(k, 2) == 0) c(5:6) = 1.0e-3_wp * c(5:6)
+      x = beam_config(b, c(1:2), c(3), c(4) * b%l0, c(5), c(6))
+      turns = nint([rng%uniform(-20.0_wp, 20.0_wp), rng%uniform(-20.0_wp, 20.0_wp)])
+      x(3:6:3) = x(3:6:3) + 2 * PI * turns
+      xd = rng%uniform_vec(6, -2.0_wp, 2.0_wp)
+      g = [rng%uniform(-1.0_wp, 1.0_wp), -9.81_wp]
+      call b%evaluate(x, e, de)
+      ! Rounding x(3), x(6) at up to 130 rad costs ~3e-14 rad: compare e with the floor l0.
+      err(1) = max(err(1), relerr(e, beam_expected(b, c(4) * b%l0, c(5), c(6)), b%l0))
+      call b%inertia(x, xd, m, h)
+      call b%weight(x, g, f, pot)
+      call beam_gauss_reference(b, x, xd, g, mr, hr, fr, potr)
+      scale = b%rho_a * b%l0
+      err(2) = max(err(2), relerr(flat(m), flat(mr), scale))
+      err(3) = max(err(3), relerr(h, hr, scale * dot_product(xd, xd)))
+      err(4) = max(err(4), relerr(f, fr, scale * norm2(g)))
+      err(5) = max(err(5), relerr([pot], [potr], scale * norm2(g) * (norm2(x(1:2)) + b%l0)))
+    end do
+    what = 'beam/' // fname // ' 200 random states:'
+    call expect(trim(what) // ' e vs closed form, many turns', err(1), 1.0e-12_wp, C_E)
+    call expect(trim(what) // ' M vs Gauss quadrature', err(2), 1.0e-13_wp, C_GAUSS)
+    call expect(trim(what) // ' h vs Gauss quadrature', err(3), 1.0e-13_wp, C_GAUSS)
+    call expect(trim(what) // ' weight vs Gauss quadrature', err(4), 1.0e-13_wp, C_GAUSS)
+    call expect(trim(what) // ' potential vs Gauss quadrature', err(5), 1.0e-13_wp, C_GAUSS)
+  end subroutine beam_closed_forms
 
   !> Textbook Euler-Bernoulli (phi = 0) or Timoshenko local stiffness on (u1,v1,th1,u2,v2,th2).
   function textbook_beam_k(ea, ei, l, p) result(k)

@@ -20,6 +20,30 @@ module elements_beam
                                          0.6699905217924281_wp, 0.9305681557970263_wp]
   real(wp), parameter :: GAUSS_W(4) = [0.1739274225687269_wp, 0.3260725774312731_wp, &
                                         0.3260725774312731_wp, 0.1739274225687269_wp]
+  !> Hermite bending shapes H2, H4 at the Gauss points (docs/theory.md 2.1, consistent mass).
+  real(wp), parameter :: GAUSS_H2(4) = GAUSS_XI - 2 * GAUSS_XI**2 + GAUSS_XI**3
+  real(wp), parameter :: GAUSS_H4(4) = GAUSS_XI**3 - GAUSS_XI**2
+  !> Quadrature moments sum_i w_i f(xi_i). The material point is affine in c(xi) and its
+  !> gradient, so mass, convective force and weight are sums of these configuration-independent
+  !> moments times products of e, de, d2e, lv and dlv: closed forms, no Gauss-point loop.
+  real(wp), parameter :: M_1 = sum(GAUSS_W), M_X = sum(GAUSS_W * GAUSS_XI)
+  real(wp), parameter :: M_P = sum(GAUSS_W * (1 - GAUSS_XI))
+  real(wp), parameter :: M_PP = sum(GAUSS_W * (1 - GAUSS_XI)**2)
+  real(wp), parameter :: M_PX = sum(GAUSS_W * (1 - GAUSS_XI) * GAUSS_XI)
+  real(wp), parameter :: M_XX = sum(GAUSS_W * GAUSS_XI**2)
+  real(wp), parameter :: M_2 = sum(GAUSS_W * GAUSS_H2), M_4 = sum(GAUSS_W * GAUSS_H4)
+  real(wp), parameter :: M_P2 = sum(GAUSS_W * (1 - GAUSS_XI) * GAUSS_H2)
+  real(wp), parameter :: M_P4 = sum(GAUSS_W * (1 - GAUSS_XI) * GAUSS_H4)
+  real(wp), parameter :: M_X2 = sum(GAUSS_W * GAUSS_XI * GAUSS_H2)
+  real(wp), parameter :: M_X4 = sum(GAUSS_W * GAUSS_XI * GAUSS_H4)
+  real(wp), parameter :: M_22 = sum(GAUSS_W * GAUSS_H2**2)
+  real(wp), parameter :: M_24 = sum(GAUSS_W * GAUSS_H2 * GAUSS_H4)
+  real(wp), parameter :: M_44 = sum(GAUSS_W * GAUSS_H4**2)
+
+  real(wp), parameter :: PI = 3.14159265358979323846_wp, TWO_PI = 2 * PI
+  !> 2 pi split so that n * TWO_PI_HI is exact for |n| < 2**22 (Cody-Waite reduction).
+  real(wp), parameter :: TWO_PI_HI = 6.28318530693650245668_wp
+  real(wp), parameter :: TWO_PI_LO = 2.430840202602476899728e-10_wp
 
   type, extends(element_t) :: beam_t
     real(wp) :: l0 = 1.0_wp          !< undeformed length [m]
@@ -47,22 +71,42 @@ module elements_beam
 
 contains
 
+  !> One atan2 for the chord angle beta instead of one atan2 and one sincos per node: theta_k
+  !> = a_k - beta, a_k = alpha0 + phi_k - phi_k0, wrapped into (-pi, pi] as atan2 did.
   pure function chord(this, x) result(c)
     class(beam_t), intent(in) :: this
-    real(wp), intent(in) :: x(6)
+    real(wp), intent(in) :: x(:)
     type(chord_t) :: c
-    real(wp) :: a, t(2)
+    real(wp) :: beta
     integer :: k
     c%lv = x(4:5) - x(1:2)
-    c%l = norm2(c%lv)
+    ! Element lengths are far from overflow: no need for norm2's scaling.
+    c%l = sqrt(c%lv(1)**2 + c%lv(2)**2)
     c%el = c%lv / c%l
-    c%nl = [-c%el(2), c%el(1)]
+    c%nl(1) = -c%el(2)
+    c%nl(2) = c%el(1)
+    beta = atan2(c%lv(2), c%lv(1))
     do k = 1, 2
-      a = this%alpha0 + x(3 * k) - this%phi0(k)
-      t = [cos(a), sin(a)]
-      c%theta(k) = atan2(c%el(1) * t(2) - c%el(2) * t(1), dot_product(c%el, t))
+      ! Reducing a_k before subtracting beta keeps the rounding at the size of theta, not of a_k.
+      c%theta(k) = wrap_angle(wrap_angle(this%alpha0 + x(3 * k) - this%phi0(k)) - beta)
     end do
   end function chord
+
+  !> a modulo 2 pi in (-pi, pi]. Nodal angles may have turned many times: the split 2 pi keeps
+  !> the reduction exact, so theta is as accurate as with the former sin/cos + atan2.
+  pure real(wp) function wrap_angle(a) result(r)
+    real(wp), intent(in) :: a
+    real(wp) :: n
+    r = a
+    if (abs(r) <= PI) return
+    n = anint(r / TWO_PI)
+    r = (r - n * TWO_PI_HI) - n * TWO_PI_LO
+    if (r > PI) then
+      r = r - TWO_PI
+    else if (r <= -PI) then
+      r = r + TWO_PI
+    end if
+  end function wrap_angle
 
   !> Bending measure g(theta) and its first two derivatives for the chosen form.
   pure subroutine bend_measure(this, theta, g, g1, g2)
@@ -80,24 +124,44 @@ contains
     class(beam_t), intent(in) :: this
     real(wp), intent(in) :: x(:)
     real(wp), intent(out) :: e(:), de(:, :)
-    type(chord_t) :: c
-    real(wp) :: g(2), g1(2), g2(2), dtheta(6, 2)
-    integer :: k
-    c = chord(this, x)
+    call modes(this, chord(this, x), e, de)
+  end subroutine beam_evaluate
+
+  !> e and de from the chord, shared by evaluate, inertia and weight.
+  pure subroutine modes(this, c, e, de)
+    class(beam_t), intent(in) :: this
+    type(chord_t), intent(in) :: c
+    real(wp), intent(out) :: e(:), de(:, :)
+    real(wp) :: g(2), g1(2), g2(2), nb(2), s2, s3, a2, a3
+    integer :: k, j
     do k = 1, 2
       call bend_measure(this, c%theta(k), g(k), g1(k), g2(k))
-      ! theta_k = alpha0 + phi_k - phi_k0 - beta(chord); d beta / d x_q = nl / l
-      dtheta(:, k) = [c%nl / c%l, 0.0_wp, -c%nl / c%l, 0.0_wp]
-      dtheta(3 * k, k) = 1.0_wp
     end do
+    ! theta_k = alpha0 + phi_k - phi_k0 - beta(chord); d beta / d x_q = nl / l
+    nb = c%nl / c%l
+    s2 = this%l0 * g1(1)
+    s3 = -this%l0 * g1(2)
     e(2) = this%l0 * g(1)
     e(3) = -this%l0 * g(2)
-    de(2, :) = this%l0 * g1(1) * dtheta(:, 1)
-    de(3, :) = -this%l0 * g1(2) * dtheta(:, 2)
+    ! Element-wise: array constructors into the assumed-shape de cost a temporary each.
+    do j = 1, 2
+      de(1, j) = -c%el(j)
+      de(1, j + 3) = c%el(j)
+      de(2, j) = s2 * nb(j)
+      de(2, j + 3) = -s2 * nb(j)
+      de(3, j) = s3 * nb(j)
+      de(3, j + 3) = -s3 * nb(j)
+    end do
+    de(1, 3) = 0.0_wp; de(1, 6) = 0.0_wp
+    de(2, 3) = s2; de(2, 6) = 0.0_wp
+    de(3, 3) = 0.0_wp; de(3, 6) = s3
     e(1) = c%l - this%l0 + arc_term(this, e(2), e(3))
-    de(1, :) = [-c%el, 0.0_wp, c%el, 0.0_wp] &
-      + ((4 * e(2) + e(3)) * de(2, :) + (e(2) + 4 * e(3)) * de(3, :)) / (30 * this%l0)
-  end subroutine beam_evaluate
+    a2 = (4 * e(2) + e(3)) / (30 * this%l0)
+    a3 = (e(2) + 4 * e(3)) / (30 * this%l0)
+    do j = 1, 6
+      de(1, j) = de(1, j) + a2 * de(2, j) + a3 * de(3, j)
+    end do
+  end subroutine modes
 
   pure real(wp) function arc_term(this, e2, e3)
     class(beam_t), intent(in) :: this
@@ -109,10 +173,17 @@ contains
     class(beam_t), intent(in) :: this
     real(wp), intent(in) :: x(:), v(:)
     real(wp), intent(out) :: d2e(:)
-    type(chord_t) :: c
+    call second_modes(this, chord(this, x), v, d2e)
+  end subroutine beam_second
+
+  !> d2e along v from the chord, shared by second and inertia.
+  pure subroutine second_modes(this, c, v, d2e)
+    class(beam_t), intent(in) :: this
+    type(chord_t), intent(in) :: c
+    real(wp), intent(in) :: v(:)
+    real(wp), intent(out) :: d2e(:)
     real(wp) :: dv(2), a, b, d2beta, g, g1, g2, dth, de(3), e(3)
     integer :: k
-    c = chord(this, x)
     dv = v(4:5) - v(1:2)
     a = dot_product(c%el, dv)
     b = dot_product(c%nl, dv)
@@ -128,7 +199,7 @@ contains
     d2e(1) = (dot_product(dv, dv) - a**2) / c%l &
       + ((4 * e(2) + e(3)) * d2e(2) + (e(2) + 4 * e(3)) * d2e(3) &
          + 4 * de(2)**2 + 2 * de(2) * de(3) + 4 * de(3)**2) / (30 * this%l0)
-  end subroutine beam_second
+  end subroutine second_modes
 
   pure subroutine beam_stiffness(this, s)
     class(beam_t), intent(in) :: this
@@ -159,80 +230,128 @@ contains
     diag([3, 6]) = this%rho_a * this%l0**3 / 24
   end subroutine beam_lumped_mass
 
-  !> Material point r(xi) = x_p + xi lv + c perp(lv), c = (H2 e2 - H4 e3) / l0 (cubic Hermite
-  !> bending shape scaled with the current chord). Returns r, dr/dx (2, 6), and the gradient
-  !> of c, needed for the second derivative.
-  pure subroutine material_point(this, x, e, de, xi, r, jac, dc, cval)
-    class(beam_t), intent(in) :: this
-    real(wp), intent(in) :: x(6), e(3), de(3, 6), xi
-    real(wp), intent(out) :: r(2), jac(2, 6), dc(6), cval
-    real(wp) :: h2, h4, lv(2)
-    h2 = xi - 2 * xi**2 + xi**3
-    h4 = xi**3 - xi**2
-    cval = (h2 * e(2) - h4 * e(3)) / this%l0
-    dc = (h2 * de(2, :) - h4 * de(3, :)) / this%l0
-    lv = x(4:5) - x(1:2)
-    r = x(1:2) + xi * lv + cval * perp(lv)
-    jac(:, 1) = [1 - xi, -cval]
-    jac(:, 2) = [cval, 1 - xi]
-    jac(:, 3) = 0.0_wp
-    jac(:, 4) = [xi, cval]
-    jac(:, 5) = [-cval, xi]
-    jac(:, 6) = 0.0_wp
-    jac = jac + spread(perp(lv), 2, 6) * spread(dc, 1, 2)
-  end subroutine material_point
-
-  pure function perp(a) result(p)
-    real(wp), intent(in) :: a(2)
-    real(wp) :: p(2)
-    p = [-a(2), a(1)]
-  end function perp
-
+  !> Mass matrix and convective force of the material point r(xi) = x_p + xi lv + c u, with
+  !> u = perp(lv) and c = (H2 e2 - H4 e3) / l0 (cubic Hermite bending shape scaled with the
+  !> current chord). Its Jacobian is J = A(xi, c) + u dc^T with the 2x2 blocks
+  !> A_p = (1 - xi) I - c P, A_q = xi I + c P (P = perp), so that
+  !>   J^T J = A^T A + A^T u dc^T + dc u^T A + |lv|^2 dc dc^T,
+  !> A_p^T A_p = ((1 - xi)^2 + c^2) I, A_p^T A_q = ((1 - xi) xi - c^2) I + c P,
+  !> A_q^T A_q = (xi^2 + c^2) I, A_p^T u = (1 - xi) u - c lv, A_q^T u = xi u + c lv.
+  !> c, dc, d2c are linear in (H2, H4): every Gauss sum is a moment M_* times mode quantities.
   pure subroutine beam_inertia(this, x, xd, m, h)
     class(beam_t), intent(in) :: this
     real(wp), intent(in) :: x(:), xd(:)
     real(wp), intent(out) :: m(:, :), h(:)
-    real(wp) :: r(2), jac(2, 6), dc(6), cval, d2e(3), d2c, d2r(2), h2, h4, dlv(2), lv(2)
-    real(wp) :: e(3), de(3, 6)
-    integer :: i
-    m = 0.0_wp
-    h = 0.0_wp
-    if (.not. this%has_inertia()) return
-    call this%evaluate(x, e, de)
-    call this%second(x, xd, d2e)
-    lv = x(4:5) - x(1:2)
-    dlv = xd(4:5) - xd(1:2)
-    do i = 1, size(GAUSS_XI)
-      call material_point(this, x, e, de, GAUSS_XI(i), r, jac, dc, cval)
-      h2 = GAUSS_XI(i) - 2 * GAUSS_XI(i)**2 + GAUSS_XI(i)**3
-      h4 = GAUSS_XI(i)**3 - GAUSS_XI(i)**2
-      d2c = (h2 * d2e(2) - h4 * d2e(3)) / this%l0
-      d2r = d2c * perp(lv) + 2 * dot_product(dc, xd) * perp(dlv)
-      m = m + GAUSS_W(i) * matmul(transpose(jac), jac)
-      h = h + GAUSS_W(i) * matmul(transpose(jac), d2r)
+    type(chord_t) :: c
+    real(wp) :: e(3), de(3, 6), d2e(3), d2(6), d3(6), e2, e3, f2, f3, v2, v3
+    real(wp) :: u(2), pd(2), ll, sc, scc, k2, k4, s2, s4, rho_l
+    real(wp) :: gp(6), gq(6), gc(6), q2(6), q3(6), bm(6, 6), r2(2), r4(2), rp(2), rq(2), rc(2)
+    integer :: i, j
+    if (.not. this%has_inertia()) then
+      m = 0.0_wp
+      h = 0.0_wp
+      return
+    end if
+    c = chord(this, x)
+    call modes(this, c, e, de)
+    call second_modes(this, c, xd, d2e)
+    ! c(xi) = H2 e2 - H4 e3 etc. with the 1 / l0 of c folded in.
+    e2 = e(2) / this%l0; e3 = e(3) / this%l0
+    d2 = de(2, :) / this%l0; d3 = de(3, :) / this%l0
+    f2 = d2e(2) / this%l0; f3 = d2e(3) / this%l0
+    u = perp(c%lv)
+    pd(1) = xd(2) - xd(5)
+    pd(2) = xd(4) - xd(1)
+    ll = dot_product(c%lv, c%lv)
+    ! sum w c, sum w c^2 and sum w c H2, sum w c H4 (k2, k4)
+    sc = e2 * M_2 - e3 * M_4
+    k2 = e2 * M_22 - e3 * M_24
+    k4 = e2 * M_24 - e3 * M_44
+    scc = e2 * k2 - e3 * k4
+    ! sum w (1 - xi) dc, sum w xi dc, sum w c dc, and the rows of |lv|^2 sum w dc dc^T
+    gp = M_P2 * d2 - M_P4 * d3
+    gq = M_X2 * d2 - M_X4 * d3
+    gc = k2 * d2 - k4 * d3
+    q2 = ll * (M_22 * d2 - M_24 * d3)
+    q3 = ll * (M_44 * d3 - M_24 * d2)
+    ! B = sum w A^T u dc^T; its rows 3 and 6 vanish (A has no rotation columns).
+    do j = 1, 6
+      bm(1:2, j) = u * gp(j) - c%lv * gc(j)
+      bm(3, j) = 0.0_wp
+      bm(4:5, j) = u * gq(j) + c%lv * gc(j)
+      bm(6, j) = 0.0_wp
     end do
-    m = this%rho_a * this%l0 * m
-    h = this%rho_a * this%l0 * h
+    rho_l = this%rho_a * this%l0
+    do j = 1, 6
+      do i = 1, j
+        m(i, j) = bm(i, j) + bm(j, i) + d2(i) * q2(j) + d3(i) * q3(j)
+      end do
+    end do
+    m(1, 1) = m(1, 1) + (M_PP + scc)
+    m(2, 2) = m(2, 2) + (M_PP + scc)
+    m(4, 4) = m(4, 4) + (M_XX + scc)
+    m(5, 5) = m(5, 5) + (M_XX + scc)
+    m(1, 4) = m(1, 4) + (M_PX - scc)
+    m(2, 5) = m(2, 5) + (M_PX - scc)
+    m(1, 5) = m(1, 5) - sc
+    m(2, 4) = m(2, 4) + sc
+    do j = 1, 6
+      do i = 1, j
+        m(i, j) = rho_l * m(i, j)
+        m(j, i) = m(i, j)
+      end do
+    end do
+    ! d2r(xi) = d2c u + 2 (dc . xd) perp(dlv) = H2 r2 - H4 r4, pd = perp(dlv)
+    v2 = dot_product(d2, xd)
+    v3 = dot_product(d3, xd)
+    r2 = f2 * u + 2 * v2 * pd
+    r4 = f3 * u + 2 * v3 * pd
+    ! h = sum w (A^T d2r + dc (u . d2r)): sums of (1 - xi) d2r, xi d2r, c d2r, then the dc part
+    rp = M_P2 * r2 - M_P4 * r4
+    rq = M_X2 * r2 - M_X4 * r4
+    rc = k2 * r2 - k4 * r4
+    s2 = dot_product(u, r2)
+    s4 = dot_product(u, r4)
+    h(1:2) = rp + perp(rc)
+    h(3) = 0.0_wp
+    h(4:5) = rq - perp(rc)
+    h(6) = 0.0_wp
+    h = rho_l * (h + (M_22 * s2 - M_24 * s4) * d2 - (M_24 * s2 - M_44 * s4) * d3)
   end subroutine beam_inertia
 
+  pure function perp(a) result(p)
+    real(wp), intent(in) :: a(2)
+    real(wp) :: p(2)
+    p(1) = -a(2)
+    p(2) = a(1)
+  end function perp
+
+  !> Gravity on the material points of beam_inertia: f = sum w J^T g, V = -sum w g . r.
   pure subroutine beam_weight(this, x, g, f, potential)
     class(beam_t), intent(in) :: this
     real(wp), intent(in) :: x(:), g(2)
     real(wp), intent(out) :: f(:), potential
-    real(wp) :: r(2), jac(2, 6), dc(6), cval, e(3), de(3, 6)
-    integer :: i
+    type(chord_t) :: c
+    real(wp) :: e(3), de(3, 6), sc, u(2), pg(2), gu, rho_l
     f = 0.0_wp
     potential = 0.0_wp
     if (.not. this%has_inertia()) return
-    call this%evaluate(x, e, de)
-    do i = 1, size(GAUSS_XI)
-      call material_point(this, x, e, de, GAUSS_XI(i), r, jac, dc, cval)
-      f = f + GAUSS_W(i) * matmul(g, jac)
-      potential = potential - GAUSS_W(i) * dot_product(g, r)
-    end do
-    f = this%rho_a * this%l0 * f
-    potential = this%rho_a * this%l0 * potential
+    c = chord(this, x)
+    call modes(this, c, e, de)
+    sc = (e(2) * M_2 - e(3) * M_4) / this%l0
+    u = perp(c%lv)
+    pg = perp(g)
+    gu = dot_product(g, u)
+    rho_l = this%rho_a * this%l0
+    f(1:2) = M_P * g + sc * pg
+    f(3) = 0.0_wp
+    f(4:5) = M_X * g - sc * pg
+    f(6) = 0.0_wp
+    f = rho_l * (f + gu * (M_2 * de(2, :) - M_4 * de(3, :)) / this%l0)
+    potential = -rho_l * (M_1 * dot_product(g, x(1:2)) + M_X * dot_product(g, c%lv) &
+      + sc * gu)
   end subroutine beam_weight
+
   pure function beam_type_name() result(name)
     character(len=:), allocatable :: name
     name = 'beam'
