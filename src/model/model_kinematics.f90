@@ -246,12 +246,13 @@ contains
         return
       end if
       dx(:, 1) = -r
-      call this%jacobian_solve(dx)
+      if (rmax > model%newton_tol .or. model%n_elastic > 0) call this%jacobian_solve(dx)
       if (rmax <= model%newton_tol) then
-        ! One more correction with these factors takes the error from rmax to about rmax^2:
-        ! the stress of a stiff elastic mode is EA/l0 times its error, and statics
-        ! differences such stresses.
-        this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
+        ! With elastic modes, one more correction with these factors takes the error from
+        ! rmax to about rmax^2: the stress of a stiff elastic mode is EA/l0 times its error,
+        ! and statics differences such stresses. Without them rmax is all the accuracy x
+        ! needs, and the factors then belong to x exactly.
+        if (model%n_elastic > 0) this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
         this%q = q
         this%has_factors = .true.
         this%n_iterations = this%n_iterations + it - 1
