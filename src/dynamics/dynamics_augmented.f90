@@ -35,6 +35,10 @@ module dynamics_augmented
     !> Element Jacobians dD/dx of the last factorisation, flat (offset per element)
     integer, allocatable :: de_offset(:)
     real(wp), allocatable :: de_val(:)
+    !> The dynamic modes as a flat list (no class tests or element calls in the projections):
+    !> q_dy index, element, and position of its row of dD/dx in de_val with the stride
+    !> (n_modes) between its entries.
+    integer, allocatable :: dyn_q(:), dyn_el(:), dyn_de(:), dyn_stride(:)
     type(sparse_lu_t) :: lu
     !> The iteration matrix of implicit integrators in the same form, M replaced by
     !> M + D_x^T (c_q S + c_v S_d) D_x over the stressed modes (see aug_factor_newton).
@@ -156,10 +160,31 @@ contains
         end do
       end associate
     end do
+    call list_dynamic_modes(this, model)
     call this%lu%setup(n, mass_pattern%rows(1:mass_pattern%n), mass_pattern%cols(1:mass_pattern%n))
     call this%newton%setup(n, newton_pattern%rows(1:newton_pattern%n), &
       newton_pattern%cols(1:newton_pattern%n))
   end subroutine aug_init
+
+  subroutine list_dynamic_modes(this, model)
+    type(augmented_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    integer :: iel, j, m, n
+    n = count(model%modes%class == MODE_DYNAMIC)
+    allocate(this%dyn_q(n), this%dyn_el(n), this%dyn_de(n), this%dyn_stride(n))
+    n = 0
+    do iel = 1, model%n_elements
+      do j = 1, model%elements(iel)%e%n_modes()
+        m = model%mode_first(iel) + j - 1
+        if (model%modes(m)%class /= MODE_DYNAMIC) cycle
+        n = n + 1
+        this%dyn_q(n) = model%modes(m)%q - model%n_rh
+        this%dyn_el(n) = iel
+        this%dyn_de(n) = this%de_offset(iel) + j - 1
+        this%dyn_stride(n) = model%elements(iel)%e%n_modes()
+      end do
+    end do
+  end subroutine list_dynamic_modes
 
   !> Assemble the matrix from the element Jacobians de_val (flat, as kept by the kinematics
   !> at its last factorisation: same layout as this%de_val) and mass blocks, and factor it.
@@ -297,18 +322,13 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: g(:, :)
     real(wp) :: f(model%n_x, size(g, 2))
-    real(wp), allocatable :: de(:, :)
-    integer :: iel, j, k, iq
+    integer :: d, k, iq
     f = 0.0_wp
-    do iel = 1, model%n_elements
-      associate (el => model%elements(iel)%e)
-        call this%element_jacobian(model, iel, de)
-        do j = 1, el%n_modes()
-          iq = model%modes(model%mode_first(iel) + j - 1)%q
-          if (model%modes(model%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
-          do k = 1, size(el%dofs)
-            f(el%dofs(k), :) = f(el%dofs(k), :) + de(j, k) * g(iq - model%n_rh, :)
-          end do
+    do d = 1, size(this%dyn_q)
+      associate (dofs => model%elements(this%dyn_el(d))%e%dofs, iq_d => this%dyn_q(d))
+        do k = 1, size(dofs)
+          f(dofs(k), :) = f(dofs(k), :) + &
+            this%de_val(this%dyn_de(d) + (k - 1) * this%dyn_stride(d)) * g(iq_d, :)
         end do
       end associate
     end do
@@ -327,8 +347,7 @@ contains
     real(wp), intent(out) :: a(:, :)
     logical, intent(in), optional :: newton
     real(wp) :: b(this%n_free + this%n_con, size(f, 2)), y(model%n_x, size(f, 2))
-    real(wp), allocatable :: de(:, :)
-    integer :: i, iel, j, k, iq
+    integer :: i, d, k, iq
     b = 0.0_wp
     do i = 1, model%n_x
       if (this%free_index(i) > 0) b(this%free_index(i), :) = f(i, :)
@@ -347,15 +366,11 @@ contains
       if (this%free_index(i) > 0) y(i, :) = b(this%free_index(i), :)
     end do
     a = 0.0_wp
-    do iel = 1, model%n_elements
-      associate (el => model%elements(iel)%e)
-        call this%element_jacobian(model, iel, de)
-        do j = 1, el%n_modes()
-          if (model%modes(model%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
-          iq = model%modes(model%mode_first(iel) + j - 1)%q - model%n_rh
-          do k = 1, size(el%dofs)
-            a(iq, :) = a(iq, :) + de(j, k) * y(el%dofs(k), :)
-          end do
+    do d = 1, size(this%dyn_q)
+      associate (dofs => model%elements(this%dyn_el(d))%e%dofs, iq_d => this%dyn_q(d))
+        do k = 1, size(dofs)
+          a(iq_d, :) = a(iq_d, :) + &
+            this%de_val(this%dyn_de(d) + (k - 1) * this%dyn_stride(d)) * y(dofs(k), :)
         end do
       end associate
     end do

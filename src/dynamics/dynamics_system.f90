@@ -226,7 +226,8 @@ contains
     real(wp) :: dq(this%model%n_q), pot
     real(wp) :: me_work(this%model%max_dofs, this%model%max_dofs)
     real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
-    integer :: iel, nr, nd
+    integer :: iel, nr, nd, k, l
+    logical :: weighted
     this%n_evals = this%n_evals + 1
     associate (m => this%model)
       nr = m%n_rh
@@ -244,18 +245,24 @@ contains
         call this%kin%second(m, qd, conv, xd)
       end if
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
+      weighted = any(m%gravity /= 0)
       do iel = 1, m%n_elements
-        if (.not. m%elements(iel)%e%has_inertia()) cycle
+        if (this%mass%offset(iel) == 0) cycle
         nd = size(m%elements(iel)%e%dofs)
         associate (el => m%elements(iel)%e, me => me_work(1:nd, 1:nd), he => he_work(1:nd), &
-                   fe => fe_work(1:nd))
+                   fe => fe_work(1:nd), first => this%mass%offset(iel))
           call el%inertia(this%kin%x(el%dofs), xd(el%dofs), me, he)
           fe = 0.0_wp
-          if (any(m%gravity /= 0)) &
-            call el%weight(this%kin%x(el%dofs), this%load_factor * m%gravity, fe, pot)
-          rhs(el%dofs) = rhs(el%dofs) - matmul(me, conv(el%dofs)) - he + fe
-          this%mass%val(this%mass%offset(iel):this%mass%offset(iel) + nd * nd - 1) = &
-            reshape(me, [nd * nd])
+          if (weighted) call el%weight(this%kin%x(el%dofs), this%load_factor * m%gravity, fe, pot)
+          fe = fe - he
+          ! By hand: the element is small and matmul/reshape here cost more than the product.
+          do l = 1, nd
+            do k = 1, nd
+              fe(k) = fe(k) - me(k, l) * conv(el%dofs(l))
+              this%mass%val(first + (l - 1) * nd + k - 1) = me(k, l)
+            end do
+          end do
+          rhs(el%dofs) = rhs(el%dofs) + fe
         end associate
       end do
       this%xd_now = xd

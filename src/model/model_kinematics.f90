@@ -134,8 +134,12 @@ contains
       nd = size(model%elements(iel)%e%dofs)
       associate (el => model%elements(iel)%e, e => e_work(1:nm), de => de_work(1:nm, 1:nd))
         call el%evaluate(this%x(el%dofs), e, de)
-        if (with_jac .and. this%sparse) this%de_val(this%de_offset(iel):this%de_offset(iel) + &
-          nm * nd - 1) = reshape(de, [nm * nd])
+        if (with_jac .and. this%sparse) then
+          do k = 1, nd
+            this%de_val(this%de_offset(iel) + (k - 1) * nm:this%de_offset(iel) + k * nm - 1) &
+              = de(:, k)
+          end do
+        end if
         do j = 1, nm
           row = model%modes(model%mode_first(iel) + j - 1)%row
           if (row == 0) cycle
