@@ -10,7 +10,7 @@ module dynamics_system
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use core_linalg, only: chol_factor, chol_solve
-  use model_system, only: model_t, COORD_X, COORD_Y
+  use model_system, only: model_t, COORD_X, COORD_Y, COORD_PHI
   use model_kinematics, only: kinematics_t
   use dynamics_augmented, only: augmented_t, element_mass_t
   use elements_base, only: MODE_DYNAMIC, mode_has_stress
@@ -73,6 +73,7 @@ module dynamics_system
     procedure :: iteration_factor => dyn_iteration_factor
     procedure :: iteration_solve => dyn_iteration_solve
     procedure :: newton_correction => dyn_newton_correction
+    procedure :: error_norm => dyn_error_norm
     procedure :: energy => dyn_energy
     procedure :: stresses => dyn_stresses
     procedure :: loads_at => dyn_loads_at
@@ -613,6 +614,36 @@ contains
     call this%report(err, status)
     if (status /= 0) dx = 0.0_wp
   end subroutine dyn_newton_correction
+
+  !> The local error of the nodal coordinates, dx = DF_dy dq at the last kinematic solution,
+  !> in the largest-entry norm with weights atol + rtol s, s the largest motion of a
+  !> translation (or rotation) that the dynamic coordinates make, DF_dy q at the step's start
+  !> or end: an error bound on where the nodes are, the same on every mesh. (A norm on q
+  !> itself depends on the mesh: bending modes are l0 times angles, and an RMS over many of
+  !> them dilutes the error of the few that move the tip.)
+  subroutine dyn_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: dq(:), q_old(:), q_new(:), rtol, atol
+    real(wp), intent(out) :: norm
+    real(wp) :: dqf(this%model%n_q, 3), dx(this%model%n_x, 3), motion(this%model%n_x)
+    real(wp) :: scale(this%model%n_x)
+    integer :: nr
+    nr = this%model%n_rh
+    dqf(1:nr, :) = 0.0_wp
+    dqf(nr + 1:, 1) = dq
+    dqf(nr + 1:, 2) = q_old
+    dqf(nr + 1:, 3) = q_new
+    call this%kin%apply_df_many(this%model, dqf, dx)
+    motion = max(abs(dx(:, 2)), abs(dx(:, 3)))
+    associate (rotation => this%model%coord_kind == COORD_PHI)
+      where (rotation)
+        scale = maxval(motion, mask=rotation)
+      elsewhere
+        scale = maxval(motion, mask=.not. rotation)
+      end where
+    end associate
+    norm = maxval(abs(dx(:, 1)) / (atol + rtol * scale))
+  end subroutine dyn_error_norm
 
   subroutine dyn_allocate_history(this, nt)
     class(dynamics_t), intent(inout) :: this

@@ -14,7 +14,7 @@
 !> - fixed: steps are dt, shortened evenly so that output times and breakpoints are landed on
 !>   exactly; a step whose Newton fails is halved, locally and at most max_halvings times;
 !> - adaptive: the local error of q is estimated in every step (docs/theory.md section 6) and
-!>   the step chosen to keep its weighted RMS norm below 1 (rtol, atol), dt being the first
+!>   the step chosen to keep its norm (the system's error_norm, rtol and atol) below 1, dt the first
 !>   step; output times inside a step are interpolated (cubic Hermite), breakpoints landed on.
 !>
 !> The Newton matrix I - c_q da/dq - c_v da/dv comes from sys%jacobian, or from the system
@@ -295,7 +295,8 @@ contains
         return
       end if
       if (outcome == STEP_OK) then
-        error_norm = local_error(this, h)
+        call sys%error_norm(this%err_coef * h**2 * (this%qdd - this%qdd_prev), this%q_prev, &
+          this%q, this%rtol, this%atol, error_norm)
         if (error_norm <= 1) then
           call remember_accepted(this)
           this%stats%n_steps = this%stats%n_steps + 1
@@ -335,15 +336,6 @@ contains
     if (error_norm * (largest / safety)**3 > 1) ratio = safety * error_norm**(-1.0_wp / 3)
     ratio = min(largest, max(shrink_min, ratio))
   end function step_ratio
-
-  !> Weighted RMS norm of the local error estimate of q of the step just taken:
-  !> err_coef h^2 (qdd+ - qdd), weights atol + rtol max(|q|, |q+|).
-  real(wp) function local_error(this, h) result(norm)
-    type(galpha_solver_t), intent(in) :: this
-    real(wp), intent(in) :: h
-    norm = sqrt(sum((this%err_coef * h**2 * (this%qdd - this%qdd_prev) / (this%atol + &
-      this%rtol * max(abs(this%q), abs(this%q_prev))))**2) / this%n)
-  end function local_error
 
   subroutine restore_previous(this)
     type(galpha_solver_t), intent(inout) :: this

@@ -32,6 +32,11 @@ module integrators_system
     !> c_v da/dv)^-1 (a(t, q, v) - x). The default evaluates a and solves; a model may form the
     !> residual without the accelerations (no factorisation of its mass matrix per iteration).
     procedure :: newton_correction => system_newton_correction
+    !> Norm of the local error estimate dq of q over a step from q_old to q_new, for the
+    !> adaptive generalized-alpha method (a step is accepted when it is <= 1). The default is
+    !> the weighted RMS over q, weights atol + rtol max(|q_old|, |q_new|); a model may measure
+    !> the error where its user looks instead (flexmor's models: on the nodal coordinates).
+    procedure :: error_norm => system_error_norm
   end type ode2_system_t
 
   abstract interface
@@ -124,6 +129,13 @@ contains
     dx = dx - x
     call this%iteration_solve(dx)
   end subroutine system_newton_correction
+
+  subroutine system_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
+    class(ode2_system_t), intent(inout) :: this
+    real(wp), intent(in) :: dq(:), q_old(:), q_new(:), rtol, atol
+    real(wp), intent(out) :: norm
+    norm = sqrt(sum((dq / (atol + rtol * max(abs(q_old), abs(q_new))))**2) / size(dq))
+  end subroutine system_error_norm
 
   subroutine system_fd_jacobian(this, t, q, v, dadq, dadv, status)
     class(ode2_system_t), intent(inout) :: this

@@ -38,6 +38,7 @@ module reduction_system
     procedure :: record => red_record
     procedure :: jacobian => red_jacobian
     procedure :: full_state => red_full_state
+    procedure :: error_norm => red_error_norm
     procedure :: allocate_history => red_allocate_history
   end type reduced_t
 
@@ -51,6 +52,16 @@ contains
     q_dy = this%basis%q_ref + matmul(this%basis%v, eta)
     v_dy = matmul(this%basis%v, eta_dot)
   end subroutine red_full_state
+
+  !> The full model's norm of the error V d_eta (on the nodal coordinates).
+  subroutine red_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
+    class(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: dq(:), q_old(:), q_new(:), rtol, atol
+    real(wp), intent(out) :: norm
+    call this%dyn%error_norm(matmul(this%basis%v, dq), this%basis%q_ref + &
+      matmul(this%basis%v, q_old), this%basis%q_ref + matmul(this%basis%v, q_new), rtol, &
+      atol, norm)
+  end subroutine red_error_norm
 
   subroutine red_allocate_history(this, nt)
     class(reduced_t), intent(inout) :: this
