@@ -53,9 +53,11 @@ module integrators_galpha
   !> A shortened step this close to the distance left (relative) lands on the target.
   real(wp), parameter :: landing_slack = 1.0e-8_wp
   !> Adaptive step: safety factor, limits of the step ratio, and the relative change of h that
-  !> makes the Newton matrix be refactored (as CVODE's 0.3 on gamma).
+  !> makes the Newton matrix be refactored. CVODE waits for 0.3 on gamma; here a refactorisation
+  !> costs less than the iterations a mismatched matrix adds (two-link, rtol 1e-6: 0.25 -> 0.05
+  !> took 12,315 -> 9,273 evaluations and 1,023 -> 309 Jacobian refreshes for the same steps).
   real(wp), parameter :: safety = 0.85_wp, grow_max = 2.0_wp, shrink_min = 0.2_wp
-  real(wp), parameter :: refactor_ratio = 0.25_wp
+  real(wp), parameter :: refactor_ratio = 0.05_wp
   !> Adaptive step: consecutive failures (error test or Newton) at one time before giving up.
   integer, parameter :: max_failures = 15
 
