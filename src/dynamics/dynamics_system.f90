@@ -71,7 +71,6 @@ module dynamics_system
     procedure :: jacobian => dyn_jacobian
     procedure :: has_iteration_solver => dyn_has_iteration_solver
     procedure :: iteration_factor => dyn_iteration_factor
-    procedure :: iteration_solve => dyn_iteration_solve
     procedure :: newton_correction => dyn_newton_correction
     procedure :: error_norm => dyn_error_norm
     procedure :: energy => dyn_energy
@@ -569,19 +568,6 @@ contains
     status = 0
     if (info /= 0) status = 1
   end subroutine dyn_iteration_factor
-
-  !> r := (I - c_q da/dq - c_v da/dv)^-1 r with the last factors: the solution a of
-  !> (Mbar + c_q K0 + c_v D0) a = Mbar r, with Mbar r = DF_dy^T M DF_dy r at the last evaluation.
-  subroutine dyn_iteration_solve(this, r)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(inout) :: r(:)
-    real(wp) :: dq(this%model%n_q), w(this%model%n_x, 1), a(size(r), 1)
-    dq = 0.0_wp
-    dq(this%model%n_rh + 1:) = r
-    call this%kin%apply_df(this%model, dq, w(:, 1))
-    call this%aug%accelerations(this%model, this%mass%times(this%model, w), a, newton=.true.)
-    r = a(:, 1)
-  end subroutine dyn_iteration_solve
 
   !> One Newton correction dx = (Mbar_s + c_q K0_s + c_v D0_s)^-1 r with the factors of the
   !> last iteration_factor (state s) and the residual of eq. (1) at the current state,

@@ -24,13 +24,11 @@ module integrators_system
     !> A model may solve the Newton systems of implicit steps itself, e.g. sparse where a
     !> dense n x n Jacobian would cost O(n^2) memory and O(n^3) work. Then, after an `accel`
     !> at the Jacobian's state, iteration_factor(c_q, c_v) factors I - c_q da/dq - c_v da/dv,
-    !> and iteration_solve(r) overwrites r with its inverse times r. Default: not offered.
+    !> and newton_correction(t, q, v, x, dx) returns dx = that matrix's inverse times
+    !> (a(t, q, v) - x), formed as the model likes (flexmor's: from the residual of the
+    !> equations of motion, without factoring its mass matrix). Default: not offered.
     procedure :: has_iteration_solver => system_no_iteration_solver
     procedure :: iteration_factor => system_iteration_factor
-    procedure :: iteration_solve => system_iteration_solve
-    !> One Newton correction of an implicit step with those factors: dx = (I - c_q da/dq -
-    !> c_v da/dv)^-1 (a(t, q, v) - x). The default evaluates a and solves; a model may form the
-    !> residual without the accelerations (no factorisation of its mass matrix per iteration).
     procedure :: newton_correction => system_newton_correction
     !> Norm of the local error estimate dq of q over a step from q_old to q_new, for the
     !> adaptive generalized-alpha method (a step is accepted when it is <= 1). The default is
@@ -114,20 +112,14 @@ contains
     status = -1
   end subroutine system_iteration_factor
 
-  subroutine system_iteration_solve(this, r)
-    class(ode2_system_t), intent(inout) :: this
-    real(wp), intent(inout) :: r(:)
-  end subroutine system_iteration_solve
-
+  !> Never called when has_iteration_solver is false; reports failure if it is.
   subroutine system_newton_correction(this, t, q, v, x, dx, status)
     class(ode2_system_t), intent(inout) :: this
     real(wp), intent(in) :: t, q(:), v(:), x(:)
     real(wp), intent(out) :: dx(:)
     integer, intent(out) :: status
-    call this%accel(t, q, v, dx, status)
-    if (status /= 0) return
-    dx = dx - x
-    call this%iteration_solve(dx)
+    dx = 0.0_wp
+    status = -1
   end subroutine system_newton_correction
 
   subroutine system_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
