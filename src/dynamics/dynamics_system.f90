@@ -237,13 +237,9 @@ contains
       call this%kin%solve(m, q, err)
       if (.not. err%ok()) return
       call this%kin%apply_df(m, qd, xd)
-      if (nr > 0) then
-        dq = 0.0_wp
-        dq(1:nr) = pdd
-        call this%kin%second(m, qd, conv, xd, dq)
-      else
-        call this%kin%second(m, qd, conv, xd)
-      end if
+      dq = 0.0_wp
+      dq(1:nr) = pdd
+      call this%kin%second(m, qd, conv, xd, dq)
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
       weighted = any(m%gravity /= 0)
       do iel = 1, m%n_elements
