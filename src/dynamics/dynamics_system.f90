@@ -74,6 +74,7 @@ module dynamics_system
     procedure :: newton_correction => dyn_newton_correction
     procedure :: error_norm => dyn_error_norm
     procedure :: energy => dyn_energy
+    procedure :: energy_at => dyn_energy_at
     procedure :: stresses => dyn_stresses
     procedure :: loads_at => dyn_loads_at
     procedure :: mode_stiffness => dyn_mode_stiffness
@@ -665,22 +666,39 @@ contains
     class(dynamics_t), intent(inout) :: this
     real(wp), intent(in) :: t, q_dy(:), v_dy(:)
     real(wp) :: en(2)
-    real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
-    real(wp) :: xd(this%model%n_x), x(this%model%n_x), pot
-    real(wp), allocatable :: me(:, :), he(:), fe(:), e(:), s(:, :), de(:, :)
-    integer :: iel, nm
+    real(wp) :: qd(this%model%n_q), pdd(this%model%n_rh), xd(this%model%n_x)
+    real(wp) :: q_rh(this%model%n_rh)
     associate (m => this%model)
-      call this%prescribed(t, q(1:m%n_rh), qd(1:m%n_rh), pdd)
-      q(m%n_rh + 1:) = q_dy
+      call this%prescribed(t, q_rh, qd(1:m%n_rh), pdd)
       qd(m%n_rh + 1:) = v_dy
-      x = this%kin%x
       call this%kin%apply_df(m, qd, xd)
+      en = this%energy_at(t, q_dy, this%kin%x, xd)
+    end associate
+  end function dyn_energy
+
+  !> Kinetic and potential energy at (t, q_dy) with nodal positions x and velocities xd.
+  function dyn_energy_at(this, t, q_dy, x, xd) result(en)
+    class(dynamics_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q_dy(:), x(:), xd(:)
+    real(wp) :: en(2)
+    real(wp) :: q(this%model%n_q), qd_rh(this%model%n_rh), pdd(this%model%n_rh), pot
+    real(wp) :: me(this%model%max_dofs, this%model%max_dofs), he(this%model%max_dofs)
+    real(wp) :: fe(this%model%max_dofs)
+    real(wp), allocatable :: e(:), s(:, :), de(:, :)
+    integer :: iel, nm, nd
+    associate (m => this%model)
+      call this%prescribed(t, q(1:m%n_rh), qd_rh, pdd)
+      q(m%n_rh + 1:) = q_dy
       en(1) = 0.5_wp * sum(m%lumped * xd**2)
       en(2) = -this%load_factor * dot_product(this%loads_at(t), x)
       do iel = 1, m%n_elements
         associate (el => m%elements(iel)%e)
           nm = el%n_modes()
-          allocate(e(nm), s(nm, nm), de(nm, size(el%dofs)))
+          nd = size(el%dofs)
+          if (allocated(e)) then
+            if (size(e) /= nm .or. size(de, 2) /= nd) deallocate(e, s, de)
+          end if
+          if (.not. allocated(e)) allocate(e(nm), s(nm, nm), de(nm, nd))
           if (m%elastic_element(iel)) then
             call el%evaluate(x(el%dofs), e, de)
             where (.not. mode_has_stress(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1) &
@@ -690,16 +708,13 @@ contains
           end if
           call el%stiffness(s)
           en(2) = en(2) + 0.5_wp * dot_product(e, matmul(s, e))
-          deallocate(e, s, de)
           if (.not. el%has_inertia()) cycle
-          allocate(me(size(el%dofs), size(el%dofs)), he(size(el%dofs)), fe(size(el%dofs)))
-          call el%inertia(x(el%dofs), xd(el%dofs), me, he)
-          call el%weight(x(el%dofs), this%load_factor * m%gravity, fe, pot)
-          en(1) = en(1) + 0.5_wp * dot_product(xd(el%dofs), matmul(me, xd(el%dofs)))
+          call el%inertia(x(el%dofs), xd(el%dofs), me(:nd, :nd), he(:nd))
+          call el%weight(x(el%dofs), this%load_factor * m%gravity, fe(:nd), pot)
+          en(1) = en(1) + 0.5_wp * dot_product(xd(el%dofs), matmul(me(:nd, :nd), xd(el%dofs)))
           en(2) = en(2) + pot
-          deallocate(me, he, fe)
         end associate
       end do
     end associate
-  end function dyn_energy
+  end function dyn_energy_at
 end module dynamics_system
