@@ -8,7 +8,7 @@ module analysis_run
   use core_version, only: FLEXMOR_VERSION
   use io_namelist, only: nml_file_t, string_t
   use io_scene, only: read_scene
-  use model_scene, only: scene_t, dynamic_rec_t
+  use model_scene, only: scene_t, dynamic_rec_t, auto_by_stiffness
   use model_system, only: model_t
   use elements_base, only: MODE_DYNAMIC
   use model_build, only: build_model, unused_motions
@@ -29,6 +29,11 @@ module analysis_run
   private
   public :: run_t
 
+  !> integrator = 'auto' below rtol 1e-6 computes all modes of a full model up to this many
+  !> dynamic coordinates (a dense eigenproblem, well under a second); larger ones are stiff.
+  integer, parameter :: AUTO_MODAL_MAX = 400
+  real(wp), parameter :: TWO_PI = 6.28318530717958647692_wp
+
   !> Everything one run computes, kept so that callers (the sweep) can take metrics from it.
   type :: run_t
     type(nml_file_t) :: file
@@ -46,6 +51,8 @@ module analysis_run
     type(reduced_t), allocatable :: red       !< a reduced dynamic analysis
     type(basis_t) :: initial_basis            !< its basis at the start
     type(update_log_t) :: updates             !< its basis checks and updates
+    !> Why integrator = 'auto' took the integrator it did, when the run chose ('' otherwise)
+    character(len=:), allocatable :: integrator_choice
     integer :: static_iterations = 0
     real(wp) :: wall_time_s = 0.0_wp
     !> Summary lines on stdout, and progress lines on stderr during long analyses.
@@ -363,6 +370,7 @@ contains
     if (this%scene%reduction%active) then
       call run_reduced(this, opts, breaks, err)
     else
+      if (opts%method == 'auto') call choose_integrator(this, opts, full_omega_max(this))
       call this%dyn%allocate_history(size(this%time))
       allocate(v0(this%dyn%model%n_dy))
       v0 = 0.0_wp
@@ -374,6 +382,44 @@ contains
       this%stats%n_steps, ' steps, ', this%stats%n_rhs_evals, ' evaluations, ', &
       this%stats%n_jac_evals, ' Jacobians'
   end subroutine run_dynamic
+
+  !> integrator = 'auto' below rtol 1e-6: BDF unless the model is stiff (model_scene's
+  !> auto_by_stiffness); omega_max < 0: not known, taken as stiff. The choice and its reason
+  !> go to the result (attributes integrator, integrator_choice) and the summary.
+  subroutine choose_integrator(this, opts, omega_max)
+    type(run_t), intent(inout) :: this
+    type(integrator_options_t), intent(inout) :: opts
+    real(wp), intent(in) :: omega_max
+    real(wp) :: span
+    span = this%time(size(this%time)) - this%time(1)
+    if (omega_max < 0.0_wp) then
+      opts%method = 'galpha_adaptive'
+      this%integrator_choice = 'auto: the fastest mode is not computed for models of more ' // &
+        'than ' // int_str(AUTO_MODAL_MAX) // ' dynamic coordinates; taken as stiff'
+    else
+      opts%method = auto_by_stiffness(omega_max, span)
+      this%integrator_choice = 'auto: the fastest mode (' // approx_str(omega_max / TWO_PI) // &
+        ' Hz) turns through ' // approx_str(omega_max * span) // ' rad over the run, ' // &
+        trim(merge('stiff    ', 'not stiff', opts%method == 'galpha_adaptive')) // &
+        ' (limit 1000 rad)'
+    end if
+    this%scene%dynamic%integrator = trim(opts%method)
+    if (this%verbose) write(*, '(a)') 'integrator: ' // trim(opts%method) // ' (' // &
+      this%integrator_choice // ')'
+  end subroutine choose_integrator
+
+  !> The fastest natural frequency [rad/s] of the full model at the start (joints locked), or
+  !> -1 when the model is too large for all its modes or they cannot be computed (a singular
+  !> mass matrix): then it is taken as stiff, which a large model is.
+  real(wp) function full_omega_max(this) result(omega)
+    type(run_t), intent(inout) :: this
+    type(modal_result_t) :: modes
+    type(error_t) :: err
+    omega = -1.0_wp
+    if (this%dyn%model%n_dy > AUTO_MODAL_MAX) return
+    call modal_analysis(this%dyn, this%time(1), this%q_static, 0, modes, err, 'lapack')
+    if (err%ok()) omega = sqrt(max(maxval(modes%omega2), 0.0_wp))
+  end function full_omega_max
 
   !> Output every output_dt, and at t_end exactly (once, even when t_end is not a multiple).
   function output_times(d) result(time)
@@ -413,6 +459,7 @@ contains
     type(error_t), intent(out) :: err
     type(basis_spec_t) :: spec
     type(update_spec_t) :: update
+    type(integrator_options_t) :: run_opts
     associate (r => this%scene%reduction)
       spec%selection = r%selection
       spec%n_modes = r%n_modes
@@ -450,12 +497,15 @@ contains
       end if
     end associate
     this%initial_basis = this%red%basis
+    run_opts = opts
+    if (run_opts%method == 'auto') call choose_integrator(this, run_opts, &
+      TWO_PI * maxval(this%red%basis%frequency_hz))
     if (this%verbose) write(*, '(a,i0,a,*(f0.3,:,", "))') 'reduction: ', &
       this%red%basis%k(), ' modes (' // this%red%basis%reason // '), [Hz]: ', &
       this%red%basis%frequency_hz
     flush(output_unit)
     call this%red%allocate_history(size(this%time))
-    call integrate_reduced(this%red, update, opts, this%time, breaks, this%stats, &
+    call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
       this%updates, err)
     this%dyn = this%red%dyn
     if (this%verbose .and. err%ok() .and. update%mode /= 'none') write(*, '(a,i0,a,i0,a)') &

@@ -42,6 +42,8 @@ contains
     if (.not. this%scene%dynamic%active) return
     associate (s => this%stats, d => this%scene%dynamic)
       if (err%ok()) call h5%write_string_attr('/', 'integrator', d%integrator, err)
+      if (err%ok() .and. allocated(this%integrator_choice)) call h5%write_string_attr('/', &
+        'integrator_choice', this%integrator_choice, err)
       if (err%ok()) call h5%write_real_attr('/', 'rtol', d%rtol, err)
       if (err%ok()) call h5%write_real_attr('/', 'atol', d%atol, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_steps', s%n_steps, err)

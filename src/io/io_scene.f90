@@ -412,12 +412,15 @@ contains
       call rd_real(g, 'rtol', d%rtol, err)
       call rd_choice(g, 'integrator', d%integrator, err)
       if (err%ok() .and. d%integrator == 'auto') d%integrator = auto_integrator(d%rtol)
+      ! Still 'auto' (tight rtol): the run chooses by the model's stiffness, unless BDF's own
+      ! option says which one is meant.
+      if (err%ok() .and. d%integrator == 'auto' .and. g%has('max_order')) d%integrator = 'bdf'
       if (err%ok()) then
         associate (m => d%integrator, when => 'with integrator = ')
           call only_with(g, ['dt     ', 'rho_inf'], m(1:min(6, len(m))) == 'galpha', &
-            when // '''galpha'' or ''galpha_adaptive''', err)
+            when // '''galpha'' or ''galpha_adaptive''' // auto_note(m), err)
           call only_with(g, ['max_order'], m == 'bdf', when // '''bdf''', err)
-          call only_with(g, ['erk_order'], m == 'erk', when // '''erk''', err)
+          call only_with(g, ['erk_order'], m == 'erk', when // '''erk''' // auto_note(m), err)
           call only_with(g, ['max_step'], m /= 'galpha', &
             when // '''bdf'', ''galpha_adaptive'' or ''erk''', err)
           call only_with(g, ['jacobian'], m /= 'erk', &
@@ -434,9 +437,18 @@ contains
       if (.not. err%ok()) return
       if (d%jacobian == 'internal' .and. d%integrator /= 'bdf') call err%set(ERR_INPUT, &
         g%where() // ': variable ''jacobian'': ''internal'' (CVODE''s difference quotients) ' &
-        // 'needs integrator = ''bdf''')
+        // 'needs integrator = ''bdf''' // auto_note(d%integrator))
     end associate
   end subroutine read_dynamic
+
+  !> Why an option of one integrator is refused when the integrator is still 'auto'.
+  function auto_note(method) result(note)
+    character(len=*), intent(in) :: method
+    character(len=:), allocatable :: note
+    note = ''
+    if (method == 'auto') note = ' (below rtol 1e-6 integrator = ''auto'' chooses by the ' // &
+      'model''s stiffness when the run starts: name the integrator)'
+  end function auto_note
 
   subroutine read_reduction(g, scene, err)
     type(nml_group_t), intent(inout) :: g
