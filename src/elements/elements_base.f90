@@ -93,10 +93,11 @@ contains
     h = 0.0_wp
   end subroutine element_zero_inertia
 
-  !> Nodal forces f (n_coords) of gravity g (2) on a consistent mass, and its potential energy.
+  !> Nodal forces f (n_coords) of gravity g (2 components in the plane, 3 in space) on a
+  !> consistent mass, and its potential energy.
   pure subroutine element_zero_weight(this, x, g, f, potential)
     class(element_t), intent(in) :: this
-    real(wp), intent(in) :: x(:), g(2)
+    real(wp), intent(in) :: x(:), g(:)
     real(wp), intent(out) :: f(:), potential
     f = 0.0_wp
     potential = 0.0_wp

@@ -329,7 +329,7 @@ contains
   !> Gravity on the material points of beam_inertia: f = sum w J^T g, V = -sum w g . r.
   pure subroutine beam_weight(this, x, g, f, potential)
     class(beam_t), intent(in) :: this
-    real(wp), intent(in) :: x(:), g(2)
+    real(wp), intent(in) :: x(:), g(:)
     real(wp), intent(out) :: f(:), potential
     type(chord_t) :: c
     real(wp) :: e(3), de(3, 6), sc, u(2), pg(2), gu, rho_l

@@ -76,7 +76,7 @@ contains
 
   pure subroutine truss_weight(this, x, g, f, potential)
     class(truss_t), intent(in) :: this
-    real(wp), intent(in) :: x(:), g(2)
+    real(wp), intent(in) :: x(:), g(:)
     real(wp), intent(out) :: f(:), potential
     f = 0.0_wp
     potential = 0.0_wp
