@@ -41,10 +41,8 @@ program test_elements
     'de^T S de vs textbook stiffness', 'P Hess(e1_bar) vs textbook Kg', &
     'consistent mass vs textbook', 'h vs Lagrange FD of M', 'weight vs -FD of potential', &
     'frame invariance of M and h', 'beam M, h, weight vs Gauss-point quadrature']
-  real(wp) :: worst(N_CAT) = 0.0_wp
   type(lcg_t) :: rng = lcg_t(seed=20240611)
   type(suite_t) :: ts
-  integer :: i
 
   call ts%init('elements')
 
@@ -57,26 +55,12 @@ program test_elements
   call truss_tests()
   call hinge_tests()
 
-  write(*, '(a)') '-- worst achieved relative errors:'
-  do i = 1, N_CAT
-    write(*, '(4x,a,es10.2)') CAT_NAME(i), worst(i)
-  end do
+  call ts%print_worst(CAT_NAME)
   call ts%finish()
 
 contains
 
   ! ------------------------------------------------------------------ utilities
-
-  !> A check on an achieved relative error; records the worst per category.
-  subroutine expect(what, err, tol, cat)
-    character(len=*), intent(in) :: what
-    real(wp), intent(in) :: err, tol
-    integer, intent(in) :: cat
-    character(len=60) :: buf
-    write(buf, '(a,es9.2,a,es8.1,a)') ': rel err ', err, ' (tol ', tol, ')'
-    call ts%check(err <= tol .and. err == err, what // trim(buf))
-    if (err == err) worst(cat) = max(worst(cat), err)
-  end subroutine expect
 
   pure function rot2(a) result(r)
     real(wp), intent(in) :: a
@@ -150,19 +134,19 @@ contains
     real(wp) :: hm(size(x), size(x))
     integer :: m
     call evaluate(el, x, e, de)
-    call expect(what // ' de', relerr(flat(de), flat(fd_jacobian(el, x, 2.0e-6_wp)), 1.0_wp), &
+    call ts%expect(what // ' de', relerr(flat(de), flat(fd_jacobian(el, x, 2.0e-6_wp)), 1.0_wp), &
       1.0e-8_wp, C_DE)
     d2 = second(el, x, v)
     d2fd = fd_second(el, x, v, 2.0e-3_wp)
-    call expect(what // ' second vs FD d2/ds2', relerr(d2, d2fd, floor_d2), 1.0e-7_wp, C_D2FD)
+    call ts%expect(what // ' second vs FD d2/ds2', relerr(d2, d2fd, floor_d2), 1.0e-7_wp, C_D2FD)
     allocate(vhv(size(e)))
     do m = 1, size(e)
       hm = fd_hessian(el, x, m, 1.0e-5_wp)
       vhv(m) = dot_product(v, matmul(hm, v))
-      call expect(what // ' Hessian (polarised second) vs FD, mode ' // achar(48 + m), &
+      call ts%expect(what // ' Hessian (polarised second) vs FD, mode ' // achar(48 + m), &
         relerr(flat(polar_hessian(el, x, m)), flat(hm), floor_d2), 1.0e-7_wp, C_POL)
     end do
-    call expect(what // ' second vs v^T H_fd v', relerr(d2, vhv, floor_d2), 1.0e-8_wp, C_D2H)
+    call ts%expect(what // ' second vs v^T H_fd v', relerr(d2, vhv, floor_d2), 1.0e-8_wp, C_D2H)
   end subroutine check_derivatives
 
   !> M symmetric, h vs Lagrange form from FD of M, frame invariance, weight vs -dV/dx.
@@ -178,7 +162,7 @@ contains
     real(wp) :: hs, psi
     n = size(x)
     call el%inertia(x, xd, m, h)
-    call expect(what // ' M symmetric', relerr(flat(m), flat(transpose(m)), 1.0_wp), &
+    call ts%expect(what // ' M symmetric', relerr(flat(m), flat(transpose(m)), 1.0_wp), &
       1.0e-14_wp, C_M)
     dm = fd_mass_derivative(el, x, 1.0e-5_wp)
     hfd = 0.0_wp
@@ -192,16 +176,16 @@ contains
     hs = maxval(abs(m)) * dot_product(xd, xd)
     ! Central differences at 1e-5: truncation (h^2) and round-off (eps / h) meet at a floor of
     ! ~2e-9 on the most deformed configurations (steps 1e-4 and 1e-6 both do worse): 3e-8.
-    call expect(what // ' h vs sum (dM_ij/dx_k - dM_jk/dx_i / 2) xd_j xd_k', &
+    call ts%expect(what // ' h vs sum (dM_ij/dx_k - dM_jk/dx_i / 2) xd_j xd_k', &
       relerr(h, hfd, 1.0e-3_wp * hs), 3.0e-8_wp, C_H)
     ! Objectivity: M(R x) = T^T M(x) T and h(R x, R xd) = T^T h(x, xd) for a rigid rotation.
     psi = 2.1_wp
     xr = rigid_move(x, kinds, psi, [0.4_wp, -0.9_wp], [1.5_wp, 0.25_wp])
     t = local_transform(psi, kinds)
     call el%inertia(xr, matmul(transpose(t), xd), m2, h2)
-    call expect(what // ' M frame invariant', relerr(flat(m2), &
+    call ts%expect(what // ' M frame invariant', relerr(flat(m2), &
       flat(matmul(transpose(t), matmul(m, t))), 1.0_wp), 1.0e-12_wp, C_OBJ)
-    call expect(what // ' h frame invariant', relerr(h2, matmul(transpose(t), h), &
+    call ts%expect(what // ' h frame invariant', relerr(h2, matmul(transpose(t), h), &
       1.0e-3_wp * hs), 1.0e-12_wp, C_OBJ)
     ! Weight: f = -dV/dx.
     g = [0.35_wp, -9.81_wp]
@@ -214,7 +198,7 @@ contains
       call el%weight(xp, g, fr, potm)
       ffd(k) = -(potp - potm) / 2.0e-5_wp
     end do
-    call expect(what // ' weight f = -dV/dx', relerr(f, ffd, 1.0_wp), 1.0e-8_wp, C_W)
+    call ts%expect(what // ' weight f = -dV/dx', relerr(f, ffd, 1.0_wp), 1.0e-8_wp, C_W)
   end subroutine check_inertia
 
   ! ------------------------------------------------------------------ beam
@@ -297,7 +281,7 @@ contains
       call evaluate(b, x, ev, de)
       e = ev
       ee = beam_expected(b, c(4) * b%l0, c(5), c(6))
-      call expect(trim(what) // ' e vs closed form', relerr(e, ee, 1.0e-3_wp), 1.0e-13_wp, C_E)
+      call ts%expect(trim(what) // ' e vs closed form', relerr(e, ee, 1.0e-3_wp), 1.0e-13_wp, C_E)
       ! Sign conventions of docs/theory.md 2.1: pure bending gives e2 = e3, an S-shape e2 = -e3.
       if (k == 3) call ts%check(e(2) > 0 .and. abs(e(2) - e(3)) <= 1.0e-15_wp, &
         trim(what) // ' pure bending: e2 = e3 > 0')
@@ -311,11 +295,11 @@ contains
         if (j == 2) y(3) = y(3) + 2 * PI
         if (j == 3) y(6) = y(6) - 2 * PI
         ey = modes(b, y)
-        call expect(trim(what) // ' e invariant under rotation', relerr(ey, e, 1.0e-3_wp), &
+        call ts%expect(trim(what) // ' e invariant under rotation', relerr(ey, e, 1.0e-3_wp), &
           1.0e-12_wp, C_INV)
       end do
       y = rigid_move(x, [1, 2, 3, 1, 2, 3], 0.0_wp, [0.0_wp, 0.0_wp], [3.1_wp, -4.2_wp])
-      call expect(trim(what) // ' e invariant under translation', relerr(modes(b, y), e, &
+      call ts%expect(trim(what) // ' e invariant under translation', relerr(modes(b, y), e, &
         1.0e-3_wp), 1.0e-12_wp, C_INV)
       call check_inertia(b, x, xd, [1, 2, 3, 1, 2, 3], trim(what))
     end do
@@ -324,7 +308,7 @@ contains
       x = beam_config(b, [0.0_wp, 0.0_wp], b%alpha0, b%l0, 0.0_wp, 0.0_wp)
       x(3:6:3) = b%phi0
       y = rigid_move(x, [1, 2, 3, 1, 2, 3], psis(j), [-0.3_wp, 0.5_wp], [1.0_wp, 2.0_wp])
-      call expect('beam/' // fname // ' e = 0 undeformed', relerr(modes(b, y), [0.0_wp, 0.0_wp, &
+      call ts%expect('beam/' // fname // ' e = 0 undeformed', relerr(modes(b, y), [0.0_wp, 0.0_wp, &
         0.0_wp], 1.0_wp), 1.0e-14_wp, C_INV)
     end do
   end subroutine beam_tests
@@ -417,11 +401,11 @@ contains
       err(5) = max(err(5), relerr([pot], [potr], scale * norm2(g) * (norm2(x(1:2)) + b%l0)))
     end do
     what = 'beam/' // fname // ' 200 random states:'
-    call expect(trim(what) // ' e vs closed form, many turns', err(1), 1.0e-12_wp, C_E)
-    call expect(trim(what) // ' M vs Gauss quadrature', err(2), 1.0e-13_wp, C_GAUSS)
-    call expect(trim(what) // ' h vs Gauss quadrature', err(3), 1.0e-13_wp, C_GAUSS)
-    call expect(trim(what) // ' weight vs Gauss quadrature', err(4), 1.0e-13_wp, C_GAUSS)
-    call expect(trim(what) // ' potential vs Gauss quadrature', err(5), 1.0e-13_wp, C_GAUSS)
+    call ts%expect(trim(what) // ' e vs closed form, many turns', err(1), 1.0e-12_wp, C_E)
+    call ts%expect(trim(what) // ' M vs Gauss quadrature', err(2), 1.0e-13_wp, C_GAUSS)
+    call ts%expect(trim(what) // ' h vs Gauss quadrature', err(3), 1.0e-13_wp, C_GAUSS)
+    call ts%expect(trim(what) // ' weight vs Gauss quadrature', err(4), 1.0e-13_wp, C_GAUSS)
+    call ts%expect(trim(what) // ' potential vs Gauss quadrature', err(5), 1.0e-13_wp, C_GAUSS)
   end subroutine beam_closed_forms
 
   !> Textbook Euler-Bernoulli (phi = 0) or Timoshenko local stiffness on (u1,v1,th1,u2,v2,th2).
@@ -487,20 +471,20 @@ contains
           call b%stiffness(s)
           k = matmul(transpose(de), matmul(s, de))
           t = local_transform(b%alpha0, [1, 2, 3, 1, 2, 3])
-          call expect(trim(what) // ' de^T S de = textbook K', relerr(flat(k), &
+          call ts%expect(trim(what) // ' de^T S de = textbook K', relerr(flat(k), &
             flat(matmul(transpose(t), matmul(textbook_beam_k(b%ea, b%ei, b%l0, p), t))), &
             1.0_wp), 1.0e-12_wp, C_K)
           if (ishear == 1) cycle
           kg = pforce * polar_hessian(b, x, 1)
           hfd = pforce * fd_hessian(b, x, 1, 1.0e-5_wp)
-          call expect(trim(what) // ' P Hess(e1_bar) = textbook Kg', relerr(flat(kg), &
+          call ts%expect(trim(what) // ' P Hess(e1_bar) = textbook Kg', relerr(flat(kg), &
             flat(matmul(transpose(t), matmul(textbook_beam_kg(pforce, b%l0), t))), 1.0_wp), &
             1.0e-12_wp, C_KG)
-          call expect(trim(what) // ' P Hess_fd(e1_bar) = textbook Kg', relerr(flat(hfd), &
+          call ts%expect(trim(what) // ' P Hess_fd(e1_bar) = textbook Kg', relerr(flat(hfd), &
             flat(matmul(transpose(t), matmul(textbook_beam_kg(pforce, b%l0), t))), 1.0_wp), &
             1.0e-8_wp, C_KG)
           call b%inertia(x, 0 * x, m, h)
-          call expect(trim(what) // ' M = textbook consistent mass', relerr(flat(m), &
+          call ts%expect(trim(what) // ' M = textbook consistent mass', relerr(flat(m), &
             flat(matmul(transpose(t), matmul(textbook_beam_m(b%rho_a, b%l0), t))), 1.0_wp), &
             1.0e-12_wp, C_M)
           call ts%check(all(h == 0.0_wp), trim(what) // ' h = 0 at rest')
@@ -516,7 +500,7 @@ contains
     b%consistent = .false.
     x = beam_config(b, [0.1_wp, 0.2_wp], 1.0_wp, 0.95_wp, 0.2_wp, -0.1_wp)
     call b%lumped_mass(diag)
-    call expect('beam lumped: rhoA l0/2 on translations', relerr(diag([1, 2, 4, 5]), &
+    call ts%expect('beam lumped: rhoA l0/2 on translations', relerr(diag([1, 2, 4, 5]), &
       b%rho_a * b%l0 / 2 * [1, 1, 1, 1], 1.0_wp), 1.0e-15_wp, C_M)
     ! Rotations: none (translations only) or the rotary inertia of each half about its node,
     ! rhoA l0/2 (l0/2)^2/3 = rhoA l0^3/24; nothing else.
@@ -564,11 +548,11 @@ contains
       v = rng%uniform_vec(4, -1.0_wp, 1.0_wp)
       xd = rng%uniform_vec(4, -2.0_wp, 2.0_wp)
       call evaluate(tr, x, e, de)
-      call expect(trim(what) // ' e = l - l0', abs(e(1) - (l - tr%l0)) / tr%l0, 1.0e-14_wp, C_E)
+      call ts%expect(trim(what) // ' e = l - l0', abs(e(1) - (l - tr%l0)) / tr%l0, 1.0e-14_wp, C_E)
       call check_derivatives(tr, x, v, trim(what), 1.0e-2_wp * dot_product(v, v))
       e0 = e(1)
       y = rigid_move(x, [1, 2, 1, 2], 2.6_wp, [0.5_wp, 0.5_wp], [-3.0_wp, 1.0_wp])
-      call expect(trim(what) // ' e invariant under rigid motion', &
+      call ts%expect(trim(what) // ' e invariant under rigid motion', &
         maxval(abs(modes(tr, y) - e0)) / tr%l0, 1.0e-14_wp, C_INV)
       call check_inertia(tr, x, xd, [1, 2, 1, 2], trim(what))
     end do
@@ -577,28 +561,28 @@ contains
     x = [0.2_wp, -0.1_wp, 0.2_wp + tr%l0 * cos(beta), -0.1_wp + tr%l0 * sin(beta)]
     call evaluate(tr, x, e, de)
     ! sqrt of a sum of squares minus l0: a few roundings, bound 20 eps (observed 0.8 eps).
-    call expect('truss e = 0 undeformed', abs(e(1)) / tr%l0, 20 * epsilon(1.0_wp), C_INV)
+    call ts%expect('truss e = 0 undeformed', abs(e(1)) / tr%l0, 20 * epsilon(1.0_wp), C_INV)
     call tr%stiffness(s)
     k = matmul(transpose(de), matmul(s, de))
     t = local_transform(beta, [1, 2, 1, 2])
     kl = 0.0_wp
     kl([1, 3], [1, 3]) = tr%ea / tr%l0 * reshape([1, -1, -1, 1], [2, 2])
-    call expect('truss de^T S de = EA/L axial', relerr(flat(k), &
+    call ts%expect('truss de^T S de = EA/L axial', relerr(flat(k), &
       flat(matmul(transpose(t), matmul(kl, t))), 1.0_wp), 1.0e-13_wp, C_K)
     kg = pforce * polar_hessian(tr, x, 1)
     kl = 0.0_wp
     kl([2, 4], [2, 4]) = pforce / tr%l0 * reshape([1, -1, -1, 1], [2, 2])
-    call expect('truss P Hess(l) = P/L transverse', relerr(flat(kg), &
+    call ts%expect('truss P Hess(l) = P/L transverse', relerr(flat(kg), &
       flat(matmul(transpose(t), matmul(kl, t))), 1.0_wp), 1.0e-13_wp, C_KG)
     call tr%inertia(x, 0 * x, m, h)
     ml = 0.0_wp
     ml([1, 3], [1, 3]) = tr%rho_a * tr%l0 / 6 * reshape([2, 1, 1, 2], [2, 2])
     ml([2, 4], [2, 4]) = ml([1, 3], [1, 3])
-    call expect('truss M = textbook consistent mass', relerr(flat(m), &
+    call ts%expect('truss M = textbook consistent mass', relerr(flat(m), &
       flat(matmul(transpose(t), matmul(ml, t))), 1.0_wp), 1.0e-14_wp, C_M)
     tr%consistent = .false.
     call tr%lumped_mass(diag)
-    call expect('truss lumped: rhoA l0/2 per translation', relerr(diag, &
+    call ts%expect('truss lumped: rhoA l0/2 per translation', relerr(diag, &
       [1, 1, 1, 1] * tr%rho_a * tr%l0 / 2, 1.0_wp), 1.0e-15_wp, C_M)
     call ts%check(.not. tr%has_inertia(), 'truss lumped: no consistent inertia')
   end subroutine truss_tests
@@ -621,21 +605,21 @@ contains
       x = rng%uniform_vec(2, -3.0_wp, 3.0_wp)
       v = rng%uniform_vec(2, -1.0_wp, 1.0_wp)
       call evaluate(hg, x, e, de)
-      call expect(trim(what) // ' e = (phi_q - phi_q0) - (phi_p - phi_p0)', &
+      call ts%expect(trim(what) // ' e = (phi_q - phi_q0) - (phi_p - phi_p0)', &
         abs(e(1) - ((x(2) - hg%phi0(2)) - (x(1) - hg%phi0(1)))), 1.0e-14_wp, C_E)
       ! e is linear: the FD error is round-off only, eps (|e| + |x|) / h, |e| + |x| < 12; x5.
-      call expect(trim(what) // ' de', relerr(flat(de), flat(fd_jacobian(hg, x, 1.0e-6_wp)), &
+      call ts%expect(trim(what) // ' de', relerr(flat(de), flat(fd_jacobian(hg, x, 1.0e-6_wp)), &
         1.0_wp), 5 * epsilon(1.0_wp) * 12 / 1.0e-6_wp, C_DE)
-      call expect(trim(what) // ' second = 0 = FD', maxval(abs([second(hg, x, v), &
+      call ts%expect(trim(what) // ' second = 0 = FD', maxval(abs([second(hg, x, v), &
         fd_second(hg, x, v, 1.0e-2_wp)])), 1.0e-10_wp, C_D2FD)
       e0 = e(1)
-      call expect(trim(what) // ' e invariant under rigid rotation', &
+      call ts%expect(trim(what) // ' e invariant under rigid rotation', &
         maxval(abs(modes(hg, x + 1.7_wp) - e0)), 1.0e-14_wp, C_INV)
     end do
-    call expect('hinge e = 0 at phi0', maxval(abs(modes(hg, hg%phi0))), 1.0e-15_wp, C_INV)
+    call ts%expect('hinge e = 0 at phi0', maxval(abs(modes(hg, hg%phi0))), 1.0e-15_wp, C_INV)
     call hg%stiffness(s)
     call evaluate(hg, hg%phi0, e, de)
-    call expect('hinge de^T S de = k [[1,-1],[-1,1]]', relerr(flat(matmul(transpose(de), &
+    call ts%expect('hinge de^T S de = k [[1,-1],[-1,1]]', relerr(flat(matmul(transpose(de), &
       matmul(s, de))), hg%k * [1, -1, -1, 1] * 1.0_wp, 1.0_wp), 1.0e-15_wp, C_K)
     call ts%check(.not. hg%has_inertia(), 'hinge has no consistent inertia')
   end subroutine hinge_tests

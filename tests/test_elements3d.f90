@@ -17,10 +17,11 @@ program test_elements3d
   use core_kinds, only: wp
   use core_error, only: error_t
   use testing, only: suite_t
-  use fd_helpers, only: lcg_t, relerr, flat
+  use beam3d_fixture, only: make_beam3d, beam3d_state, space_frame
+  use fd_helpers, only: lcg_t, relerr, flat, random_rotvec
   use element_fd, only: modes, jacobian, second, fd_jacobian, fd_second, fd_hessian, &
     polar_hessian
-  use elements_base, only: element_t, MODE_RIGID, MODE_DYNAMIC
+  use elements_base, only: element_t, MODE_RIGID
   use elements_rotation, only: rot_matrix, rot_apply, rot_apply_jac, rot_apply_second, &
     rotvec_to_euler, euler_to_matrix, matrix_to_euler, euler_product, skew
   use elements_beam3d, only: beam3d_t, BENDING_ANGLE, BENDING_SINE, beam3d_set_geometry
@@ -28,6 +29,8 @@ program test_elements3d
   implicit none
 
   real(wp), parameter :: PI = 3.14159265358979323846_wp, EPS = epsilon(1.0_wp)
+  !> The 2 x 2 stiffness pattern of a bar (axial, torsion) per unit stiffness.
+  real(wp), parameter :: BAR(2, 2) = reshape([1.0_wp, -1.0_wp, -1.0_wp, 1.0_wp], [2, 2])
   integer, parameter :: C_ROT = 1, C_E = 2, C_DE = 3, C_D2FD = 4, C_POL = 5, C_INV = 6, &
     C_K = 7, C_KG = 8, C_TW = 9, N_CAT = 9
   character(len=44), parameter :: CAT_NAME(N_CAT) = [character(len=44) :: &
@@ -35,10 +38,8 @@ program test_elements3d
     'second vs 5-point FD d2/ds2 e(x+sv)', 'Hessian by polarisation vs FD Hessian', &
     'rigid-body invariance of e', 'B^T S B vs textbook 12x12 stiffness', &
     'P Hess(e1_bar) vs textbook Kg', 'pure twist / bending without twist']
-  real(wp) :: worst(N_CAT) = 0.0_wp
   type(lcg_t) :: rng = lcg_t(seed=20251125)
   type(suite_t) :: ts
-  integer :: i
 
   call ts%init('elements3d')
   call rotation_tests()
@@ -48,23 +49,10 @@ program test_elements3d
   call twist_tests(BENDING_ANGLE, 'angle')
   call twist_tests(BENDING_SINE, 'sine')
   call misc_tests()
-  write(*, '(a)') '-- worst achieved relative errors:'
-  do i = 1, N_CAT
-    write(*, '(4x,a,es10.2)') CAT_NAME(i), worst(i)
-  end do
+  call ts%print_worst(CAT_NAME)
   call ts%finish()
 
 contains
-
-  subroutine expect(what, err, tol, cat)
-    character(len=*), intent(in) :: what
-    real(wp), intent(in) :: err, tol
-    integer, intent(in) :: cat
-    character(len=60) :: buf
-    write(buf, '(a,es9.2,a,es8.1,a)') ': rel err ', err, ' (tol ', tol, ')'
-    call ts%check(err <= tol .and. err == err, what // trim(buf))
-    if (err == err) worst(cat) = max(worst(cat), err)
-  end subroutine expect
 
   pure function rodrigues(phi) result(r)
     real(wp), intent(in) :: phi(3)
@@ -88,13 +76,6 @@ contains
     r = rodrigues(c / max(norm2(c), tiny(1.0_wp)) * atan2(norm2(c), dot_product(a, b)))
   end function min_rotation
 
-  function random_rotvec(amax) result(phi)
-    real(wp), intent(in) :: amax
-    real(wp) :: phi(3)
-    phi = rng%uniform_vec(3, -1.0_wp, 1.0_wp)
-    phi = phi / norm2(phi) * rng%uniform(0.0_wp, amax)
-  end function random_rotvec
-
   ! ------------------------------------------------------------------ FD machinery
 
   !> de, second and the Hessian at x against FD. Steps: central differences at h = 1e-6 and
@@ -106,17 +87,17 @@ contains
     real(wp), allocatable :: d2(:)
     real(wp) :: err
     integer :: m
-    call expect(what // ' de', relerr(flat(jacobian(el, x)), flat(fd_jacobian(el, x, 1.0e-6_wp)), &
+    call ts%expect(what // ' de', relerr(flat(jacobian(el, x)), flat(fd_jacobian(el, x, 1.0e-6_wp)), &
       1.0_wp), 1.0e-8_wp, C_DE)
     d2 = second(el, x, v)
-    call expect(what // ' second vs FD d2/ds2', relerr(d2, fd_second(el, x, v, 2.0e-3_wp), &
+    call ts%expect(what // ' second vs FD d2/ds2', relerr(d2, fd_second(el, x, v, 2.0e-3_wp), &
       floor_d2), 1.0e-7_wp, C_D2FD)
     err = 0.0_wp
     do m = 1, el%n_modes()
       err = max(err, relerr(flat(polar_hessian(el, x, m)), flat(fd_hessian(el, x, m, &
         1.0e-5_wp)), floor_d2 / dot_product(v, v)))
     end do
-    call expect(what // ' Hessian (polarised second) vs FD, all modes', err, 1.0e-7_wp, C_POL)
+    call ts%expect(what // ' Hessian (polarised second) vs FD, all modes', err, 1.0e-7_wp, C_POL)
   end subroutine check_derivatives
 
   ! ------------------------------------------------------------------ rotations
@@ -135,14 +116,14 @@ contains
         - r(2, 3) * r(3, 1)) + r(1, 3) * (r(2, 1) * r(3, 2) - r(2, 2) * r(3, 1))
       err(1) = max(err(1), maxval(abs(matmul(transpose(r), r) - id)), abs(det - 1))
       ! Every fifth angle is tiny (series branch), every fifth near the switch at 1e-3.
-      phi = random_rotvec(3.0_wp)
+      phi = random_rotvec(rng, 3.0_wp)
       if (mod(k, 5) == 1) phi = phi * 1.0e-5_wp
       if (mod(k, 5) == 2) phi = phi / norm2(phi) * 1.0e-3_wp * (1 + (k - 25) * 1.0e-3_wp)
       err(2) = max(err(2), maxval(abs(euler_to_matrix(rotvec_to_euler(phi)) - rodrigues(phi))))
       err(3) = max(err(3), abs(norm2(rotvec_to_euler(phi)) - 1))
       p = matrix_to_euler(rot_matrix(lam))
       err(4) = max(err(4), min(maxval(abs(p - lam)), maxval(abs(p + lam))))
-      p = rotvec_to_euler(random_rotvec(3.0_wp))
+      p = rotvec_to_euler(random_rotvec(rng, 3.0_wp))
       err(5) = max(err(5), maxval(abs(rot_matrix(euler_product(p, lam)) &
         - matmul(rot_matrix(p), rot_matrix(lam)))))
       ! Derivatives at a non-unit lambda: R a is a quadratic polynomial in all of R^4.
@@ -164,48 +145,18 @@ contains
       err(7) = max(err(7), maxval(abs(rot_apply_second(mu, a) - d2fd)) / (nl**2 * norm2(a)))
     end do
     ! Closed forms: a few roundings of O(1) terms, 50 eps bounds (observed < 10 eps).
-    call expect('R(unit lambda): |R^T R - I|, |det R - 1|', err(1), 50 * EPS, C_ROT)
-    call expect('rotation vector -> lambda -> R = Rodrigues', err(2), 50 * EPS, C_ROT)
-    call expect('rotation vector -> lambda is unit', err(3), 50 * EPS, C_ROT)
-    call expect('matrix -> lambda = +-lambda', err(4), 50 * EPS, C_ROT)
-    call expect('R(p q) = R(p) R(q)', err(5), 50 * EPS, C_ROT)
+    call ts%expect('R(unit lambda): |R^T R - I|, |det R - 1|', err(1), 50 * EPS, C_ROT)
+    call ts%expect('rotation vector -> lambda -> R = Rodrigues', err(2), 50 * EPS, C_ROT)
+    call ts%expect('rotation vector -> lambda is unit', err(3), 50 * EPS, C_ROT)
+    call ts%expect('matrix -> lambda = +-lambda', err(4), 50 * EPS, C_ROT)
+    call ts%expect('R(p q) = R(p) R(q)', err(5), 50 * EPS, C_ROT)
     ! Polynomials of degree 2: central differences are exact up to round-off ~ eps |Ra| / h
     ! and eps |Ra| / s^2 (16 terms of the 5-point rule): bounds 100 eps / h, 300 eps / s^2.
-    call expect('d(R a)/dlambda vs central FD', err(6), 100 * EPS / 1.0e-4_wp, C_ROT)
-    call expect('d2(R a) along mu vs 5-point FD', err(7), 300 * EPS / 1.0e-2_wp**2, C_ROT)
+    call ts%expect('d(R a)/dlambda vs central FD', err(6), 100 * EPS / 1.0e-4_wp, C_ROT)
+    call ts%expect('d2(R a) along mu vs 5-point FD', err(7), 300 * EPS / 1.0e-2_wp**2, C_ROT)
   end subroutine rotation_tests
 
   ! ------------------------------------------------------------------ beam
-
-  !> A beam with a general reference orientation: chord along dir, section y from orient.
-  function make_beam(form, l0, dir, orient) result(b)
-    integer, intent(in) :: form
-    real(wp), intent(in) :: l0, dir(3), orient(3)
-    type(beam3d_t) :: b
-    type(error_t) :: err
-    integer :: k
-    b%label = 'beam3d'
-    b%dofs = [(k, k=1, 14)]
-    b%mode_class = [MODE_RIGID, (MODE_DYNAMIC, k=1, 5)]
-    call beam3d_set_geometry(b, [0.3_wp, -0.2_wp, 0.5_wp], [0.3_wp, -0.2_wp, 0.5_wp] &
-      + l0 * dir / norm2(dir), orient, err)
-    call ts%check(err%ok(), 'beam3d_set_geometry accepts a general orientation')
-    b%ea = 3.0e4_wp; b%gj = 41.0_wp; b%ei_y = 55.0_wp; b%ei_z = 23.0_wp; b%rho_a = 2.7_wp
-    b%bending = form
-  end function make_beam
-
-  !> Coordinates of a state: chord from xp of length l along R_rig R(tilt) ex0, nodal
-  !> rotations R_rig R(th_k) relative to the reference (R_rig = R(rig) a rigid rotation).
-  function beam_state(b, xp, rig, l, tilt, thp, thq) result(x)
-    type(beam3d_t), intent(in) :: b
-    real(wp), intent(in) :: xp(3), rig(3), l, tilt(3), thp(3), thq(3)
-    real(wp) :: x(14), rr(4)
-    rr = rotvec_to_euler(rig)
-    x(1:3) = xp
-    x(8:10) = xp + l * matmul(rodrigues(rig), matmul(rodrigues(tilt), b%ex0))
-    x(4:7) = euler_product(rr, rotvec_to_euler(thp))
-    x(11:14) = euler_product(rr, rotvec_to_euler(thq))
-  end function beam_state
 
   !> e_bar from Rodrigues matrices (nodal rotation R_rig R(th_k)), independent of the element.
   function beam_expected(b, x, rig, thp, thq) result(e)
@@ -240,15 +191,15 @@ contains
     real(wp) :: e(6), x0(14)
     character(len=40) :: what
     integer :: k
-    b = make_beam(form, 0.8_wp, [0.6_wp, -0.3_wp, 0.74_wp], [0.2_wp, 0.9_wp, -0.1_wp])
+    b = make_beam3d(form, 0.8_wp, [0.6_wp, -0.3_wp, 0.74_wp], [0.2_wp, 0.9_wp, -0.1_wp], ts)
     do k = 1, N_CFG
       write(what, '(a,a,a,i0)') 'beam3d/', fname, ' cfg ', k
       xp = rng%uniform_vec(3, -2.0_wp, 2.0_wp)
-      rig = random_rotvec(PI)
+      rig = random_rotvec(rng, PI)
       l = b%l0 * rng%uniform(0.9_wp, 1.1_wp)
-      tilt = random_rotvec(0.4_wp)
-      thp = random_rotvec(1.0_wp)
-      thq = random_rotvec(1.0_wp)
+      tilt = random_rotvec(rng, 0.4_wp)
+      thp = random_rotvec(rng, 1.0_wp)
+      thq = random_rotvec(rng, 1.0_wp)
       ! Pure bending by 1 rad per node in a plane at 0.7 rad to the section axes; then
       ! tangent rotations past 90 degrees (angle form: closed-form branch with cx < 0).
       if (k == 1) then
@@ -268,22 +219,22 @@ contains
         thp = -atan(0.5_wp) * (1 + 1.0e-7_wp) * (cos(0.3_wp) * b%ey0 + sin(0.3_wp) * b%ez0)
         thq = atan(0.5_wp) * (1 - 1.0e-7_wp) * (cos(1.1_wp) * b%ey0 + sin(1.1_wp) * b%ez0)
       end if
-      x = beam_state(b, xp, rig, l, tilt, thp, thq)
+      x = beam3d_state(b, xp, rig, l, tilt, thp, thq)
       e = modes(b, x)
-      call expect(trim(what) // ' e vs closed form', relerr(e, beam_expected(b, x, rig, thp, &
+      call ts%expect(trim(what) // ' e vs closed form', relerr(e, beam_expected(b, x, rig, thp, &
         thq), b%l0), 1.0e-13_wp, C_E)
       v = rng%uniform_vec(14, -1.0_wp, 1.0_wp)
       call check_derivatives(b, x, v, trim(what), 1.0e-2_wp * b%l0 * dot_product(v, v))
       ! Rigid motion: positions rotated by sig about the origin and translated, sig composed
       ! in front of both nodal rotations.
-      sig = rotvec_to_euler(random_rotvec(PI))
+      sig = rotvec_to_euler(random_rotvec(rng, PI))
       d = rng%uniform_vec(3, -3.0_wp, 3.0_wp)
       y = x
       y(1:3) = rot_apply(sig, x(1:3)) + d
       y(8:10) = rot_apply(sig, x(8:10)) + d
       y(4:7) = euler_product(sig, x(4:7))
       y(11:14) = euler_product(sig, x(11:14))
-      call expect(trim(what) // ' e invariant under rigid motion', relerr(modes(b, y), e, &
+      call ts%expect(trim(what) // ' e invariant under rigid motion', relerr(modes(b, y), e, &
         b%l0), 1.0e-13_wp, C_INV)
     end do
     ! A non-unit lambda: the derivatives hold for the homogeneous form off the unit sphere.
@@ -292,10 +243,10 @@ contains
     call check_derivatives(b, x, v, 'beam3d/' // fname // ' non-unit lambda', &
       1.0e-2_wp * b%l0 * dot_product(v, v))
     ! e = 0 undeformed, for any rigid placement of it.
-    x0 = beam_state(b, [0.3_wp, -0.2_wp, 0.5_wp], [0.0_wp, 0.0_wp, 0.0_wp], b%l0, &
+    x0 = beam3d_state(b, [0.3_wp, -0.2_wp, 0.5_wp], [0.0_wp, 0.0_wp, 0.0_wp], b%l0, &
       [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp])
     do k = 1, 3
-      sig = rotvec_to_euler(random_rotvec(PI))
+      sig = rotvec_to_euler(random_rotvec(rng, PI))
       d = rng%uniform_vec(3, -3.0_wp, 3.0_wp)
       y = x0
       y(1:3) = rot_apply(sig, x0(1:3)) + d
@@ -303,7 +254,7 @@ contains
       y(4:7) = sig
       y(11:14) = sig
       ! Roundings of positions up to |x| ~ 5 in l and e_l: a few eps |x| / l0 ~ 1e-15.
-      call expect('beam3d/' // fname // ' e = 0 undeformed, rigidly placed', &
+      call ts%expect('beam3d/' // fname // ' e = 0 undeformed, rigidly placed', &
         maxval(abs(modes(b, y))) / b%l0, 5.0e-14_wp, C_INV)
     end do
   end subroutine beam_tests
@@ -327,25 +278,6 @@ contains
     k = pa / (30 * l) * reshape([36 * l**0, 3 * l, -36 * l**0, 3 * l, 3 * l, 4 * l**2, &
       -3 * l, -l**2, -36 * l**0, -3 * l, 36 * l**0, -3 * l, 3 * l, -l**2, -3 * l, 4 * l**2], [4, 4])
   end function planar_kg
-
-  !> Local 12x12 space-frame matrix on (u, v, w, tx, ty, tz) per node from the planar blocks:
-  !> x-y plane (v, tz) with kxy, x-z plane (w, ty) with kxz and ty = -dw/dx (sign flip).
-  pure function space_frame(kax, ktor, kxy, kxz) result(k)
-    real(wp), intent(in) :: kax, ktor, kxy(4, 4), kxz(4, 4)
-    real(wp) :: k(12, 12), sg(4)
-    integer, parameter :: ixz(4) = [3, 5, 9, 11]
-    integer :: i, j
-    k = 0.0_wp
-    k([1, 7], [1, 7]) = kax * reshape([1, -1, -1, 1], [2, 2])
-    k([4, 10], [4, 10]) = ktor * reshape([1, -1, -1, 1], [2, 2])
-    k([2, 6, 8, 12], [2, 6, 8, 12]) = kxy
-    sg = [1, -1, 1, -1]
-    do j = 1, 4
-      do i = 1, 4
-        k(ixz(i), ixz(j)) = sg(i) * sg(j) * kxz(i, j)
-      end do
-    end do
-  end function space_frame
 
   !> x(w) at the undeformed state x0 for w = (u_p, theta_p, u_q, theta_q), exact rotation map.
   function frame_coords(x0, w) result(x)
@@ -371,7 +303,7 @@ contains
     end do
     do form = BENDING_ANGLE, BENDING_SINE
       do ishear = 0, 1
-        b = make_beam(form, 0.65_wp, [-0.4_wp, 0.8_wp, 0.45_wp], [0.7_wp, 0.1_wp, 0.5_wp])
+        b = make_beam3d(form, 0.65_wp, [-0.4_wp, 0.8_wp, 0.45_wp], [0.7_wp, 0.1_wp, 0.5_wp], ts)
         py = ishear * shears(1); pz = ishear * shears(2)
         b%shear_xz = py; b%shear_xy = pz
         write(what, '(a,i0,a,f4.2,a,f4.2)') 'beam3d form ', form, ' shear xz ', py, ' xy ', pz
@@ -380,21 +312,21 @@ contains
         do i = 0, 3
           t(3 * i + 1:3 * i + 3, 3 * i + 1:3 * i + 3) = lam3
         end do
-        x0 = frame_coords(beam_state(b, [0.1_wp, 0.2_wp, -0.3_wp], [0.0_wp, 0.0_wp, 0.0_wp], &
+        x0 = frame_coords(beam3d_state(b, [0.1_wp, 0.2_wp, -0.3_wp], [0.0_wp, 0.0_wp, 0.0_wp], &
           b%l0, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp]), &
           [(0.0_wp, i=1, 12)])
         de = jacobian(b, x0)
         bm = matmul(de, jm)
         call b%stiffness(s)
         k = matmul(transpose(bm), matmul(s, bm))
-        kref = space_frame(b%ea / b%l0, b%gj / b%l0, planar_k(b%ei_z, b%l0, pz), &
+        kref = space_frame(b%ea / b%l0 * BAR, b%gj / b%l0 * BAR, planar_k(b%ei_z, b%l0, pz), &
           planar_k(b%ei_y, b%l0, py))
         kref = matmul(transpose(t), matmul(kref, t))
         ! Products of O(1) direction cosines: a few eps of the largest entry; bound 1e-13.
-        call expect(trim(what) // ' B^T S B = textbook 12x12', relerr(flat(k), flat(kref), &
+        call ts%expect(trim(what) // ' B^T S B = textbook 12x12', relerr(flat(k), flat(kref), &
           1.0_wp), 1.0e-13_wp, C_K)
         if (form == BENDING_ANGLE) bs = bm
-        if (form == BENDING_SINE) call expect(trim(what) // ' B(angle) = B(sine)', &
+        if (form == BENDING_SINE) call ts%expect(trim(what) // ' B(angle) = B(sine)', &
           relerr(flat(bm), flat(bs), 1.0_wp), 1.0e-14_wp, C_K)
         if (ishear == 1) cycle
         ! P Hess(e1_bar) in (u, theta): J^T H_x J plus de1/dlambda0 d2lambda0/dtheta2 = -I/4
@@ -407,9 +339,9 @@ contains
         kg = pforce * kg
         ! The textbook torsion entries P Ip / (A L) are absent: e1_bar is the elongation of the
         ! beam axis, and the lengthening of off-axis fibres by twist (Wagner) is not a mode.
-        kref = space_frame(0.0_wp, 0.0_wp, planar_kg(pforce, b%l0), planar_kg(pforce, b%l0))
+        kref = space_frame(0 * BAR, 0 * BAR, planar_kg(pforce, b%l0), planar_kg(pforce, b%l0))
         kref = matmul(transpose(t), matmul(kref, t))
-        call expect(trim(what) // ' P Hess(e1_bar) = textbook Kg (bending part)', &
+        call ts%expect(trim(what) // ' P Hess(e1_bar) = textbook Kg (bending part)', &
           relerr(flat(kg), flat(kref), 1.0_wp), 1.0e-13_wp, C_KG)
         ! Independent of the chain rule: second differences of e1_bar(x(w)) through the exact
         ! rotation map, h = 1e-4: truncation ~h^2, round-off ~eps l0 / h^2 ~ 1e-8 relative.
@@ -428,7 +360,7 @@ contains
             kgfd(i, j) = pforce * (fpp - fpm - fmp + fmm) / (4 * h**2)
           end do
         end do
-        call expect(trim(what) // ' FD Hessian of P e1_bar(x(u, theta)) = textbook Kg', &
+        call ts%expect(trim(what) // ' FD Hessian of P e1_bar(x(u, theta)) = textbook Kg', &
           relerr(flat(kgfd), flat(kref), 1.0_wp), 1.0e-6_wp, C_KG)
       end do
     end do
@@ -485,24 +417,24 @@ contains
     real(wp) :: sp(2), sq(2), dq(2), beta
     integer :: k, icase
     character(len=100) :: what
-    b = make_beam(form, 0.8_wp, [0.3_wp, 0.5_wp, -0.8_wp], [1.0_wp, 0.2_wp, 0.4_wp])
+    b = make_beam3d(form, 0.8_wp, [0.3_wp, 0.5_wp, -0.8_wp], [1.0_wp, 0.2_wp, 0.4_wp], ts)
     ! Equal and opposite rotations about the chord, rigidly rotated: e2 = l0 sin(phi) exactly.
     do k = 1, 2
       phi = 1.0e-3_wp
       if (k == 2) phi = 0.9_wp
-      x = beam_state(b, [0.1_wp, 0.0_wp, 0.2_wp], [0.0_wp, 0.0_wp, 0.0_wp], b%l0, &
+      x = beam3d_state(b, [0.1_wp, 0.0_wp, 0.2_wp], [0.0_wp, 0.0_wp, 0.0_wp], b%l0, &
         [0.0_wp, 0.0_wp, 0.0_wp], -phi / 2 * b%ex0, phi / 2 * b%ex0)
       sig = rotvec_to_euler([1.2_wp, -0.8_wp, 2.0_wp])
       x(1:3) = rot_apply(sig, x(1:3)); x(8:10) = rot_apply(sig, x(8:10))
       x(4:7) = euler_product(sig, x(4:7)); x(11:14) = euler_product(sig, x(11:14))
       e = modes(b, x)
       write(what, '(a,a,a,es8.1)') 'beam3d/', fname, ' pure twist phi ', phi
-      call expect(trim(what) // ': e2 = l0 sin(phi)', abs(e(2) - b%l0 * sin(phi)) / b%l0, &
+      call ts%expect(trim(what) // ': e2 = l0 sin(phi)', abs(e(2) - b%l0 * sin(phi)) / b%l0, &
         1.0e-14_wp, C_TW)
-      call expect(trim(what) // ': e1, e3..e6 = 0', maxval(abs(e([1, 3, 4, 5, 6]))) / b%l0, &
+      call ts%expect(trim(what) // ': e1, e3..e6 = 0', maxval(abs(e([1, 3, 4, 5, 6]))) / b%l0, &
         1.0e-14_wp, C_TW)
       ! First order: e2 / (l0 phi) - 1 = -phi^2/6 + ...; bound 2 phi^2 (12x).
-      if (k == 1) call expect(trim(what) // ': e2 = l0 phi to first order', &
+      if (k == 1) call ts%expect(trim(what) // ': e2 = l0 phi to first order', &
         abs(e(2) / (b%l0 * phi) - 1), 2 * phi**2, C_TW)
     end do
     ! Bending without twist, e2_bar at eps, eps/2, eps/4. e2_bar is even in eps (eps -> -eps
@@ -534,7 +466,7 @@ contains
         call ts%order(ealt(2), ealt(3), 2, trim(what) // ' order')
       else
         ! Planar: e2 and the correction vanish identically; the transport's rounding remains.
-        call expect(trim(what) // ' = 0', maxval(eb) / b%l0, 1.0e-12_wp, C_TW)
+        call ts%expect(trim(what) // ' = 0', maxval(eb) / b%l0, 1.0e-12_wp, C_TW)
       end if
     end do
   end subroutine twist_tests
@@ -554,12 +486,14 @@ contains
     call beam3d_set_geometry(b, [0.0_wp, 0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp, 0.0_wp], &
       [0.0_wp, 1.0_wp, 0.0_wp], err)
     call ts%check(.not. err%ok(), 'beam3d_set_geometry rejects coincident nodes')
-    b = make_beam(BENDING_ANGLE, 0.9_wp, [1.0_wp, 2.0_wp, 3.0_wp], [0.0_wp, 0.0_wp, 1.0_wp])
+    b = make_beam3d(BENDING_ANGLE, 0.9_wp, [1.0_wp, 2.0_wp, 3.0_wp], [0.0_wp, 0.0_wp, 1.0_wp], ts)
+    ! Mass options in detail: tests/test_beam3d_mass.f90.
+    b%consistent = .false.
     call b%lumped_mass(diag)
     call ts%check(all(diag([1, 2, 3, 8, 9, 10]) == b%rho_a * b%l0 / 2) .and. &
       all(diag([4, 5, 6, 7, 11, 12, 13, 14]) == 0), 'beam3d lumped: rhoA l0/2 per translation')
-    call ts%check(.not. b%has_inertia() .and. b%type_name() == 'beam3d' .and. &
-      b%n_modes() == 6, 'beam3d: no consistent inertia, type name, 6 modes')
+    call ts%check(b%has_inertia() .and. b%type_name() == 'beam3d' .and. &
+      b%n_modes() == 6, 'beam3d: inertia, type name, 6 modes')
     ! Degenerate states (collapsed chord, lambda = 0) give finite numbers, not a trap.
     do k = BENDING_ANGLE, BENDING_SINE
       b%bending = k
@@ -574,14 +508,14 @@ contains
       lam = rng%uniform_vec(4, -1.0_wp, 1.0_wp)
       v = rng%uniform_vec(4, -1.0_wp, 1.0_wp)
       e = modes(en, lam)
-      call expect('euler e = |lambda|^2 - 1', abs(e(1) - (sum(lam**2) - 1)), 10 * EPS, C_E)
+      call ts%expect('euler e = |lambda|^2 - 1', abs(e(1) - (sum(lam**2) - 1)), 10 * EPS, C_E)
       ! Round-off only: eps |e| / h with h = 1e-6 and eps |e| / s^2 (5-point, s = 1e-2).
-      call expect('euler de vs FD', relerr(flat(jacobian(en, lam)), flat(fd_jacobian(en, lam, &
+      call ts%expect('euler de vs FD', relerr(flat(jacobian(en, lam)), flat(fd_jacobian(en, lam, &
         1.0e-6_wp)), 1.0_wp), 100 * EPS / 1.0e-6_wp, C_DE)
-      call expect('euler second vs FD', relerr(second(en, lam, v), fd_second(en, lam, v, &
+      call ts%expect('euler second vs FD', relerr(second(en, lam, v), fd_second(en, lam, v, &
         1.0e-2_wp), 1.0_wp), 300 * EPS / 1.0e-4_wp, C_D2FD)
       e = modes(en, lam / norm2(lam))
-      call expect('euler e = 0 for unit lambda', abs(e(1)), 10 * EPS, C_INV)
+      call ts%expect('euler e = 0 for unit lambda', abs(e(1)), 10 * EPS, C_INV)
     end do
   end subroutine misc_tests
 

@@ -20,18 +20,24 @@
 !>              in that plane (per-plane atan2 angles are not), and scale-free in |lambda|.
 !> Both forms have the same linear limit (h = 1 + O(alpha^2)) and the same Hessian at the
 !> undeformed state. The torsion mode is the same in both (sine of the relative twist).
+!>
+!> Inertia and weight (consistent by default; submodule elements_beam3d_mass) follow from the
+!> centroid line r(xi) = x_p + xi l_v + (c_z u_z - c_y u_y) / l0 with the cubic Hermite
+!> offsets c_z = H2 e3 - H4 e4, c_y = H2 e5 - H4 e6 and u_z = l_v x m_y, u_y = m_z x l_v
+!> (m = mean of the nodal section axes), and from the section angular velocity interpolated
+!> linearly between the nodal body angular velocities 2 G(lambda) lambda'.
 module elements_beam3d
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
   use elements_base, only: element_t
   use elements_rotation, only: rot_apply, rot_apply_jac, rot_apply_second
+  use elements_sd, only: sd_t, sd_lin, sd_scale, sd_mul, N_X
   implicit none
   private
-  public :: beam3d_t, BENDING_ANGLE, BENDING_SINE, beam3d_set_geometry
+  public :: beam3d_t, BENDING_ANGLE, BENDING_SINE, beam3d_set_geometry, beam3d_centroid
 
   integer, parameter :: BENDING_ANGLE = 1
   integer, parameter :: BENDING_SINE = 2
-  integer, parameter :: N_X = 14
   !> First coordinate of the position and of the Euler parameters of node p (1), q (2).
   integer, parameter :: IPOS(2) = [1, 8], ILAM(2) = [4, 11]
   !> An orientation vector within this sine of the chord is rejected: ey0 would carry a
@@ -48,27 +54,54 @@ module elements_beam3d
     real(wp) :: ey0(3) = [0.0_wp, 1.0_wp, 0.0_wp]   !< reference section axis y
     real(wp) :: ez0(3) = [0.0_wp, 0.0_wp, 1.0_wp]   !< reference section axis z = ex0 x ey0
     real(wp) :: ea = 0.0_wp, gj = 0.0_wp, ei_y = 0.0_wp, ei_z = 0.0_wp, rho_a = 0.0_wp
+    !> Rotary inertia of the cross-section per length [kg m]: rho J_polar about the axis
+    !> (torsion), rho I_y and rho I_z about the section axes y and z.
+    real(wp) :: rho_j = 0.0_wp, rho_iy = 0.0_wp, rho_iz = 0.0_wp
     real(wp) :: shear_xz = 0.0_wp  !< 12 EI_y / (k G A l0^2) of the (e3, e4) plane; 0 = E-B
     real(wp) :: shear_xy = 0.0_wp  !< 12 EI_z / (k G A l0^2) of the (e5, e6) plane
     integer :: bending = BENDING_ANGLE
+    !> Consistent (configuration-dependent) mass, or lumped: rho_a l0 / 2 per node and
+    !> translation plus the rotary inertia of each half element, rigidly fixed to its node.
+    logical :: consistent = .true.
   contains
     procedure :: evaluate => beam3d_evaluate
     procedure :: second => beam3d_second
     procedure :: stiffness => beam3d_stiffness
     procedure, nopass :: type_name => beam3d_type_name
+    procedure :: has_inertia => beam3d_has_inertia
+    procedure :: inertia => beam3d_inertia
+    procedure :: weight => beam3d_weight
     procedure :: lumped_mass => beam3d_lumped_mass
   end type beam3d_t
-
-  !> A scalar function of x with its gradient and its first and second derivatives along v.
-  type :: sd_t
-    real(wp) :: f = 0.0_wp, g(N_X) = 0.0_wp, d1 = 0.0_wp, d2 = 0.0_wp
-  end type sd_t
 
   !> Current chord and nodal axes with their derivatives (d1, d2: along v, zero without v).
   type :: geom_t
     real(wp) :: l, inv_l, el(3), dl1, dl2, del1(3), del2(3)
     real(wp) :: ax(3, 3, 2), jac(3, 4, 3, 2), dax1(3, 3, 2), dax2(3, 3, 2)
   end type geom_t
+
+  interface
+    !> Mass matrix M = d2T/dxd2 and convective force h = (dM/dt) xd - dT/dx (submodule).
+    pure module subroutine beam3d_inertia(this, x, xd, m, h)
+      class(beam3d_t), intent(in) :: this
+      real(wp), intent(in) :: x(:), xd(:)
+      real(wp), intent(out) :: m(:, :), h(:)
+    end subroutine beam3d_inertia
+
+    !> Gravity g (3) on the consistent mass: potential = -int rho_a g . r, f = -dV/dx.
+    pure module subroutine beam3d_weight(this, x, g, f, potential)
+      class(beam3d_t), intent(in) :: this
+      real(wp), intent(in) :: x(:), g(:)
+      real(wp), intent(out) :: f(:), potential
+    end subroutine beam3d_weight
+
+    !> The centroid r(xi) of the mass interpolation, xi in [0, 1] from p to q.
+    pure module function beam3d_centroid(this, x, xi) result(r)
+      class(beam3d_t), intent(in) :: this
+      real(wp), intent(in) :: x(:), xi
+      real(wp) :: r(3)
+    end function beam3d_centroid
+  end interface
 
 contains
 
@@ -171,35 +204,6 @@ contains
     s%d2 = dot_product(gm%dax2(:, i, 1), gm%ax(:, j, 2)) + 2 * dot_product(gm%dax1(:, i, 1), &
       gm%dax1(:, j, 2)) + dot_product(gm%ax(:, i, 1), gm%dax2(:, j, 2))
   end function axis_axis
-
-  pure function sd_lin(a, sa, b, sb) result(s)
-    type(sd_t), intent(in) :: a, b
-    real(wp), intent(in) :: sa, sb
-    type(sd_t) :: s
-    s%f = sa * a%f + sb * b%f
-    s%g = sa * a%g + sb * b%g
-    s%d1 = sa * a%d1 + sb * b%d1
-    s%d2 = sa * a%d2 + sb * b%d2
-  end function sd_lin
-
-  pure function sd_scale(a, sa) result(s)
-    type(sd_t), intent(in) :: a
-    real(wp), intent(in) :: sa
-    type(sd_t) :: s
-    s%f = sa * a%f
-    s%g = sa * a%g
-    s%d1 = sa * a%d1
-    s%d2 = sa * a%d2
-  end function sd_scale
-
-  pure function sd_mul(a, b) result(s)
-    type(sd_t), intent(in) :: a, b
-    type(sd_t) :: s
-    s%f = a%f * b%f
-    s%g = a%f * b%g + b%f * a%g
-    s%d1 = a%f * b%d1 + b%f * a%d1
-    s%d2 = a%d2 * b%f + 2 * a%d1 * b%d1 + a%f * b%d2
-  end function sd_mul
 
   !> h(c, q) = atan2(sqrt(q), c) / sqrt(q) and its derivatives hd = (h_c, h_q, h_cc, h_cq,
   !> h_qq). h_c = -1 / r^2 with r^2 = c^2 + q exactly; h_q and h_qq cancel badly in closed
@@ -337,12 +341,21 @@ contains
     b = kb * reshape([4 + p, -(2 - p), -(2 - p), 4 + p], [2, 2])
   end function bending_block
 
-  !> Half the mass on the translations of each node; none on the Euler parameters (no
-  !> rotary inertia until the spatial node inertia M = 4 G^T J G is implemented).
+  !> Both mass options have a configuration-dependent part: the lumped one its nodal rotary
+  !> inertia 4 G^T J G (not a constant diagonal in Euler parameters).
+  pure logical function beam3d_has_inertia(this)
+    class(beam3d_t), intent(in) :: this
+    beam3d_has_inertia = this%rho_a > 0 .or. this%rho_j > 0 .or. this%rho_iy > 0 &
+      .or. this%rho_iz > 0
+  end function beam3d_has_inertia
+
+  !> Lumped option: half the mass on the translations of each node (its rotary inertia is in
+  !> beam3d_inertia); nothing for the consistent mass.
   pure subroutine beam3d_lumped_mass(this, diag)
     class(beam3d_t), intent(in) :: this
     real(wp), intent(out) :: diag(:)
     diag = 0.0_wp
+    if (this%consistent) return
     diag(IPOS(1):IPOS(1) + 2) = this%rho_a * this%l0 / 2
     diag(IPOS(2):IPOS(2) + 2) = this%rho_a * this%l0 / 2
   end subroutine beam3d_lumped_mass

@@ -4,7 +4,7 @@ module fd_helpers
   use core_kinds, only: wp
   implicit none
   private
-  public :: lcg_t, relerr, flat
+  public :: lcg_t, relerr, flat, random_rotvec
 
   !> Deterministic uniform numbers in [a, b) (a 64-bit-free LCG, same on every platform).
   type :: lcg_t
@@ -46,4 +46,13 @@ contains
     real(wp) :: v(size(m))
     v = reshape(m, [size(m)])
   end function flat
+
+  !> A rotation vector of random direction and random angle in [0, amax).
+  function random_rotvec(rng, amax) result(phi)
+    type(lcg_t), intent(inout) :: rng
+    real(wp), intent(in) :: amax
+    real(wp) :: phi(3)
+    phi = rng%uniform_vec(3, -1.0_wp, 1.0_wp)
+    phi = phi / norm2(phi) * rng%uniform(0.0_wp, amax)
+  end function random_rotvec
 end module fd_helpers

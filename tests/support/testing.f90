@@ -11,12 +11,16 @@ module testing
     character(len=:), allocatable :: name
     integer :: n_pass = 0
     integer :: n_fail = 0
+    !> Worst achieved relative error per category of `expect`, for the summary.
+    real(wp), allocatable :: worst(:)
   contains
     procedure :: init => suite_init
     procedure :: check => suite_check
     procedure :: close => suite_close
     procedure :: close_array => suite_close_array
     procedure :: order => suite_order
+    procedure :: expect => suite_expect
+    procedure :: print_worst => suite_print_worst
     procedure :: finish => suite_finish
   end type suite_t
 
@@ -97,6 +101,43 @@ contains
     write(line, '(a,f7.3,a,i0,a)') ' (observed order ', p, ', expected ', expected, ' +- 0.5)'
     call this%check(abs(p - expected) < 0.5_wp, what // trim(line))
   end subroutine suite_order
+
+  !> A check on an achieved relative error err <= tol; records the worst per category cat.
+  subroutine suite_expect(this, what, err, tol, cat)
+    class(suite_t), intent(inout) :: this
+    character(len=*), intent(in) :: what
+    real(wp), intent(in) :: err, tol
+    integer, intent(in) :: cat
+    character(len=60) :: buf
+    real(wp), allocatable :: grown(:)
+    write(buf, '(a,es9.2,a,es8.1,a)') ': rel err ', err, ' (tol ', tol, ')'
+    call this%check(err <= tol .and. err == err, what // trim(buf))
+    if (.not. allocated(this%worst)) allocate(this%worst(0))
+    if (size(this%worst) < cat) then
+      allocate(grown(cat))
+      grown = 0.0_wp
+      grown(1:size(this%worst)) = this%worst
+      call move_alloc(grown, this%worst)
+    end if
+    if (err == err) this%worst(cat) = max(this%worst(cat), err)
+  end subroutine suite_expect
+
+  !> The worst achieved relative error of every category, named.
+  subroutine suite_print_worst(this, names)
+    class(suite_t), intent(in) :: this
+    character(len=*), intent(in) :: names(:)
+    integer :: i
+    write(*, '(a)') '-- worst achieved relative errors:'
+    do i = 1, size(names)
+      if (allocated(this%worst)) then
+        if (i <= size(this%worst)) then
+          write(*, '(4x,a,es10.2)') names(i), this%worst(i)
+          cycle
+        end if
+      end if
+      write(*, '(4x,a,a)') names(i), '  (no check)'
+    end do
+  end subroutine suite_print_worst
 
   subroutine suite_finish(this)
     class(suite_t), intent(inout) :: this
