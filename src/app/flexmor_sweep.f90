@@ -5,7 +5,7 @@
 !> line, exit 130/143, the finished cases stay in the file (rerun to resume).
 program flexmor_sweep_main
   use, intrinsic :: iso_fortran_env, only: error_unit
-  use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_Comm_rank, MPI_COMM_WORLD
+  use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_Comm_rank, MPI_Barrier, MPI_COMM_WORLD
   use core_error, only: error_t
   use core_linalg, only: single_thread_blas
   use io_cli, only: cli_args_t, parse_cli
@@ -15,7 +15,7 @@ program flexmor_sweep_main
   use sweep_run, only: run_sweep, check_sweep
   implicit none
   type(sweep_spec_t) :: spec
-  type(error_t) :: err
+  type(error_t) :: err, guard_err
   type(cli_args_t) :: args
   integer :: rank, code
 
@@ -41,11 +41,17 @@ program flexmor_sweep_main
       if (err%ok()) call run_sweep(spec, args%output, MPI_COMM_WORLD, args%verbose, err)
     end if
   end if
+  ! The run is over: a SIGTERM from mpiexec now (another rank has exited with an error first)
+  ! must not claim that finished cases are kept: say nothing, the error line says it all.
+  call install_interrupt_guard('flexmor-sweep', '', guard_err, silent=.true.)
   code = 0
   if (.not. err%ok()) then
     if (rank == 0) write(error_unit, '(a)') 'flexmor-sweep: error: ' // err%message
+    flush(error_unit)
     code = err%code
   end if
+  ! No rank exits (which makes mpiexec stop the others) before rank 0 has said why.
+  call MPI_Barrier(MPI_COMM_WORLD)
   call MPI_Finalize()
   select case (code)
   case (0)
