@@ -15,9 +15,11 @@ module model_system
   use motion_law, only: motion_t
   implicit none
   private
-  public :: model_t, mode_ref_t, COORD_X, COORD_Y, COORD_PHI
+  public :: model_t, mode_ref_t, COORD_X, COORD_Y, COORD_PHI, COORD_Z, COORD_EULER
 
   integer, parameter :: COORD_X = 1, COORD_Y = 2, COORD_PHI = 3
+  !> Spatial models: the z translation, and the four Euler parameters of a node's rotation.
+  integer, parameter :: COORD_Z = 4, COORD_EULER = 5
 
   !> One deformation mode of one element.
   type :: mode_ref_t
