@@ -286,7 +286,7 @@ contains
     do i = 1, model%n_elements
       associate (el => model%elements(i)%e)
         allocate(fe(size(el%dofs)))
-        call el%weight(x(el%dofs), model%gravity, fe, pot)
+        call el%weight(x(el%dofs), model%gravity(1:model%dim), fe, pot)
         v = v + pot
         deallocate(fe)
       end associate

@@ -10,7 +10,7 @@ module dynamics_system
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use core_linalg, only: chol_factor, chol_solve
-  use model_system, only: model_t, COORD_X, COORD_Y, COORD_PHI
+  use model_system, only: model_t, COORD_X, COORD_Y, COORD_Z, COORD_PHI
   use model_kinematics, only: kinematics_t
   use dynamics_augmented, only: augmented_t, element_mass_t
   use elements_base, only: MODE_DYNAMIC, mode_has_stress
@@ -101,6 +101,7 @@ contains
     this%load = model%force
     where (model%coord_kind == COORD_X) this%load = this%load + model%lumped * model%gravity(1)
     where (model%coord_kind == COORD_Y) this%load = this%load + model%lumped * model%gravity(2)
+    where (model%coord_kind == COORD_Z) this%load = this%load + model%lumped * model%gravity(3)
     this%sparse = model%n_x > SPARSE_ABOVE
     if (present(linear_solver)) then
       if (linear_solver == 'dense') this%sparse = .false.
@@ -250,7 +251,8 @@ contains
                    fe => fe_work(1:nd), first => this%mass%offset(iel))
           call el%inertia(this%kin%x(el%dofs), xd(el%dofs), me, he)
           fe = 0.0_wp
-          if (weighted) call el%weight(this%kin%x(el%dofs), this%load_factor * m%gravity, fe, pot)
+          if (weighted) call el%weight(this%kin%x(el%dofs), &
+            this%load_factor * m%gravity(1:m%dim), fe, pot)
           fe = fe - he
           ! By hand: the element is small and matmul/reshape here cost more than the product.
           do l = 1, nd
@@ -710,7 +712,7 @@ contains
           en(2) = en(2) + 0.5_wp * dot_product(e, matmul(s, e))
           if (.not. el%has_inertia()) cycle
           call el%inertia(x(el%dofs), xd(el%dofs), me(:nd, :nd), he(:nd))
-          call el%weight(x(el%dofs), this%load_factor * m%gravity, fe(:nd), pot)
+          call el%weight(x(el%dofs), this%load_factor * m%gravity(1:m%dim), fe(:nd), pot)
           en(1) = en(1) + 0.5_wp * dot_product(xd(el%dofs), matmul(me(:nd, :nd), xd(el%dofs)))
           en(2) = en(2) + pot
         end associate

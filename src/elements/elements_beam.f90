@@ -332,23 +332,24 @@ contains
     real(wp), intent(in) :: x(:), g(:)
     real(wp), intent(out) :: f(:), potential
     type(chord_t) :: c
-    real(wp) :: e(3), de(3, 6), sc, u(2), pg(2), gu, rho_l
+    real(wp) :: e(3), de(3, 6), sc, u(2), pg(2), gu, rho_l, g2(2)
     f = 0.0_wp
     potential = 0.0_wp
     if (.not. this%has_inertia()) return
+    g2 = g(1:2)
     c = chord(this, x)
     call modes(this, c, e, de)
     sc = (e(2) * M_2 - e(3) * M_4) / this%l0
     u = perp(c%lv)
-    pg = perp(g)
-    gu = dot_product(g, u)
+    pg = perp(g2)
+    gu = dot_product(g2, u)
     rho_l = this%rho_a * this%l0
-    f(1:2) = M_P * g + sc * pg
+    f(1:2) = M_P * g2 + sc * pg
     f(3) = 0.0_wp
-    f(4:5) = M_X * g - sc * pg
+    f(4:5) = M_X * g2 - sc * pg
     f(6) = 0.0_wp
     f = rho_l * (f + gu * (M_2 * de(2, :) - M_4 * de(3, :)) / this%l0)
-    potential = -rho_l * (M_1 * dot_product(g, x(1:2)) + M_X * dot_product(g, c%lv) &
+    potential = -rho_l * (M_1 * dot_product(g2, x(1:2)) + M_X * dot_product(g2, c%lv) &
       + sc * gu)
   end subroutine beam_weight
 

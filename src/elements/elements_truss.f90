@@ -81,8 +81,9 @@ contains
     f = 0.0_wp
     potential = 0.0_wp
     if (.not. this%has_inertia()) return
-    f = this%rho_a * this%l0 / 2 * [g, g]
-    potential = -this%rho_a * this%l0 * dot_product(g, (x(1:2) + x(3:4)) / 2)
+    ! A planar element: the first two components of gravity.
+    f = this%rho_a * this%l0 / 2 * [g(1:2), g(1:2)]
+    potential = -this%rho_a * this%l0 * dot_product(g(1:2), (x(1:2) + x(3:4)) / 2)
   end subroutine truss_weight
 
   pure subroutine truss_lumped_mass(this, diag)

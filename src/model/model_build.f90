@@ -122,7 +122,7 @@ contains
     integer :: i
     call check_size(scene, err); if (.not. err%ok()) return
     call model%init()
-    model%gravity = scene%gravity
+    model%gravity(1:2) = scene%gravity
     call add_nodes(scene, model, b, err); if (.not. err%ok()) return
     call add_motions(scene, model, err); if (.not. err%ok()) return
     call check_hinges(scene, b, err); if (.not. err%ok()) return

@@ -50,7 +50,9 @@ module model_system
     !> load_motion(k).
     real(wp), allocatable :: load_shape(:, :)
     integer, allocatable :: load_motion(:)
-    real(wp) :: gravity(2) = 0.0_wp           !< [m/s^2]
+    !> 2 (planar) or 3 (spatial): the components of gravity the elements see.
+    integer :: dim = 2
+    real(wp) :: gravity(3) = 0.0_wp           !< [m/s^2]; z unused in the plane
     type(motion_t), allocatable :: motions(:)
     integer :: n_motions = 0
     !> Named points for output: label and coordinate indices (x, y, phi; phi 0 if none).
