@@ -7,7 +7,9 @@
 !>     large-deflection answer (same mesh, angle form) in that plane, without twist;
 !>   - clamped-free bending frequencies in both planes and the torsional one (modal analysis);
 !>   - released from a large deflection in both planes, the undamped beam keeps its energy
-!>     (consistent mass with rotary inertia, its convective forces, Euler parameters).
+!>     (consistent mass with rotary inertia, its convective forces, Euler parameters);
+!>   - an end moment: small, M L / EI and M L^2 / (2 EI); 2 pi EI / L rolls the cantilever
+!>     into a full circle, its tip back at the root with its orientation (closed form).
 program test_spatial_model
   use core_kinds, only: wp
   use core_error, only: error_t
@@ -35,17 +37,19 @@ program test_spatial_model
   call tilted_plane()
   call frequencies()
   call free_vibration()
+  call roll_up()
   call ts%finish()
 
 contains
 
   !> A cantilever along x from the origin, n beam3d elements (section y axis along global y),
   !> clamped at the root, force f at the tip. Returns the dynamics at q = 0.
-  subroutine cantilever(n, f, dyn, err)
+  subroutine cantilever(n, f, dyn, err, moment)
     integer, intent(in) :: n
     real(wp), intent(in) :: f(3)
     type(dynamics_t), intent(out) :: dyn
     type(error_t), intent(out) :: err
+    real(wp), intent(in), optional :: moment(3)   !< at the tip, fixed in space
     type(model_t) :: model
     type(beam3d_t) :: b
     type(euler_norm_t) :: en
@@ -93,6 +97,7 @@ contains
       idx = model%add_element(b, [(0, k = 1, 6)])
     end do
     model%force(first(n):first(n) + 2) = f
+    if (present(moment)) call model%add_moment(first(n) + 3, moment)
     call model%finalize(err)
     if (.not. err%ok()) return
     allocate(q0(model%n_dy))
@@ -293,6 +298,48 @@ contains
     call ts%check(maxval(dyn%energy_hist(1, :)) > 0.5_wp * en(1), &
       'free vibration: the energy goes through kinetic and back')
   end subroutine free_vibration
+
+  subroutine roll_up()
+    type(dynamics_t) :: dyn
+    type(error_t) :: err
+    real(wp), allocatable :: x(:)
+    real(wp) :: m, r(3, 3), id(3, 3)
+    integer :: it, k
+    ! Small: tip rotation M L / EI_z about z, deflection M L^2 / (2 EI_z) in +y.
+    m = 1.0e-4_wp * E_MOD * I_Z / LEN
+    call cantilever(4, [0.0_wp, 0.0_wp, 0.0_wp], dyn, err, moment=[0.0_wp, 0.0_wp, m])
+    if (err%ok()) call solve(dyn, 1, x, err)
+    call ts%check(err%ok(), 'small end moment: static solution' // msg(err))
+    if (.not. err%ok()) return
+    it = dyn%model%n_x - 6
+    r = euler_to_matrix(x(it + 3:it + 6))
+    call ts%close(x(it + 1), m * LEN**2 / (2 * E_MOD * I_Z), 1.0e-6_wp, 0.0_wp, &
+      'small end moment: tip deflection M L^2 / (2 EI)')
+    call ts%close(r(2, 1), m * LEN / (E_MOD * I_Z), 1.0e-6_wp, 0.0_wp, &
+      'small end moment: tip rotation M L / EI')
+    ! Full circle: equal elements under equal moments form a closed regular polygon, so the
+    ! tip returns to the root exactly (to the Newton tolerance, 1e-10), for any mesh.
+    m = 2 * acos(-1.0_wp) * E_MOD * I_Z / LEN
+    call cantilever(8, [0.0_wp, 0.0_wp, 0.0_wp], dyn, err, moment=[0.0_wp, 0.0_wp, m])
+    if (err%ok()) call solve(dyn, 16, x, err)
+    call ts%check(err%ok(), 'end moment 2 pi EI / L: static solution in 16 steps' // msg(err))
+    if (.not. err%ok()) return
+    it = dyn%model%n_x - 6
+    call ts%close(norm2(x(it:it + 2)) / LEN, 0.0_wp, 0.0_wp, 1.0e-8_wp, &
+      'roll-up: the tip is back at the root (distance / L)')
+    r = euler_to_matrix(x(it + 3:it + 6))
+    id = 0.0_wp
+    do k = 1, 3
+      id(k, k) = 1.0_wp
+    end do
+    call ts%close(maxval(abs(r - id)), 0.0_wp, 0.0_wp, 1.0e-8_wp, &
+      'roll-up: the tip section has turned a full turn')
+    ! Half way (moment pi EI / L would make a half circle): the middle node of the full
+    ! circle is opposite the root, at 2 R = L / pi from it (polygon: to O(h^2)).
+    ! Node 4 of 0..8 (7 coordinates a node, the root's included).
+    call ts%close(norm2(x(29:31)), LEN / acos(-1.0_wp), 2.0e-2_wp, 0.0_wp, &
+      'roll-up: the middle node is a diameter 2 EI / M away')
+  end subroutine roll_up
 
   function msg(err) result(s)
     type(error_t), intent(in) :: err

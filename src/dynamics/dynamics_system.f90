@@ -265,6 +265,7 @@ contains
         end associate
       end do
       this%xd_now = xd
+      if (size(m%moment_lambda) > 0) call add_moments(m, this%kin%x, this%load_factor, rhs)
       if (m%n_elastic > 0) call this%elastic_forces(xd, rhs)
       this%nodal_force = rhs
       this%q_now = q
@@ -272,6 +273,26 @@ contains
       this%sigma_now = this%stresses(q, qd)
     end associate
   end subroutine dyn_prepare
+
+  !> Nodal forces of the moments on spatial nodes: M . omega_global = M . 2 E(lambda) lambda'
+  !> gives 2 E^T M on the Euler parameters, E = [-lv, l0 I + [lv x]]. A moment fixed in space
+  !> is not conservative under large 3D rotations: it has no potential in the energy output.
+  pure subroutine add_moments(model, x, factor, f)
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: x(:), factor
+    real(wp), intent(inout) :: f(:)
+    real(wp) :: l(4), e(3, 4)
+    integer :: k, i
+    do k = 1, size(model%moment_lambda)
+      i = model%moment_lambda(k)
+      l = x(i:i + 3)
+      e(:, 1) = -l(2:4)
+      e(:, 2) = [l(1), l(4), -l(3)]
+      e(:, 3) = [-l(4), l(1), l(2)]
+      e(:, 4) = [l(3), -l(2), l(1)]
+      f(i:i + 3) = f(i:i + 3) + 2 * factor * matmul(transpose(e), model%moment(:, k))
+    end do
+  end subroutine add_moments
 
   !> The generalised force g = DF_dy^T f - sigma_dy at a state (the right-hand side of eq. (1),
   !> also left in gen_force) by one transposed solve: O(n) on the sparse path, no Mbar. Statics

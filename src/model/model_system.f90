@@ -49,6 +49,11 @@ module model_system
     !> Loads that follow a time law: load_shape(:, k) [N, N m] times the value of motion
     !> load_motion(k).
     real(wp), allocatable :: load_shape(:, :)
+    !> Moments on spatial nodes, constant in the global frame [N m]: moment(:, k) on the node
+    !> whose Euler parameters start at coordinate moment_lambda(k). Their generalised force
+    !> 2 E(lambda)^T M depends on the rotation, so the dynamics adds it at each evaluation.
+    real(wp), allocatable :: moment(:, :)
+    integer, allocatable :: moment_lambda(:)
     integer, allocatable :: load_motion(:)
     !> 2 (planar) or 3 (spatial): the components of gravity the elements see.
     integer :: dim = 2
@@ -82,6 +87,7 @@ module model_system
     procedure :: add_element => model_add_element
     procedure :: add_motion => model_add_motion
     procedure :: add_timed_load => model_add_timed_load
+    procedure :: add_moment => model_add_moment
     procedure :: loads_at => model_loads_at
     procedure :: add_node_label => model_add_node_label
     procedure :: find_node => model_find_node
@@ -104,6 +110,7 @@ contains
     allocate(this%lumped(0), this%force(0), this%elements(0), this%motions(0))
     allocate(this%node_label(0), this%node_coord(3, 0))
     allocate(this%load_shape(0, 0), this%load_motion(0))
+    allocate(this%moment(3, 0), this%moment_lambda(0))
     this%finalized = .false.
   end subroutine model_init
 
@@ -160,6 +167,17 @@ contains
     end do
     this%modes = [this%modes, modes]
   end function model_add_element
+
+  !> A moment m (3, global frame, constant) on the node whose Euler parameters start at
+  !> coordinate first_lambda.
+  subroutine model_add_moment(this, first_lambda, m)
+    class(model_t), intent(inout) :: this
+    integer, intent(in) :: first_lambda
+    real(wp), intent(in) :: m(3)
+    this%moment = reshape([reshape(this%moment, [size(this%moment)]), m], &
+      [3, size(this%moment, 2) + 1])
+    this%moment_lambda = [this%moment_lambda, first_lambda]
+  end subroutine model_add_moment
 
   !> A nodal load `shape` (n_x) that follows motion `motion` in time.
   subroutine model_add_timed_load(this, shape, motion)
