@@ -2,6 +2,7 @@
 !>   - G(lambda) against the body angular velocity from differences of the rotation matrix,
 !>     R^T dR/dt = [omega x], along a unit-norm path lambda(t);
 !>   - kinetic energy 1/2 lambda'^T M lambda' = 1/2 omega^T J omega + 1/2 m |v|^2;
+!>   - E(lambda) against the global angular velocity dR/dt R^T, and R = E G^T;
 !>   - M symmetric, positive semi-definite in lambda with the null direction lambda itself;
 !>   - the convective force h against Lagrange's form from central differences of M,
 !>     h_i = sum_jk (dM_ij/dx_k - 1/2 dM_jk/dx_i) xd_j xd_k, on random states (also with
@@ -10,7 +11,8 @@ program test_body3d
   use core_kinds, only: wp
   use testing, only: suite_t
   use fd_helpers, only: lcg_t, relerr, flat
-  use elements_body3d, only: body3d_t, euler_g
+  use elements_body3d, only: body3d_t
+  use elements_rotation, only: euler_g, euler_e
   implicit none
 
   type(suite_t) :: suite
@@ -50,6 +52,7 @@ contains
     integer, intent(in) :: trial
     real(wp) :: x(7), xd(7), l(4), ld(4), omega(3), w(3, 3), r_p(3, 3), r_m(3, 3), s
     real(wp) :: m(7, 7), h(7), hfd(7), dm(7, 7, 7), kin, kin_ref, hs, g(3, 4), r0(3, 3)
+    real(wp) :: e(3, 4)
     real(wp), parameter :: dt = 1.0e-6_wp, dx = 1.0e-5_wp
     character(len=12) :: tag
     integer :: i, j, k
@@ -70,6 +73,14 @@ contains
       1.0e-8_wp, 'G: omega = 2 G lambdadot equals R^T dR/dt, rel. error' // tag)
     call suite%close(relerr(flat(w), -flat(transpose(w)), 1.0_wp), 0.0_wp, 0.0_wp, 1.0e-8_wp, &
       'R^T dR/dt is skew, rel. error' // tag)
+    ! Global angular velocity: dR/dt R^T = [omega_g x] with omega_g = 2 E lambdadot = R omega,
+    ! and R = E G^T.
+    w = matmul((r_p - r_m) / (2 * dt), transpose(r0))
+    e = euler_e(l)
+    call suite%close(relerr([w(3, 2), w(1, 3), w(2, 1)], 2 * matmul(e, ld), 1.0_wp), 0.0_wp, &
+      0.0_wp, 1.0e-8_wp, 'E: omega_global = 2 E lambdadot equals dR/dt R^T, rel. error' // tag)
+    call suite%close(relerr(flat(matmul(e, transpose(g))), flat(r0), 1.0_wp), 0.0_wp, 0.0_wp, &
+      1.0e-14_wp, 'R = E G^T, rel. error' // tag)
 
     x(1:3) = rng%uniform_vec(3, -2.0_wp, 2.0_wp)
     x(4:7) = l

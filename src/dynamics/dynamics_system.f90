@@ -11,6 +11,7 @@ module dynamics_system
   use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use core_linalg, only: chol_factor, chol_solve
   use model_system, only: model_t, COORD_X, COORD_Y, COORD_Z, COORD_PHI
+  use elements_rotation, only: euler_e
   use model_kinematics, only: kinematics_t
   use dynamics_augmented, only: augmented_t, element_mass_t
   use elements_base, only: MODE_DYNAMIC, mode_has_stress
@@ -281,15 +282,11 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: x(:), factor
     real(wp), intent(inout) :: f(:)
-    real(wp) :: l(4), e(3, 4)
+    real(wp) :: e(3, 4)
     integer :: k, i
     do k = 1, size(model%moment_lambda)
       i = model%moment_lambda(k)
-      l = x(i:i + 3)
-      e(:, 1) = -l(2:4)
-      e(:, 2) = [l(1), l(4), -l(3)]
-      e(:, 3) = [-l(4), l(1), l(2)]
-      e(:, 4) = [l(3), -l(2), l(1)]
+      e = euler_e(x(i:i + 3))
       f(i:i + 3) = f(i:i + 3) + 2 * factor * matmul(transpose(e), model%moment(:, k))
     end do
   end subroutine add_moments

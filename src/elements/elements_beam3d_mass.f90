@@ -38,8 +38,7 @@
 !> Both M and h hold for any lambda, also |lambda| /= 1: T is a smooth function of x and xd
 !> in all of R^14 (homogeneous R, G linear) and M, h are its exact derivatives.
 submodule (elements_beam3d) elements_beam3d_mass
-  use elements_rotation, only: skew
-  use elements_body3d, only: euler_g
+  use elements_rotation, only: skew, euler_g
   implicit none
 
   !> 4-point Gauss-Legendre on [0, 1]: exact for the degree-6 integrands J^T J and J^T r''.

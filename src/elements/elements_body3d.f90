@@ -10,9 +10,10 @@
 module elements_body3d
   use core_kinds, only: wp
   use elements_base, only: element_t
+  use elements_rotation, only: euler_g
   implicit none
   private
-  public :: body3d_t, euler_g
+  public :: body3d_t
 
   type, extends(element_t) :: body3d_t
     real(wp) :: mass = 0.0_wp                 !< [kg]
@@ -27,15 +28,6 @@ module elements_body3d
   end type body3d_t
 
 contains
-
-  !> G(lambda) (3 x 4): omega_body = 2 G(lambda) lambda'. Linear in lambda; G(a) a = 0.
-  pure function euler_g(l) result(g)
-    real(wp), intent(in) :: l(4)
-    real(wp) :: g(3, 4)
-    g(1, :) = [-l(2), l(1), l(4), -l(3)]
-    g(2, :) = [-l(3), -l(4), l(1), l(2)]
-    g(3, :) = [-l(4), l(3), -l(2), l(1)]
-  end function euler_g
 
   !> No modes: nothing to evaluate (the arrays have size zero).
   pure subroutine body_evaluate(this, x, e, de)

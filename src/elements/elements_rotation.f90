@@ -13,12 +13,31 @@ module elements_rotation
   private
   public :: rot_matrix, rot_apply, rot_apply_jac, rot_apply_second
   public :: rotvec_to_euler, euler_to_matrix, matrix_to_euler, euler_product, skew
+  public :: euler_g, euler_e
 
   !> Below this angle sin(theta/2)/theta is summed as its series: the closed form loses
   !> accuracy as theta^2 / theta^2 and is 0/0 at theta = 0.
   real(wp), parameter :: SMALL_ANGLE = 1.0e-3_wp
 
 contains
+
+  !> G(lambda) (3 x 4): omega_body = 2 G(lambda) lambda'. Linear in lambda; G(a) a = 0.
+  pure function euler_g(l) result(g)
+    real(wp), intent(in) :: l(4)
+    real(wp) :: g(3, 4)
+    g(1, :) = [-l(2), l(1), l(4), -l(3)]
+    g(2, :) = [-l(3), -l(4), l(1), l(2)]
+    g(3, :) = [-l(4), l(3), -l(2), l(1)]
+  end function euler_g
+
+  !> E(lambda) (3 x 4): omega_global = 2 E(lambda) lambda' (R = E G^T). Linear in lambda.
+  pure function euler_e(l) result(e)
+    real(wp), intent(in) :: l(4)
+    real(wp) :: e(3, 4)
+    e(1, :) = [-l(2), l(1), -l(4), l(3)]
+    e(2, :) = [-l(3), l(4), l(1), -l(2)]
+    e(3, :) = [-l(4), -l(3), l(2), l(1)]
+  end function euler_e
 
   !> [a x], the cross-product matrix: skew(a) b = a x b.
   pure function skew(a) result(s)
