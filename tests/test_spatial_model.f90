@@ -38,6 +38,7 @@ program test_spatial_model
   call frequencies()
   call free_vibration()
   call roll_up()
+  call bad_models()
   call ts%finish()
 
 contains
@@ -340,6 +341,32 @@ contains
     call ts%close(norm2(x(29:31)), LEN / acos(-1.0_wp), 2.0e-2_wp, 0.0_wp, &
       'roll-up: the middle node is a diameter 2 EI / M away')
   end subroutine roll_up
+
+  !> Mistakes of a model built through the API are clear errors, not wrong answers.
+  subroutine bad_models()
+    type(model_t) :: model, model2, model3
+    type(error_t) :: err
+    integer :: ix
+    call model%init()
+    ix = model%add_coord(0.0_wp, COORD_X, .false., 'a x')
+    ix = model%add_coord(0.0_wp, COORD_Y, .false., 'a y')
+    ix = model%add_coord(0.0_wp, COORD_Z, .false., 'a z')
+    ix = model%add_coord(1.0_wp, COORD_EULER, .false., 'a l0')
+    call model%add_moment(1, [0.0_wp, 0.0_wp, 1.0_wp])
+    call model%finalize(err)
+    call ts%check(.not. err%ok() .and. index(err%message, 'Euler parameters') > 0 .and. &
+      index(err%message, 'a x') > 0, 'a moment on translations is refused: ' // err%message)
+    call model2%init()
+    model2%gravity = [0.0_wp, 0.0_wp, -9.81_wp]
+    call model2%finalize(err)
+    call ts%check(.not. err%ok() .and. index(err%message, 'z component') > 0, &
+      'z gravity in a planar model is refused: ' // err%message)
+    call model3%init()
+    model3%dim = 4
+    call model3%finalize(err)
+    call ts%check(.not. err%ok() .and. index(err%message, 'dim') > 0, &
+      'dim 4 is refused: ' // err%message)
+  end subroutine bad_models
 
   function msg(err) result(s)
     type(error_t), intent(in) :: err

@@ -238,6 +238,35 @@ contains
     idx = 0
   end function model_find_node
 
+  !> What a spatial model built through the API must get right: dim 2 or 3, no z gravity in
+  !> the plane, and every moment on the four Euler parameters of one node.
+  subroutine check_spatial(this, err)
+    type(model_t), intent(in) :: this
+    type(error_t), intent(inout) :: err
+    integer :: k, i
+    if (this%dim /= 2 .and. this%dim /= 3) then
+      call err%set(ERR_MODEL, 'model: dim must be 2 or 3, got ' // achar(48 + modulo(this%dim, &
+        10)))
+      return
+    end if
+    if (this%dim == 2 .and. this%gravity(3) /= 0) then
+      call err%set(ERR_MODEL, 'model: gravity has a z component in a planar model (dim = 2)')
+      return
+    end if
+    do k = 1, size(this%moment_lambda)
+      i = this%moment_lambda(k)
+      if (i < 1 .or. i + 3 > this%n_x) then
+        call err%set(ERR_MODEL, 'model: moment on coordinates outside the model')
+        return
+      end if
+      if (any(this%coord_kind(i:i + 3) /= COORD_EULER)) then
+        call err%set(ERR_MODEL, 'model: a moment acts on the four Euler parameters of a ' // &
+          'node, but coordinate ''' // trim(this%coord_name(i)) // ''' starts no such four')
+        return
+      end if
+    end do
+  end subroutine check_spatial
+
   !> Number the calculable coordinates, kinematic rows and generalised coordinates, and check
   !> that there are as many kinematic equations as calculable coordinates.
   subroutine model_finalize(this, err)
@@ -246,6 +275,8 @@ contains
     integer :: i, m, n_rows, iq_rh, iq_dy
     logical :: calculable(this%n_x)
     if (.not. allocated(this%modes)) allocate(this%modes(0), this%mode_first(0))
+    call check_spatial(this, err)
+    if (.not. err%ok()) return
     calculable = .not. this%fixed .and. this%coord_input == 0
     allocate(this%calc_index(this%n_x))
     this%calc_index = 0
