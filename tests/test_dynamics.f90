@@ -169,7 +169,7 @@ contains
     real(wp), allocatable :: p(:, :)
     integer :: in, ic(3)
     in = dyn%model%find_node('tip')
-    ic = dyn%model%node_coord(:, in)
+    ic = dyn%model%node_coord(1:3, in)
     p = dyn%x_hist(ic(1:2), :)
   end function tip_history
 
@@ -380,7 +380,7 @@ contains
     zeta = BETA * omega / 2
     t_d = 2 * PI / (omega * sqrt(1 - zeta**2))
     in = dyn%model%find_node('tip')
-    ic = dyn%model%node_coord(:, in)
+    ic = dyn%model%node_coord(1:3, in)
     ! First mode shape scaled to 1 cm at the tip.
     q0 = modes%shapes(:, 1) * 0.01_wp / norm2(modes%node_shapes(ic(1:2), 1, 1))
     call make(damped, dyn, err, q0)

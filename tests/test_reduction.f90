@@ -75,7 +75,7 @@ contains
   real(wp) function tip_difference(a, b) result(d)
     type(run_t), intent(in) :: a, b
     integer :: ic(3)
-    ic = a%dyn%model%node_coord(:, a%dyn%model%find_node('tip'))
+    ic = a%dyn%model%node_coord(1:3, a%dyn%model%find_node('tip'))
     d = maxval(hypot(a%dyn%x_hist(ic(1), :) - b%dyn%x_hist(ic(1), :), &
                      a%dyn%x_hist(ic(2), :) - b%dyn%x_hist(ic(2), :)))
   end function tip_difference
@@ -170,7 +170,7 @@ contains
     call run_scene('beam_k1', beam // dyn // " &reduction n_modes = 1 /", plain)
     call run_scene('beam_k1_corrected', beam // dyn // " &reduction n_modes = 1, " // &
       "static_correction = .true. /", corrected)
-    ic = ref%dyn%model%node_coord(:, ref%dyn%model%find_node('tip'))
+    ic = ref%dyn%model%node_coord(1:3, ref%dyn%model%find_node('tip'))
     nt = size(ref%time)
     y_st = stat%x_static(ic(2), size(stat%x_static, 2))
     e_full = abs(ref%dyn%x_hist(ic(2), nt) - y_st)

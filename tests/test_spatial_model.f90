@@ -182,7 +182,7 @@ contains
     if (.not. err%ok()) return
     it = dyn%model%n_x - 6
     u = x(it:it + 2)
-    ic = dyn2%model%node_coord(:, dyn2%model%find_node('tip'))
+    ic = dyn2%model%node_coord(1:3, dyn2%model%find_node('tip'))
     defl = x2(ic(2))
     ! Same discrete equations in the plane; Newton converged to 1e-10: bound 1e-8 relative.
     call ts%close(u(1), x2(ic(1)), 1.0e-8_wp, 0.0_wp, &

@@ -232,7 +232,7 @@ contains
       write(*, '(a)') '    ' // err%message
       return
     end if
-    associate (x => dyn%kin%x, nc => dyn%model%node_coord(:, dyn%model%find_node('tip')))
+    associate (x => dyn%kin%x, nc => dyn%model%node_coord(1:3, dyn%model%find_node('tip')))
       call suite%close(x(nc(1)), 0.0_wp, 0.0_wp, 1.0e-9_wp, 'two-link at t = 0.7: tip x = 0')
       call suite%close(x(nc(2)), 1.22_wp, 1.0e-9_wp, 0.0_wp, 'two-link at t = 0.7: tip y = 1.22')
     end associate

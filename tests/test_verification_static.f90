@@ -66,7 +66,7 @@ contains
     real(wp) :: s(3)
     integer :: it
     it = dyn%model%find_node('tip')
-    s = x(dyn%model%node_coord(:, it))
+    s = x(dyn%model%node_coord(1:3, it))
   end function tip_state
 
   ! ------------------------------------------------------------------ cases

@@ -94,6 +94,9 @@ def read_model(f: h5py.File) -> Model:
                               ("n_coordinates", "n_nodes", "n_elements"))
     except KeyError as exc:
         raise ValueError(f"/model has no attribute {exc.args[0]}") from None
+    if int(group.attrs.get("dimension", 2)) != 2:
+        raise ValueError("/model is a spatial model (dimension 3): flexmor.model reads planar "
+                         "models only so far (node paths are in /nodes/<label>/position)")
     names = _strings(_dataset(f, "model/coordinates/name", (n_x,)))
     reference = np.asarray(_dataset(f, "model/coordinates/reference", (n_x,)), dtype=float)
     kind = np.asarray(_dataset(f, "model/coordinates/kind", (n_x,)), dtype=np.int64)

@@ -76,11 +76,14 @@ contains
     integer :: in
     call locate(this, label, analysis, in, err)
     if (.not. err%ok()) return
-    if (analysis == 'static') then
-      pos = this%x_static(this%node_coord(1:2, in), :)
-    else
-      pos = this%x_dynamic(this%node_coord(1:2, in), :)
-    end if
+    ! x and y, and z in a spatial model.
+    associate (rows => pack(this%node_coord([1, 2, 4], in), this%node_coord([1, 2, 4], in) > 0))
+      if (analysis == 'static') then
+        pos = this%x_static(rows, :)
+      else
+        pos = this%x_dynamic(rows, :)
+      end if
+    end associate
   end subroutine results_node_position
 
   !> Rotation [rad] of node `label` relative to the reference configuration, per output time

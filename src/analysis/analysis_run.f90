@@ -274,7 +274,9 @@ contains
           q_steps)
       end if
     end associate
-    if (err%ok()) call static_responses(this, q_steps, .not. arc, err)
+    ! Reactions and compliances are planar (x, y, phi) so far: a spatial scene has none.
+    if (err%ok() .and. this%dyn%model%dim == 2) call static_responses(this, q_steps, .not. arc, &
+      err)
     if (.not. err%ok()) return
     if (this%verbose) write(*, '(a,i0,a,a,i0,a)') 'static: ', size(this%static_load_factor), &
       trim(merge(' arc-length steps', ' load steps      ', arc)), ', ', this%static_iterations, &
@@ -295,10 +297,10 @@ contains
     associate (m => this%dyn%model, sc => this%scene)
       allocate(out_coords(3, size(sc%output_nodes)), comp_coords(3, size(sc%compliance_nodes)))
       do i = 1, size(sc%output_nodes)
-        out_coords(:, i) = m%node_coord(:, m%find_node(sc%output_nodes(i)%s))
+        out_coords(:, i) = m%node_coord(1:3, m%find_node(sc%output_nodes(i)%s))
       end do
       do i = 1, size(sc%compliance_nodes)
-        comp_coords(:, i) = m%node_coord(:, m%find_node(sc%compliance_nodes(i)%s))
+        comp_coords(:, i) = m%node_coord(1:3, m%find_node(sc%compliance_nodes(i)%s))
       end do
       if (sc%static%n_frequencies > m%n_dy) then
         call err%set(ERR_INPUT, 'group &static: variable ''n_frequencies'' = ' // &

@@ -1,7 +1,7 @@
 !> The result file of one run (layout: docs/output.md): the writers of analysis_run.
 submodule (analysis_run) analysis_run_output
   use io_hdf5, only: h5_writer_t
-  use model_system, only: COORD_PHI, COORD_Y
+  use model_system, only: COORD_PHI, COORD_Y, COORD_Z, COORD_EULER, NODE_SLOTS
   implicit none
 
 contains
@@ -76,11 +76,12 @@ contains
     ! from that node; a hinge then finds its rotations among them.
     allocate(coord_node(model%n_x), source=0)
     do i = 1, n_nodes
-      do j = 1, 3
+      do j = 1, NODE_SLOTS
         if (model%node_coord(j, i) > 0) coord_node(model%node_coord(j, i)) = i
       end do
     end do
-    allocate(el_coords(6, model%n_elements), el_nodes(2, model%n_elements), source=0)
+    allocate(el_coords(max(6, model%max_dofs), model%n_elements), source=0)
+    allocate(el_nodes(2, model%n_elements), source=0)
     allocate(el_type(model%n_elements), el_label(model%n_elements))
     do i = 1, model%n_elements
       associate (e => model%elements(i)%e)
@@ -89,7 +90,8 @@ contains
         el_coords(1:size(e%dofs), i) = e%dofs
         owner = 0
         do j = 1, size(e%dofs)
-          if (model%coord_kind(e%dofs(j)) /= COORD_PHI) owner = coord_node(e%dofs(j))
+          if (all(model%coord_kind(e%dofs(j)) /= [COORD_PHI, COORD_EULER])) &
+            owner = coord_node(e%dofs(j))
           if (model%coord_kind(e%dofs(j)) == COORD_PHI .and. owner > 0 .and. &
               coord_node(e%dofs(j)) == 0) coord_node(e%dofs(j)) = owner
         end do
@@ -103,7 +105,7 @@ contains
           ! An element's nodes: those of its positions, or of its rotations if it has none.
           if (model%coord_kind(e%dofs(j)) == COORD_PHI .and. any(model%coord_kind(e%dofs) /= &
               COORD_PHI)) cycle
-          if (model%coord_kind(e%dofs(j)) == COORD_Y) cycle
+          if (any(model%coord_kind(e%dofs(j)) == [COORD_Y, COORD_Z, COORD_EULER])) cycle
           k = k + 1
           el_nodes(k, i) = coord_node(e%dofs(j))
         end do
@@ -115,19 +117,23 @@ contains
     do i = 1, n_nodes
       pos(1:2, i) = model%x0(model%node_coord(1:2, i))
       pos(3, i) = 0.0_wp
+      if (model%node_coord(4, i) > 0) pos(3, i) = model%x0(model%node_coord(4, i))
     end do
     call h5%write_string_1d(g // '/coordinates/name', model%coord_name, err)
     if (err%ok()) call h5%write_real_1d(g // '/coordinates/reference', model%x0, err)
     if (err%ok()) call h5%write_int_1d(g // '/coordinates/kind', model%coord_kind, err)
     if (err%ok()) call h5%write_string_1d(g // '/nodes/label', model%node_label, err)
     if (err%ok()) call h5%write_real_2d(g // '/nodes/position', pos, err, units='m')
-    if (err%ok()) call h5%write_int_2d(g // '/nodes/coordinates', model%node_coord, err)
+    ! Planar files keep their (x, y, phi) table; spatial ones add z and the first lambda.
+    if (err%ok()) call h5%write_int_2d(g // '/nodes/coordinates', &
+      model%node_coord(1:merge(3, NODE_SLOTS, model%dim == 2), :), err)
     if (err%ok()) call h5%write_string_1d(g // '/elements/label', el_label, err)
     if (err%ok()) call h5%write_string_1d(g // '/elements/type', el_type, err)
     if (err%ok()) call h5%write_int_2d(g // '/elements/coordinates', el_coords, err)
     if (err%ok()) call h5%write_int_2d(g // '/elements/nodes', el_nodes, err)
     if (err%ok()) call h5%write_int_attr(g, 'n_nodes', n_nodes, err)
     if (err%ok()) call h5%write_int_attr(g, 'n_elements', model%n_elements, err)
+    if (err%ok()) call h5%write_int_attr(g, 'dimension', model%dim, err)
     if (err%ok()) call h5%write_int_attr(g, 'n_coordinates', model%n_x, err)
   end subroutine write_model
 
@@ -139,7 +145,7 @@ contains
     real(wp), intent(in) :: x(:, :)
     type(error_t), intent(inout) :: err
     real(wp) :: pos(3, size(x, 2))
-    integer :: i, in, ic(3)
+    integer :: i, in, ic(NODE_SLOTS)
     do i = 1, size(this%scene%output_nodes)
       associate (label => this%scene%output_nodes(i)%s)
         in = this%dyn%model%find_node(label)
@@ -147,10 +153,13 @@ contains
         pos(1, :) = x(ic(1), :)
         pos(2, :) = x(ic(2), :)
         pos(3, :) = 0.0_wp
+        if (ic(4) > 0) pos(3, :) = x(ic(4), :)
         if (err%ok()) call h5%write_real_2d(group // '/nodes/' // label // '/position', pos, &
           err, units='m')
         if (ic(3) > 0 .and. err%ok()) call h5%write_real_1d(group // '/nodes/' // label // &
           '/rotation', x(ic(3), :), err, units='rad')
+        if (ic(5) > 0 .and. err%ok()) call h5%write_real_2d(group // '/nodes/' // label // &
+          '/orientation', x(ic(5):ic(5) + 3, :), err)
       end associate
     end do
   end subroutine write_nodes
@@ -165,6 +174,7 @@ contains
     if (err%ok()) call h5%write_real_2d('/static/x', this%x_static, err)
     if (err%ok()) call h5%write_int_1d('/static/stable', merge(1, 0, this%static_stable), err)
     call write_nodes(this, h5, '/static', this%x_static, err)
+    if (this%dyn%model%dim /= 2) return   ! no reactions or compliances in space yet
     associate (r => this%static_response, sc => this%scene)
       if (sc%static%n_frequencies > 0 .and. err%ok()) call h5%write_real_2d( &
         '/static/frequency_hz', r%frequency_hz, err, units='Hz')
@@ -184,7 +194,7 @@ contains
     type(h5_writer_t), intent(inout) :: h5
     type(error_t), intent(inout) :: err
     real(wp), allocatable :: shape(:, :)
-    integer :: i, in, ic(3)
+    integer :: i, in, ic(NODE_SLOTS)
     call h5%write_real_1d('/modal/frequency_hz', this%modal%frequency_hz, err, units='Hz')
     if (err%ok()) call h5%write_real_2d('/modal/shapes', this%modal%shapes, err)
     if (err%ok()) call h5%write_real_attr('/modal', 'time', this%scene%modal%time, err)
@@ -195,6 +205,7 @@ contains
       shape(1, :) = this%modal%node_shapes(ic(1), :, 1)
       shape(2, :) = this%modal%node_shapes(ic(2), :, 1)
       shape(3, :) = 0.0_wp
+      if (ic(4) > 0) shape(3, :) = this%modal%node_shapes(ic(4), :, 1)
       if (err%ok()) call h5%write_real_2d('/modal/nodes/' // this%scene%output_nodes(i)%s // &
         '/shape', shape, err, units='m')
       deallocate(shape)
@@ -207,7 +218,7 @@ contains
     type(h5_writer_t), intent(inout) :: h5
     type(error_t), intent(inout) :: err
     real(wp), allocatable :: shape(:, :)
-    integer :: i, in, ic(3)
+    integer :: i, in, ic(NODE_SLOTS)
     associate (b => this%buckling)
       call h5%write_real_1d('/buckling/load_factor', b%load_factor, err)
       if (err%ok()) call h5%write_real_2d('/buckling/shapes', b%shapes, err)

@@ -10,7 +10,7 @@ module dynamics_system
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use core_linalg, only: chol_factor, chol_solve
-  use model_system, only: model_t, COORD_X, COORD_Y, COORD_Z, COORD_PHI
+  use model_system, only: model_t, COORD_X, COORD_Y, COORD_Z, COORD_PHI, COORD_EULER
   use elements_rotation, only: euler_e
   use model_kinematics, only: kinematics_t
   use dynamics_augmented, only: augmented_t, element_mass_t
@@ -638,7 +638,8 @@ contains
     dqf(nr + 1:, 3) = q_new
     call this%kin%apply_df_many(this%model, dqf, dx)
     motion = max(abs(dx(:, 2)), abs(dx(:, 3)))
-    associate (rotation => this%model%coord_kind == COORD_PHI)
+    associate (rotation => this%model%coord_kind == COORD_PHI .or. &
+               this%model%coord_kind == COORD_EULER)
       where (rotation)
         scale = maxval(motion, mask=rotation)
       elsewhere

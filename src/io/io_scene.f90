@@ -18,6 +18,15 @@ module io_scene
   private
   public :: read_scene, load_scene, SCENE_GROUPS
 
+  interface
+    !> Variables and groups of the other dimension than &scene dimension are errors
+    !> (submodule io_scene_dimension).
+    module subroutine check_dimension(scene, err)
+      type(scene_t), intent(in) :: scene
+      type(error_t), intent(inout) :: err
+    end subroutine check_dimension
+  end interface
+
 contains
 
   !> Load and read a scene file.
@@ -95,6 +104,10 @@ contains
       '&static group (the compliance is computed at its equilibria)')
     if (scene%reduction%active .and. .not. scene%dynamic%active) call err%set(ERR_INPUT, &
       file%path // ': group &reduction needs a &dynamic group (it reduces the dynamic analysis)')
+    if (err%ok()) then
+      call check_dimension(scene, err)
+      if (.not. err%ok()) call err%prefix(file%path // ': ')
+    end if
   end subroutine read_scene
 
   subroutine read_scene_group(g, scene, err)
@@ -103,17 +116,20 @@ contains
     type(error_t), intent(inout) :: err
     real(wp), allocatable :: gravity(:)
     type(error_t) :: e
+    integer :: i
     call rd_string(g, 'title', scene%title, err)
     if (.not. err%ok()) return
     call rd_choice(g, 'linear_solver', scene%linear_solver, err)
+    call rd_int(g, 'dimension', scene%dimension, err)
     if (.not. err%ok()) return
-    call g%get_real_array('gravity', gravity, e, default=[0.0_wp, 0.0_wp])
+    call g%get_real_array('gravity', gravity, e, default=[(0.0_wp, i = 1, scene%dimension)])
     if (.not. e%ok()) then
       err = e
-    else if (size(gravity) /= 2) then
-      call err%set(ERR_INPUT, g%where() // ': variable ''gravity'' needs 2 values (gx, gy)')
+    else if (size(gravity) /= scene%dimension) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''gravity'' needs ' // &
+        trim(merge('2 values (gx, gy)    ', '3 values (gx, gy, gz)', scene%dimension == 2)))
     else
-      scene%gravity = gravity
+      scene%gravity(1:scene%dimension) = gravity
     end if
   end subroutine read_scene_group
 
@@ -130,6 +146,12 @@ contains
     call rd_logical(g, 'fix_y', n%fix_y, err, default=fixed)
     call rd_logical(g, 'fix_phi', n%fix_phi, err, default=fixed)
     call read_node_inputs(g, n, err)
+    call rd_real(g, 'z', n%z, err)
+    call rd_logical(g, 'fix_z', n%fix_z, err, default=fixed)
+    call rd_logical(g, 'fix_rotation', n%fix_rotation, err, default=fixed)
+    n%spatial_var = first_given(g, [character(len=12) :: 'z', 'fix_z', 'fix_rotation'])
+    n%planar_var = first_given(g, [character(len=12) :: 'fix_phi', 'dynamic', 'motion_x', &
+      'motion_y', 'motion_phi'])
   end subroutine read_node
 
   !> Coordinates of a node that are inputs: `dynamic = 'x', 'phi'` makes them degrees of
@@ -170,6 +192,7 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(link_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
+    type(error_t) :: e
     call rd_label(g, r%label, err)
     call rd_string(g, 'from', r%from, err)
     call rd_string(g, 'to', r%to, err)
@@ -185,6 +208,17 @@ contains
     call rd_choice(g, 'bending_form', r%bending_form, err)
     call rd_choice(g, 'mass', r%mass, err)
     call rd_real(g, 'damping', r%damping, err)
+    if (g%has('Iy')) call rd_real(g, 'Iy', r%inertia_y, err)
+    if (g%has('J')) call rd_real(g, 'J', r%torsion, err)
+    if (g%has('orientation') .and. err%ok()) then
+      call g%get_real_array('orientation', r%orientation, e)
+      if (.not. e%ok()) then
+        err = e
+      else if (size(r%orientation) /= 3) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''orientation'' needs 3 values')
+      end if
+    end if
+    r%spatial_var = first_given(g, [character(len=12) :: 'Iy', 'J', 'orientation'])
   end subroutine read_link
 
   subroutine read_hinge(g, r, err)
@@ -257,6 +291,7 @@ contains
     call rd_string(g, 'node', r%node, err)
     call rd_real(g, 'm', r%m, err)
     call rd_real(g, 'J', r%j, err)
+    r%planar_var = first_given(g, [character(len=12) :: 'J'])
   end subroutine read_mass
 
   subroutine read_force(g, r, err)
@@ -268,7 +303,29 @@ contains
     call rd_real(g, 'fy', r%fy, err)
     call rd_real(g, 'moment', r%moment, err)
     call rd_string(g, 'time_law', r%time_law, err)
+    call rd_real(g, 'fz', r%fz, err)
+    call rd_real(g, 'mx', r%m_xyz(1), err)
+    call rd_real(g, 'my', r%m_xyz(2), err)
+    call rd_real(g, 'mz', r%m_xyz(3), err)
+    r%spatial_var = first_given(g, [character(len=12) :: 'fz', 'mx', 'my', 'mz'])
+    ! A spatial moment is a follower of nothing: fixed in space, so no time law for it yet.
+    r%planar_var = first_given(g, [character(len=12) :: 'moment', 'time_law'])
   end subroutine read_force
+
+  !> The first of `names` the group gives, '' if none.
+  function first_given(g, names) result(name)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: names(:)
+    character(len=:), allocatable :: name
+    integer :: i
+    name = ''
+    do i = 1, size(names)
+      if (g%has(trim(names(i)))) then
+        name = trim(names(i))
+        return
+      end if
+    end do
+  end function first_given
 
   subroutine read_motion(g, r, err)
     type(nml_group_t), intent(inout) :: g

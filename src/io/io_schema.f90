@@ -42,7 +42,7 @@ module io_schema
     character(len=56) :: doc
   end type var_spec_t
 
-  type(var_spec_t), parameter :: SCENE_VARS(3) = [ &
+  type(var_spec_t), parameter :: SCENE_VARS(4) = [ &
     var_spec_t('scene', 'title', VK_STRING, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'free text, the result file title attribute'), &
@@ -51,8 +51,11 @@ module io_schema
       '', 'gravitational acceleration (gx, gy)'), &
     var_spec_t('scene', 'linear_solver', VK_CHOICE, '', 'auto', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      'auto|dense|sparse', 'dense (LAPACK) or sparse (KLU) linear algebra')]
-  type(var_spec_t), parameter :: NODE_VARS(11) = [ &
+      'auto|dense|sparse', 'dense (LAPACK) or sparse (KLU) linear algebra'), &
+    var_spec_t('scene', 'dimension', VK_INT, '', '2', .false., &
+      2.0_wp, .false., 3.0_wp, .false., &
+      '', 'planar (2) or spatial (3)')]
+  type(var_spec_t), parameter :: NODE_VARS(14) = [ &
     var_spec_t('node', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'unique name'), &
@@ -85,8 +88,17 @@ module io_schema
       '', 'motion prescribing that coordinate'), &
     var_spec_t('node', 'motion_phi', VK_STRING, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'motion prescribing that coordinate')]
-  type(var_spec_t), parameter :: LINK_VARS(15) = [ &
+      '', 'motion prescribing that coordinate'), &
+    var_spec_t('node', 'z', VK_REAL, 'm', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'reference position (spatial scenes)'), &
+    var_spec_t('node', 'fix_z', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'support (spatial scenes)'), &
+    var_spec_t('node', 'fix_rotation', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'clamp the rotation (spatial scenes)')]
+  type(var_spec_t), parameter :: LINK_VARS(18) = [ &
     var_spec_t('link', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'unique name'), &
@@ -131,7 +143,16 @@ module io_schema
       'consistent|lumped', 'mass model'), &
     var_spec_t('link', 'damping', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
-      '', 'stiffness-proportional time constant')]
+      '', 'stiffness-proportional time constant'), &
+    var_spec_t('link', 'Iy', VK_REAL, 'm^4', 'I', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'second moment about section y (spatial)'), &
+    var_spec_t('link', 'J', VK_REAL, 'm^4', '', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'torsion constant (spatial scenes)'), &
+    var_spec_t('link', 'orientation', VK_REAL_LIST, '', 'z x chord', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'section y axis direction (spatial scenes)')]
   type(var_spec_t), parameter :: HINGE_VARS(7) = [ &
     var_spec_t('hinge', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -211,7 +232,7 @@ module io_schema
     var_spec_t('mass', 'J', VK_REAL, 'kg m^2', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'rotary inertia')]
-  type(var_spec_t), parameter :: FORCE_VARS(5) = [ &
+  type(var_spec_t), parameter :: FORCE_VARS(9) = [ &
     var_spec_t('force', 'node', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'node label'), &
@@ -226,7 +247,19 @@ module io_schema
       '', 'moment'), &
     var_spec_t('force', 'time_law', VK_STRING, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'motion whose value multiplies the load')]
+      '', 'motion whose value multiplies the load'), &
+    var_spec_t('force', 'fz', VK_REAL, 'N', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'force component (spatial scenes)'), &
+    var_spec_t('force', 'mx', VK_REAL, 'N m', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'moment, fixed in space (spatial scenes)'), &
+    var_spec_t('force', 'my', VK_REAL, 'N m', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'moment, fixed in space (spatial scenes)'), &
+    var_spec_t('force', 'mz', VK_REAL, 'N m', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'moment, fixed in space (spatial scenes)')]
   type(var_spec_t), parameter :: MOTION_VARS(14) = [ &
     var_spec_t('motion', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -379,7 +412,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(107) = [ &
+  type(var_spec_t), parameter :: SCHEMA(118) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]

@@ -9,7 +9,8 @@ module model_build
   use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC, &
     MODE_ELASTIC
   use model_system, only: model_t, COORD_X, COORD_Y, COORD_PHI
-  use model_scene, only: scene_t, node_rec_t
+  use model_scene, only: scene_t, node_rec_t, link_rec_t, label_t
+  use elements_beam, only: beam_t
   implicit none
   private
   public :: build_model, mode_class_from_name, unused_motions, MAX_COORDINATES
@@ -56,6 +57,53 @@ module model_build
       type(builder_t), intent(in) :: b
       type(error_t), intent(inout) :: err
     end subroutine add_sliders
+    !> Beam properties and mode classes shared by all elements of a link (checked).
+    module subroutine link_beam(r, where, beam, err)
+      type(link_rec_t), intent(in) :: r
+      character(len=*), intent(in) :: where
+      type(beam_t), intent(out) :: beam
+      type(error_t), intent(inout) :: err
+    end subroutine link_beam
+    !> A link's mode classes: 1 or n_elements keywords (bending: also 2 n_elements), each
+    !> rigid, released, dynamic or elastic (a beam mode cannot be driven).
+    module subroutine check_classes(classes, n, where, var, err)
+      type(label_t), intent(in) :: classes(:)
+      integer, intent(in) :: n
+      character(len=*), intent(in) :: where, var
+      type(error_t), intent(inout) :: err
+    end subroutine check_classes
+    !> Class of mode j (1 or 2: a bending pair's side) of element k of n.
+    module function class_of(classes, n, k, j) result(c)
+      type(label_t), intent(in) :: classes(:)
+      integer, intent(in) :: n, k, j
+      integer :: c
+    end function class_of
+    !> Link i: a unique label, existing end nodes (ia, ib) and checked beam properties.
+    module subroutine link_header(scene, i, where, ia, ib, beam, err)
+      type(scene_t), intent(in) :: scene
+      integer, intent(in) :: i
+      character(len=*), intent(in) :: where
+      integer, intent(out) :: ia, ib
+      type(beam_t), intent(out) :: beam
+      type(error_t), intent(inout) :: err
+    end subroutine link_header
+    !> Node i's label is not defined by an earlier node.
+    module subroutine check_node_label(scene, i, err)
+      type(scene_t), intent(in) :: scene
+      integer, intent(in) :: i
+      type(error_t), intent(inout) :: err
+    end subroutine check_node_label
+    !> A free coordinate that no element uses cannot be solved for (model_build_lookup).
+    module subroutine check_connected(model, err)
+      type(model_t), intent(in) :: model
+      type(error_t), intent(inout) :: err
+    end subroutine check_connected
+    !> The spatial scene (&scene dimension = 3), in submodule model_build_spatial.
+    module subroutine build_spatial(scene, model, err)
+      type(scene_t), intent(in) :: scene
+      type(model_t), intent(inout) :: model
+      type(error_t), intent(inout) :: err
+    end subroutine build_spatial
     !> Index of the node, link or motion of that label in the scene, 0 if there is none.
     pure module function node_index(scene, label) result(idx)
       type(scene_t), intent(in) :: scene
@@ -122,7 +170,12 @@ contains
     integer :: i
     call check_size(scene, err); if (.not. err%ok()) return
     call model%init()
-    model%gravity(1:2) = scene%gravity
+    model%gravity = scene%gravity
+    if (scene%dimension == 3) then
+      call add_motions(scene, model, err); if (.not. err%ok()) return
+      call build_spatial(scene, model, err)
+      return
+    end if
     call add_nodes(scene, model, b, err); if (.not. err%ok()) return
     call add_motions(scene, model, err); if (.not. err%ok()) return
     call check_hinges(scene, b, err); if (.not. err%ok()) return
@@ -209,10 +262,8 @@ contains
     b%node_rot = 0
     do i = 1, size(scene%nodes)
       associate (n => scene%nodes(i))
-        if (node_index(scene, n%label) /= i) then
-          call err%set(ERR_INPUT, 'group &node: label ''' // n%label // ''' is defined twice')
-          return
-        end if
+        call check_node_label(scene, i, err)
+        if (.not. err%ok()) return
         ix = model%add_coord(n%x, COORD_X, n%fix_x, 'node ''' // n%label // ''' x')
         iy = model%add_coord(n%y, COORD_Y, n%fix_y, 'node ''' // n%label // ''' y')
         b%node_xy(i) = ix
@@ -372,24 +423,5 @@ contains
       end associate
     end do
   end subroutine add_node_inputs
-
-  !> A free coordinate that no element uses cannot be solved for.
-  subroutine check_connected(model, err)
-    type(model_t), intent(in) :: model
-    type(error_t), intent(inout) :: err
-    logical :: used(model%n_x)
-    integer :: i
-    used = model%fixed .or. model%coord_input /= 0
-    do i = 1, model%n_elements
-      used(model%elements(i)%e%dofs) = .true.
-    end do
-    do i = 1, model%n_x
-      if (.not. used(i)) then
-        call err%set(ERR_MODEL, 'coordinate ' // trim(model%coord_name(i)) // &
-          ' is free but no element uses it: fix it or connect the node')
-        return
-      end if
-    end do
-  end subroutine check_connected
 
 end module model_build

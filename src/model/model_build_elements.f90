@@ -19,13 +19,7 @@ contains
     character(len=12) :: num
     do i = 1, size(scene%links)
       associate (r => scene%links(i), where => 'group &link ''' // scene%links(i)%label // '''')
-        if (link_index(scene, r%label) /= i) then
-          call err%set(ERR_INPUT, 'group &link: label ''' // r%label // ''' is defined twice')
-          return
-        end if
-        call require_node(scene, r%from, where, 'from', ia, err)
-        if (err%ok()) call require_node(scene, r%to, where, 'to', ib, err)
-        if (err%ok()) call link_beam(r, where, beam, err)
+        call link_header(scene, i, where, ia, ib, beam, err)
         if (.not. err%ok()) return
         xa = [scene%nodes(ia)%x, scene%nodes(ia)%y]
         xb = [scene%nodes(ib)%x, scene%nodes(ib)%y]
@@ -65,12 +59,7 @@ contains
     end do
   end procedure add_links
 
-  !> Beam properties and mode classes shared by all elements of a link.
-  subroutine link_beam(r, where, beam, err)
-    type(link_rec_t), intent(in) :: r
-    character(len=*), intent(in) :: where
-    type(beam_t), intent(out) :: beam
-    type(error_t), intent(inout) :: err
+  module procedure link_beam
     call require_positive(r%e_modulus, where, 'E', err)
     call require_positive(r%area, where, 'A', err)
     call require_positive(r%inertia, where, 'I', err)
@@ -101,15 +90,11 @@ contains
         ''' is neither consistent nor lumped')
     end select
     beam%shear_p = 0.0_wp
-  end subroutine link_beam
+  end procedure link_beam
 
   !> A link's mode classes: 1 or n_elements keywords, each rigid, released, dynamic or
   !> elastic (a beam mode cannot be driven).
-  subroutine check_classes(classes, n, where, var, err)
-    type(label_t), intent(in) :: classes(:)
-    integer, intent(in) :: n
-    character(len=*), intent(in) :: where, var
-    type(error_t), intent(inout) :: err
+  module procedure check_classes
     integer :: k, c
     if (.not. err%ok()) return
     if (size(classes) /= 1 .and. size(classes) /= n .and. &
@@ -126,19 +111,17 @@ contains
         return
       end if
     end do
-  end subroutine check_classes
+  end procedure check_classes
 
   !> Class of mode j (1 or 2: a bending pair's side) of element k of n from a list of 1, n or
   !> 2 n class keywords (checked by check_classes).
-  integer function class_of(classes, n, k, j)
-    type(label_t), intent(in) :: classes(:)
-    integer, intent(in) :: n, k, j
+  module procedure class_of
     integer :: i
     i = 1
     if (size(classes) == n) i = k
     if (size(classes) == 2 * n) i = 2 * (k - 1) + j
-    class_of = mode_class_from_name(classes(i)%s)
-  end function class_of
+    c = mode_class_from_name(classes(i)%s)
+  end procedure class_of
 
   module procedure add_hinges
     type(hinge_t) :: hinge

@@ -46,4 +46,38 @@ contains
       trim(buf))
   end procedure require_positive
 
+  !> A free coordinate that no element uses cannot be solved for.
+  module procedure check_connected
+    logical :: used(model%n_x)
+    integer :: i
+    used = model%fixed .or. model%coord_input /= 0
+    do i = 1, model%n_elements
+      used(model%elements(i)%e%dofs) = .true.
+    end do
+    do i = 1, model%n_x
+      if (.not. used(i)) then
+        call err%set(ERR_MODEL, 'coordinate ' // trim(model%coord_name(i)) // &
+          ' is free but no element uses it: fix it or connect the node')
+        return
+      end if
+    end do
+  end procedure check_connected
+
+  !> Link i: a unique label, existing end nodes (ia, ib) and checked beam properties.
+  module procedure link_header
+    if (link_index(scene, scene%links(i)%label) /= i) then
+      call err%set(ERR_INPUT, 'group &link: label ''' // scene%links(i)%label // &
+        ''' is defined twice')
+      return
+    end if
+    call require_node(scene, scene%links(i)%from, where, 'from', ia, err)
+    if (err%ok()) call require_node(scene, scene%links(i)%to, where, 'to', ib, err)
+    if (err%ok()) call link_beam(scene%links(i), where, beam, err)
+  end procedure link_header
+
+  !> Node i's label is its first.
+  module procedure check_node_label
+    if (node_index(scene, scene%nodes(i)%label) /= i) call err%set(ERR_INPUT, &
+      'group &node: label ''' // scene%nodes(i)%label // ''' is defined twice')
+  end procedure check_node_label
 end submodule model_build_lookup

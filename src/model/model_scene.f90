@@ -29,6 +29,12 @@ module model_scene
     !> ... or prescribed by the motion of that label (not allocated or '': not prescribed),
     !> x = x0 + p(t).
     type(label_t) :: motion(3)
+    !> Spatial scenes: z, its support, and the clamp of the node's rotation.
+    real(wp) :: z = 0.0_wp
+    logical :: fix_z = .false., fix_rotation = .false.
+    !> The first variable given that only a spatial (planar) scene takes, '' if none: checked
+    !> against &scene dimension once every group is read.
+    character(len=:), allocatable :: spatial_var, planar_var
   end type node_rec_t
 
   !> A straight link from node `from` to node `to`, meshed into n_elements beams.
@@ -43,6 +49,12 @@ module model_scene
     character(len=:), allocatable :: bending_form          !< 'angle' or 'sine'
     character(len=:), allocatable :: mass                  !< 'consistent' or 'lumped'
     real(wp) :: damping = 0.0_wp                           !< stiffness-proportional [s]
+    !> Spatial scenes: I is the second moment about the section z axis (bending in the
+    !> section's x-y plane, as in the plane), inertia_y about y (< 0: equal to I), torsion the
+    !> torsion constant J, orientation the section y axis (not allocated: global z x chord).
+    real(wp) :: inertia_y = -1.0_wp, torsion = 0.0_wp
+    real(wp), allocatable :: orientation(:)
+    character(len=:), allocatable :: spatial_var
   end type link_rec_t
 
   !> A hinge at `node` that gives `link` a rotation of its own, relative to the node's.
@@ -66,6 +78,7 @@ module model_scene
   type :: mass_rec_t
     character(len=:), allocatable :: node
     real(wp) :: m = 0.0_wp, j = 0.0_wp
+    character(len=:), allocatable :: planar_var
   end type mass_rec_t
 
   type :: force_rec_t
@@ -73,6 +86,9 @@ module model_scene
     real(wp) :: fx = 0.0_wp, fy = 0.0_wp, moment = 0.0_wp
     !> Label of a &motion whose value multiplies the load in time ('' or not allocated: constant).
     character(len=:), allocatable :: time_law
+    !> Spatial scenes: fz and a moment fixed in space (mx, my, mz).
+    real(wp) :: fz = 0.0_wp, m_xyz(3) = 0.0_wp
+    character(len=:), allocatable :: spatial_var, planar_var
   end type force_rec_t
 
   !> A &motion group; each law reads only its own variables (docs/input.md, &motion).
@@ -135,7 +151,8 @@ module model_scene
 
   type :: scene_t
     character(len=:), allocatable :: title
-    real(wp) :: gravity(2) = 0.0_wp
+    integer :: dimension = 2                       !< 2: planar, 3: spatial
+    real(wp) :: gravity(3) = 0.0_wp                !< z only in spatial scenes
     character(len=:), allocatable :: linear_solver   !< 'auto', 'dense' or 'sparse'
     type(node_rec_t), allocatable :: nodes(:)
     type(link_rec_t), allocatable :: links(:)

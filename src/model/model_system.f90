@@ -20,6 +20,8 @@ module model_system
   integer, parameter :: COORD_X = 1, COORD_Y = 2, COORD_PHI = 3
   !> Spatial models: the z translation, and the four Euler parameters of a node's rotation.
   integer, parameter :: COORD_Z = 4, COORD_EULER = 5
+  !> Rows of node_coord: x, y, phi, z, first Euler parameter.
+  integer, parameter, public :: NODE_SLOTS = 5
 
   !> One deformation mode of one element.
   type :: mode_ref_t
@@ -60,7 +62,8 @@ module model_system
     real(wp) :: gravity(3) = 0.0_wp           !< [m/s^2]; z unused in the plane
     type(motion_t), allocatable :: motions(:)
     integer :: n_motions = 0
-    !> Named points for output: label and coordinate indices (x, y, phi; phi 0 if none).
+    !> Named points for output: label and coordinate indices (x, y, phi, z, first Euler
+    !> parameter; 0 where the node has none: phi only in the plane, z and lambda only in space).
     character(len=64), allocatable :: node_label(:)
     integer, allocatable :: node_coord(:, :)
     ! Derived by finalize:
@@ -91,6 +94,7 @@ module model_system
     procedure :: loads_at => model_loads_at
     procedure :: add_node_label => model_add_node_label
     procedure :: find_node => model_find_node
+    procedure :: translation => model_translation
     procedure :: finalize => model_finalize
     procedure :: count_message => model_count_message
     procedure :: mode_name => model_mode_name
@@ -108,7 +112,7 @@ contains
     allocate(this%x0(0), this%fixed(0), this%coord_kind(0), this%coord_name(0))
     allocate(this%coord_input(0), this%coord_motion(0))
     allocate(this%lumped(0), this%force(0), this%elements(0), this%motions(0))
-    allocate(this%node_label(0), this%node_coord(3, 0))
+    allocate(this%node_label(0), this%node_coord(NODE_SLOTS, 0))
     allocate(this%load_shape(0, 0), this%load_motion(0))
     allocate(this%moment(3, 0), this%moment_lambda(0))
     this%finalized = .false.
@@ -219,14 +223,29 @@ contains
   subroutine model_add_node_label(this, label, coords)
     class(model_t), intent(inout) :: this
     character(len=*), intent(in) :: label
-    integer, intent(in) :: coords(3)
+    integer, intent(in) :: coords(:)   !< x, y, phi (, z, lambda_0): missing ones are 0
     integer, allocatable :: grown(:, :)
     this%node_label = [character(len=64) :: this%node_label, label]
-    allocate(grown(3, size(this%node_label)))
+    allocate(grown(NODE_SLOTS, size(this%node_label)))
     grown(:, 1:size(this%node_label) - 1) = this%node_coord
-    grown(:, size(this%node_label)) = coords
+    grown(:, size(this%node_label)) = 0
+    grown(1:size(coords), size(this%node_label)) = coords
     call move_alloc(grown, this%node_coord)
   end subroutine model_add_node_label
+
+  !> Length of the translation of node i in a nodal displacement dx (x, y and, in space, z).
+  pure real(wp) function model_translation(this, i, dx) result(d)
+    class(model_t), intent(in) :: this
+    integer, intent(in) :: i
+    real(wp), intent(in) :: dx(:)
+    integer :: k, slot(3)
+    d = 0.0_wp
+    slot = [1, 2, 4]
+    do k = 1, 3
+      if (this%node_coord(slot(k), i) > 0) d = d + dx(this%node_coord(slot(k), i))**2
+    end do
+    d = sqrt(d)
+  end function model_translation
 
   !> Index of a named point, 0 if there is none.
   pure integer function model_find_node(this, label) result(idx)

@@ -229,16 +229,14 @@ contains
     call this%dyn%kin%apply_df(this%dyn%model, dq_full, dx)
   end function nodal_motion
 
-  !> Largest translation sqrt(dx^2 + dy^2) over the nodes of a nodal displacement dx.
+  !> Largest translation over the nodes of a nodal displacement dx.
   pure real(wp) function largest_translation(model, dx) result(d)
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: dx(:)
-    integer :: i, ic(3)
+    integer :: i
     d = 0.0_wp
     do i = 1, size(model%node_coord, 2)
-      ic = model%node_coord(:, i)
-      if (ic(1) < 1 .or. ic(2) < 1) cycle
-      d = max(d, hypot(dx(ic(1)), dx(ic(2))))
+      d = max(d, model%translation(i, dx))
     end do
   end function largest_translation
 end module reduction_system

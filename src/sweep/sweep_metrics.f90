@@ -48,18 +48,17 @@ contains
     type(error_t), intent(out) :: err
     real(wp), allocatable :: deflection(:), zero(:)
     real(wp) :: motion_end
-    integer :: k, ic(3), nt
+    integer :: k, in, nt
     metrics = not_available()
     associate (dyn => run%dyn, model => run%dyn%model)
-      ic = model%node_coord(:, model%find_node(node))
+      in = model%find_node(node)
       nt = size(run%time)
       allocate(deflection(nt), zero(model%n_dy))
       zero = 0.0_wp
       do k = 1, nt
         call dyn%kin%solve(model, dyn%full_q(run%time(k), zero), err)
         if (.not. err%ok()) return
-        deflection(k) = hypot(dyn%x_hist(ic(1), k) - dyn%kin%x(ic(1)), &
-                              dyn%x_hist(ic(2), k) - dyn%kin%x(ic(2)))
+        deflection(k) = model%translation(in, dyn%x_hist(:, k) - dyn%kin%x)
       end do
       metrics(1) = maxval(deflection)
       motion_end = 0.0_wp

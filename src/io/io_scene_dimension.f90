@@ -1,0 +1,68 @@
+!> Spatial (&scene dimension = 3) and planar scenes take different variables and groups; a
+!> variable of the other kind is an error, never silently dropped. Checked once every group is
+!> read, since &scene may come last in the file.
+submodule (io_scene) io_scene_dimension
+  implicit none
+
+contains
+
+  module subroutine check_dimension(scene, err)
+    type(scene_t), intent(in) :: scene
+    type(error_t), intent(inout) :: err
+    integer :: i
+    character(len=*), parameter :: NOT_YET = ' is not in spatial scenes yet (dimension = 3 ' // &
+      'has nodes, links, masses, forces and moments; statics, modal analysis, dynamics)'
+    if (scene%dimension == 3) then
+      if (size(scene%hinges) > 0) call err%set(ERR_INPUT, 'group &hinge' // NOT_YET)
+      if (size(scene%trusses) > 0) call err%set(ERR_INPUT, 'group &truss' // NOT_YET)
+      if (size(scene%sliders) > 0) call err%set(ERR_INPUT, 'group &slider' // NOT_YET)
+      if (scene%buckling%active) call err%set(ERR_INPUT, 'group &buckling' // NOT_YET)
+      if (size(scene%compliance_nodes) > 0) call err%set(ERR_INPUT, 'group &output: ' // &
+        'variable ''compliance_nodes''' // NOT_YET)
+      if (scene%static%n_frequencies > 0) call err%set(ERR_INPUT, 'group &static: ' // &
+        'variable ''n_frequencies''' // NOT_YET)
+      if (.not. err%ok()) return
+    end if
+    do i = 1, size(scene%nodes)
+      associate (n => scene%nodes(i))
+        call mismatch('node', n%label, n%spatial_var, n%planar_var, scene%dimension, err)
+      end associate
+    end do
+    do i = 1, size(scene%links)
+      associate (r => scene%links(i))
+        call mismatch('link', r%label, r%spatial_var, '', scene%dimension, err)
+        if (err%ok() .and. scene%dimension == 3) then
+          if (.not. r%torsion > 0) call err%set(ERR_INPUT, 'group &link ''' // r%label // &
+            ''': variable ''J'' (the torsion constant, > 0) is required in a spatial scene')
+          if (err%ok() .and. .not. r%shear_modulus > 0) call err%set(ERR_INPUT, 'group &link ''' &
+            // r%label // ''': variable ''G'' (> 0) is required in a spatial scene (torsion ' // &
+            'stiffness G J; it also makes the bending shear-flexible)')
+        end if
+      end associate
+    end do
+    do i = 1, size(scene%masses)
+      call mismatch('mass', 'on node ''' // scene%masses(i)%node // '''', '', &
+        scene%masses(i)%planar_var, scene%dimension, err)
+    end do
+    do i = 1, size(scene%forces)
+      call mismatch('force', 'on node ''' // scene%forces(i)%node // '''', &
+        scene%forces(i)%spatial_var, scene%forces(i)%planar_var, scene%dimension, err)
+    end do
+  end subroutine check_dimension
+
+  subroutine mismatch(group, label, spatial_var, planar_var, dimension, err)
+    character(len=*), intent(in) :: group, label, spatial_var, planar_var
+    integer, intent(in) :: dimension
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: who
+    if (.not. err%ok()) return
+    who = 'group &' // group // ' '
+    if (label(1:min(3, len(label))) /= 'on ') who = who // ''''
+    who = who // label
+    if (label(1:min(3, len(label))) /= 'on ') who = who // ''''
+    if (dimension == 2 .and. len(spatial_var) > 0) call err%set(ERR_INPUT, who // &
+      ': variable ''' // spatial_var // ''' needs a spatial scene (&scene dimension = 3)')
+    if (dimension == 3 .and. len(planar_var) > 0) call err%set(ERR_INPUT, who // &
+      ': variable ''' // planar_var // ''' is planar only (not in spatial scenes yet)')
+  end subroutine mismatch
+end submodule io_scene_dimension

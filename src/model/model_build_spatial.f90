@@ -1,0 +1,201 @@
+!> The spatial scene (&scene dimension = 3; docs/theory.md 2.6): nodes with x, y, z and, where
+!> a link ends, four Euler parameters (reference (1, 0, 0, 0)) with a rigid normalisation
+!> unless the rotation is clamped; links meshed into spatial beams; point masses; forces and
+!> moments fixed in space. Hinges, trusses, sliders and node inputs are planar only so far
+!> (io_scene refuses them in a spatial scene).
+submodule (model_build) model_build_spatial
+  use elements_beam3d, only: beam3d_t, beam3d_set_geometry, B3_ANGLE => BENDING_ANGLE, &
+    B3_SINE => BENDING_SINE
+  use elements_euler, only: euler_norm_t
+  use elements_beam, only: PLANAR_ANGLE => BENDING_ANGLE
+  use model_system, only: COORD_Z, COORD_EULER
+  implicit none
+
+contains
+
+  module procedure build_spatial
+    integer, allocatable :: node_x(:), node_lam(:)
+    integer :: i, ix
+    model%dim = 3
+    allocate(node_x(size(scene%nodes)), node_lam(size(scene%nodes)))
+    node_lam = 0
+    do i = 1, size(scene%nodes)
+      associate (n => scene%nodes(i))
+        call check_node_label(scene, i, err)
+        if (.not. err%ok()) return
+        node_x(i) = model%add_coord(n%x, COORD_X, n%fix_x, 'node ''' // n%label // ''' x')
+        ix = model%add_coord(n%y, COORD_Y, n%fix_y, 'node ''' // n%label // ''' y')
+        ix = model%add_coord(n%z, COORD_Z, n%fix_z, 'node ''' // n%label // ''' z')
+      end associate
+    end do
+    call add_spatial_links(scene, model, node_x, node_lam, err)
+    if (err%ok()) call add_spatial_loads(scene, model, node_x, node_lam, err)
+    if (.not. err%ok()) return
+    call check_connected(model, err)
+    if (.not. err%ok()) return
+    do i = 1, size(scene%nodes)
+      call model%add_node_label(scene%nodes(i)%label, [node_x(i), node_x(i) + 1, 0, &
+        node_x(i) + 2, node_lam(i)])
+    end do
+    call model%finalize(err)
+  end procedure build_spatial
+
+  !> The four Euler parameters of a node's rotation (created on first use, clamped or with
+  !> their normalisation); returns the first.
+  integer function euler_coords(model, label, clamped) result(first)
+    type(model_t), intent(inout) :: model
+    character(len=*), intent(in) :: label
+    logical, intent(in) :: clamped
+    type(euler_norm_t) :: norm
+    integer :: k, idx
+    character(len=2), parameter :: NAMES(4) = ['l0', 'l1', 'l2', 'l3']
+    first = model%add_coord(1.0_wp, COORD_EULER, clamped, label // ' ' // NAMES(1))
+    do k = 2, 4
+      idx = model%add_coord(0.0_wp, COORD_EULER, clamped, label // ' ' // NAMES(k))
+    end do
+    if (clamped) return
+    norm%label = label // ' |lambda|'
+    norm%dofs = [(first + k, k = 0, 3)]
+    norm%mode_class = [MODE_RIGID]
+    idx = model%add_element(norm, [0])
+  end function euler_coords
+
+  subroutine add_spatial_links(scene, model, node_x, node_lam, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    integer, intent(in) :: node_x(:)
+    integer, intent(inout) :: node_lam(:)
+    type(error_t), intent(inout) :: err
+    type(beam_t) :: planar
+    type(beam3d_t) :: beam
+    real(wp) :: xa(3), xb(3), xk(3), orient(3), d(3)
+    integer :: i, k, ia, ib, p(7), q(7), idx, m
+    character(len=12) :: num
+    do i = 1, size(scene%links)
+      associate (r => scene%links(i), where => 'group &link ''' // scene%links(i)%label // '''')
+        ! The planar checks of E, A, I, rho, n_elements, classes, form and mass apply as well.
+        call link_header(scene, i, where, ia, ib, planar, err)
+        if (.not. err%ok()) return
+        xa = [scene%nodes(ia)%x, scene%nodes(ia)%y, scene%nodes(ia)%z]
+        xb = [scene%nodes(ib)%x, scene%nodes(ib)%y, scene%nodes(ib)%z]
+        d = xb - xa
+        if (norm2(d) <= 1.0e-12_wp * max(1.0_wp, norm2(xa))) then
+          call err%set(ERR_INPUT, where // ': nodes ''' // r%from // ''' and ''' // r%to // &
+            ''' are at the same place: a link needs a positive length')
+          return
+        end if
+        ! Default section y axis: global z x chord (in the x-y plane, as a planar beam's).
+        if (allocated(r%orientation)) then
+          orient = r%orientation
+        else
+          orient = [-d(2), d(1), 0.0_wp]
+          if (norm2(orient) <= 1.0e-6_wp * norm2(d)) then
+            call err%set(ERR_INPUT, where // ': the link is parallel to z: give ''orientation'' ' &
+              // '(the direction of the section y axis)')
+            return
+          end if
+        end if
+        if (node_lam(ia) == 0) node_lam(ia) = euler_coords(model, 'node ''' // r%from // '''', &
+          scene%nodes(ia)%fix_rotation)
+        if (node_lam(ib) == 0) node_lam(ib) = euler_coords(model, 'node ''' // r%to // '''', &
+          scene%nodes(ib)%fix_rotation)
+        p = [(node_x(ia) + m, m = 0, 2), (node_lam(ia) + m, m = 0, 3)]
+        do k = 1, r%n_elements
+          write(num, '(i0)') k
+          if (k < r%n_elements) then
+            xk = xa + d * real(k, wp) / r%n_elements
+            q(1) = model%add_coord(xk(1), COORD_X, .false., r%label // '.' // trim(num) // ' x')
+            q(2) = model%add_coord(xk(2), COORD_Y, .false., r%label // '.' // trim(num) // ' y')
+            q(3) = model%add_coord(xk(3), COORD_Z, .false., r%label // '.' // trim(num) // ' z')
+            q(4) = euler_coords(model, r%label // '.' // trim(num), .false.)
+            q(5:7) = q(4) + [1, 2, 3]
+            call model%add_node_label(r%label // '.' // trim(num), [q(1), q(2), 0, q(3), q(4)])
+          else
+            q = [(node_x(ib) + m, m = 0, 2), (node_lam(ib) + m, m = 0, 3)]
+          end if
+          beam%label = r%label // '#' // trim(num)
+          beam%dofs = [p, q]
+          call beam3d_set_geometry(beam, model%x0(p(1:3)), model%x0(q(1:3)), orient, err)
+          if (.not. err%ok()) then
+            call err%prefix(where // ': variable ''orientation'': ')
+            return
+          end if
+          call spatial_properties(r, planar, beam)
+          ! Torsion follows the bending class: a rigid link is rigid in every mode.
+          beam%mode_class = [class_of(r%elongation, r%n_elements, k, 1), &
+            class_of(r%bending, r%n_elements, k, 1), class_of(r%bending, r%n_elements, k, 1), &
+            class_of(r%bending, r%n_elements, k, 2), class_of(r%bending, r%n_elements, k, 1), &
+            class_of(r%bending, r%n_elements, k, 2)]
+          idx = model%add_element(beam, [(0, m = 1, 6)])
+          p = q
+        end do
+      end associate
+    end do
+  end subroutine add_spatial_links
+
+  !> Section properties: I about the section z axis (bending in the x-y plane, as in the
+  !> plane), Iy about y (default I), torsion G J, rotary inertia rho (Iy + I) about the axis;
+  !> G > 0 makes the bending shear-flexible as in the plane.
+  subroutine spatial_properties(r, planar, beam)
+    type(link_rec_t), intent(in) :: r
+    type(beam_t), intent(in) :: planar
+    type(beam3d_t), intent(inout) :: beam
+    real(wp) :: iy
+    iy = r%inertia
+    if (r%inertia_y > 0) iy = r%inertia_y
+    beam%ea = planar%ea
+    beam%gj = r%shear_modulus * r%torsion
+    beam%ei_z = r%e_modulus * r%inertia
+    beam%ei_y = r%e_modulus * iy
+    beam%rho_a = planar%rho_a
+    beam%rho_j = r%density * (iy + r%inertia)
+    beam%rho_iy = r%density * iy
+    beam%rho_iz = r%density * r%inertia
+    beam%consistent = planar%consistent
+    beam%damping = planar%damping
+    beam%bending = merge(B3_ANGLE, B3_SINE, planar%bending == PLANAR_ANGLE)
+    beam%shear_xz = 0.0_wp
+    beam%shear_xy = 0.0_wp
+    if (r%shear_modulus > 0) then
+      beam%shear_xz = 12 * beam%ei_y / (r%shear_factor * r%shear_modulus * r%area * beam%l0**2)
+      beam%shear_xy = 12 * beam%ei_z / (r%shear_factor * r%shear_modulus * r%area * beam%l0**2)
+    end if
+  end subroutine spatial_properties
+
+  !> Point masses on x, y, z; forces; moments (fixed in space) on nodes with a rotation.
+  subroutine add_spatial_loads(scene, model, node_x, node_lam, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    integer, intent(in) :: node_x(:), node_lam(:)
+    type(error_t), intent(inout) :: err
+    integer :: i, in
+    do i = 1, size(scene%masses)
+      associate (r => scene%masses(i))
+        call require_node(scene, r%node, 'group &mass', 'node', in, err)
+        if (.not. err%ok()) return
+        if (r%m < 0) then
+          call err%set(ERR_INPUT, 'group &mass on node ''' // r%node // ''': variable ''m'' ' &
+            // 'must not be negative')
+          return
+        end if
+        model%lumped(node_x(in):node_x(in) + 2) = model%lumped(node_x(in):node_x(in) + 2) + r%m
+      end associate
+    end do
+    do i = 1, size(scene%forces)
+      associate (r => scene%forces(i))
+        call require_node(scene, r%node, 'group &force', 'node', in, err)
+        if (.not. err%ok()) return
+        model%force(node_x(in):node_x(in) + 2) = model%force(node_x(in):node_x(in) + 2) + &
+          [r%fx, r%fy, r%fz]
+        if (any(r%m_xyz /= 0)) then
+          if (node_lam(in) == 0) then
+            call err%set(ERR_INPUT, 'group &force on node ''' // r%node // ''': a moment ' // &
+              'needs a node with a rotation (the end of a link)')
+            return
+          end if
+          call model%add_moment(node_lam(in), r%m_xyz)
+        end if
+      end associate
+    end do
+  end subroutine add_spatial_loads
+end submodule model_build_spatial

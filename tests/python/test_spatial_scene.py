@@ -1,0 +1,115 @@
+"""Spatial scenes (&scene dimension = 3) end to end: a cantilever of spatial beams against
+closed forms (statics in both planes with shear flexibility, the roll-up by an end moment,
+bending frequencies), the same cantilever swinging under gravity in its plane against the
+planar scene, and the input errors of the dimension split."""
+import math
+
+import h5py
+import numpy as np
+import pytest
+
+from helpers import assert_clean_error, run_scene
+
+L, E, A, I_Z, I_Y, J, G, RHO = 1.5, 7.0e10, 1.0e-4, 0.8e-9, 2.0e-9, 1.5e-9, 2.6e10, 2700.0
+K = 5.0 / 6.0
+
+
+def cantilever(extra, n=4, dim=3, link_extra=""):
+    spatial = dim == 3
+    return (f"&scene title = 'cantilever', dimension = {dim} /\n"
+            f"&node label = 'root', x = 0, y = 0{', z = 0' if spatial else ''}, fixed = .true. /\n"
+            f"&node label = 'tip', x = {L}, y = 0 /\n"
+            f"&link label = 'beam', from = 'root', to = 'tip', n_elements = {n},\n"
+            f"      E = {E}, A = {A}, I = {I_Z}, rho = {RHO}, G = {G}"
+            + (f", Iy = {I_Y}, J = {J}" if spatial else "") + link_extra + " /\n" + extra)
+
+
+def test_static_tip_force_in_both_planes(tmp_path):
+    """Cubic Timoshenko elements are exact for a tip force: P L^3/(3 E I) + P L/(k G A) per
+    plane, to the geometric non-linearity ((w/L)^2 ~ 1e-10 here); bound 1e-6 relative."""
+    p = 1.0e-3
+    proc, out = run_scene(tmp_path, cantilever(f"&force node = 'tip', fy = {p}, fz = {p} /\n"
+                                               "&static n_steps = 1 /\n"))
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        tip = f["static/nodes/tip/position"][-1]
+        lam = f["static/nodes/tip/orientation"][-1]
+        assert f["model"].attrs["dimension"] == 3
+    shear = p * L / (K * G * A)
+    assert tip[1] == pytest.approx(p * L**3 / (3 * E * I_Z) + shear, rel=1e-6)
+    assert tip[2] == pytest.approx(p * L**3 / (3 * E * I_Y) + shear, rel=1e-6)
+    assert np.linalg.norm(lam) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_roll_up_by_an_end_moment(tmp_path):
+    """mz = 2 pi E I / L rolls the cantilever into a full circle: equal elements under equal
+    moments form a closed polygon, so the tip is back at the root (Newton tolerance) and has
+    turned a full turn; the observed gap is 1e-15 L, bound 1e-8 L."""
+    m = 2 * math.pi * E * I_Z / L
+    proc, out = run_scene(tmp_path, cantilever(f"&force node = 'tip', mz = {m} /\n"
+                                               "&static n_steps = 16 /\n", n=8))
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        tip = f["static/nodes/tip/position"][-1]
+        lam = f["static/nodes/tip/orientation"][-1]
+    assert np.linalg.norm(tip) < 1e-8 * L
+    assert abs(abs(lam[0]) - 1) < 1e-8            # lambda = -(1, 0, 0, 0): a full turn
+    assert np.all(np.abs(lam[1:]) < 1e-8)
+
+
+def test_bending_frequencies_in_both_planes(tmp_path):
+    """Clamped-free, 8 elements: 1.8751^2 sqrt(E I / (rho A L^4)) / 2 pi per plane; shear and
+    rotary inertia lower it by about (r/L)^2 ~ 1e-5 (observed 2e-5); bound 1e-3."""
+    proc, out = run_scene(tmp_path, cantilever("&modal n_modes = 4 /\n", n=8))
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        freq = f["modal/frequency_hz"][:]
+    beta = 1.875104068711961**2 / (2 * math.pi)
+    f_z_plane = beta * math.sqrt(E * I_Z / (RHO * A * L**4))
+    f_y_plane = beta * math.sqrt(E * I_Y / (RHO * A * L**4))
+    assert freq[0] == pytest.approx(f_z_plane, rel=1e-3)
+    assert freq[1] == pytest.approx(f_y_plane, rel=1e-3)
+
+
+def test_planar_motion_equals_the_planar_scene(tmp_path):
+    """The cantilever released under gravity in its x-y plane: the spatial scene's tip path
+    equals the planar scene's (same mesh and bending form). The spatial beam adds the sections'
+    rotary inertia, which the planar beam leaves out: (r/L)^2 = I/(A L^2) ~ 4e-6 of the motion
+    (observed ~1e-6 of the deflection); bound 1e-4. Nothing moves out of the plane."""
+    dyn = "&dynamic t_end = 0.05, output_dt = 0.005, integrator = 'bdf', rtol = 1e-8, atol = 1e-11 /\n"
+    text3 = cantilever(dyn).replace("dimension = 3 /", "dimension = 3, gravity = 0, -9.81, 0 /")
+    text2 = cantilever(dyn, dim=2).replace("&scene title = 'cantilever', dimension = 2 /",
+                                           "&scene title = 'cantilever', gravity = 0, -9.81 /")
+    p3, out3 = run_scene(tmp_path, text3, name="spatial")
+    p2, out2 = run_scene(tmp_path, text2, name="planar")
+    assert p3.returncode == 0, p3.stderr
+    assert p2.returncode == 0, p2.stderr
+    with h5py.File(out3) as f3, h5py.File(out2) as f2:
+        tip3 = f3["nodes/tip/position"][:]
+        tip2 = f2["nodes/tip/position"][:]
+    deflection = np.max(np.abs(tip2[:, 1]))
+    assert deflection > 1e-3
+    assert np.max(np.abs(tip3[:, :2] - tip2[:, :2])) < 1e-4 * deflection
+    assert np.max(np.abs(tip3[:, 2])) < 1e-12
+
+
+@pytest.mark.parametrize("text,fragments", [
+    (cantilever("&hinge label = 'h', node = 'root', link = 'beam', mode = 'released' /\n"),
+     ["&hinge", "not in spatial scenes yet"]),
+    (cantilever("&buckling n_modes = 2 /\n&force node = 'tip', fx = -1 /\n"),
+     ["&buckling", "not in spatial scenes yet"]),
+    (cantilever("&static n_steps = 1, n_frequencies = 2 /\n"), ["'n_frequencies'", "not in"]),
+    (cantilever("", dim=2).replace("y = 0 /", "y = 0, z = 1 /", 1), ["'z'", "dimension = 3"]),
+    (cantilever("&force node = 'tip', fz = 1 /\n", dim=2), ["&force", "'fz'", "dimension = 3"]),
+    (cantilever("&force node = 'tip', moment = 1 /\n"), ["'moment'", "planar only"]),
+    (cantilever("").replace(f", J = {J}", ""), ["'J'", "torsion constant"]),
+    (cantilever("").replace(f", G = {G}", ""), ["'G'", "spatial scene"]),
+    (cantilever("", link_extra=", orientation = 1, 0, 0"), ["'orientation'", "parallel"]),
+    (cantilever("&force node = 'mid', mx = 1 /\n&node label = 'mid', x = 3, y = 0 /\n"),
+     ["&force", "'mid'", "rotation"]),
+    (cantilever("").replace("dimension = 3 /", "dimension = 3, gravity = 0, -9.81 /"),
+     ["'gravity'", "3 values"]),
+])
+def test_dimension_errors(tmp_path, text, fragments):
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, *fragments)
