@@ -113,3 +113,22 @@ def test_planar_motion_equals_the_planar_scene(tmp_path):
 def test_dimension_errors(tmp_path, text, fragments):
     proc, out = run_scene(tmp_path, text)
     assert_clean_error(proc, out, *fragments)
+
+
+def test_reduced_model_in_space(tmp_path):
+    """Gravity with a z component swings the cantilever in both planes; the reduced model with
+    the 3 lowest modes (both first bending modes among them) follows the full one: observed
+    1.7e-3 of the deflection over 0.2 s, bound 3e-2."""
+    scene = ("&dynamic t_end = 0.2, output_dt = 0.01 /\n"
+             "&output nodes = 'tip' /\n")
+    full = cantilever(scene).replace("dimension = 3 /", "dimension = 3, gravity = 0, -9.81, -3 /")
+    p1, out1 = run_scene(tmp_path, full, name="full")
+    p2, out2 = run_scene(tmp_path, full + "&reduction n_modes = 3 /\n", name="reduced")
+    assert p1.returncode == 0, p1.stderr
+    assert p2.returncode == 0, p2.stderr
+    with h5py.File(out1) as f1, h5py.File(out2) as f2:
+        a = f1["nodes/tip/position"][:]
+        b = f2["nodes/tip/position"][:]
+    deflection = np.max(np.hypot(a[:, 1], a[:, 2]))
+    assert deflection > 1e-2 and np.max(np.abs(a[:, 2])) > 1e-4
+    assert np.max(np.abs(a - b)) < 3e-2 * deflection
