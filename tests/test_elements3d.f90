@@ -1,4 +1,4 @@
-!> Spatial elements (design note formulation.md section 3): Euler-parameter utilities, the
+!> Spatial elements (docs/theory.md section 2.6): Euler-parameter utilities, the
 !> spatial beam in both bending forms (angle, sine) and the Euler normalisation element.
 !>
 !>   - R(lambda) orthogonal with det 1, rotation vector -> lambda -> R = Rodrigues, matrix ->

@@ -231,6 +231,7 @@ contains
     real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
     integer :: iel, nr, nd, k, l
     logical :: weighted
+    real(wp) :: g(3)
     this%n_evals = this%n_evals + 1
     associate (m => this%model)
       nr = m%n_rh
@@ -245,6 +246,7 @@ contains
       call this%kin%second(m, qd, conv, xd, dq)
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
       weighted = any(m%gravity /= 0)
+      g = this%load_factor * m%gravity
       do iel = 1, m%n_elements
         if (this%mass%offset(iel) == 0) cycle
         nd = size(m%elements(iel)%e%dofs)
@@ -252,8 +254,7 @@ contains
                    fe => fe_work(1:nd), first => this%mass%offset(iel))
           call el%inertia(this%kin%x(el%dofs), xd(el%dofs), me, he)
           fe = 0.0_wp
-          if (weighted) call el%weight(this%kin%x(el%dofs), &
-            this%load_factor * m%gravity(1:m%dim), fe, pot)
+          if (weighted) call el%weight(this%kin%x(el%dofs), g(1:m%dim), fe, pot)
           fe = fe - he
           ! By hand: the element is small and matmul/reshape here cost more than the product.
           do l = 1, nd
@@ -704,34 +705,32 @@ contains
     real(wp) :: en(2)
     real(wp) :: q(this%model%n_q), qd_rh(this%model%n_rh), pdd(this%model%n_rh), pot
     real(wp) :: me(this%model%max_dofs, this%model%max_dofs), he(this%model%max_dofs)
-    real(wp) :: fe(this%model%max_dofs)
-    real(wp), allocatable :: e(:), s(:, :), de(:, :)
+    real(wp) :: fe(this%model%max_dofs), g(3)
+    real(wp) :: e(this%model%max_modes), s(this%model%max_modes, this%model%max_modes)
+    real(wp) :: de(this%model%max_modes, this%model%max_dofs)
     integer :: iel, nm, nd
     associate (m => this%model)
       call this%prescribed(t, q(1:m%n_rh), qd_rh, pdd)
       q(m%n_rh + 1:) = q_dy
       en(1) = 0.5_wp * sum(m%lumped * xd**2)
       en(2) = -this%load_factor * dot_product(this%loads_at(t), x)
+      g = this%load_factor * m%gravity
       do iel = 1, m%n_elements
         associate (el => m%elements(iel)%e)
           nm = el%n_modes()
           nd = size(el%dofs)
-          if (allocated(e)) then
-            if (size(e) /= nm .or. size(de, 2) /= nd) deallocate(e, s, de)
-          end if
-          if (.not. allocated(e)) allocate(e(nm), s(nm, nm), de(nm, nd))
           if (m%elastic_element(iel)) then
-            call el%evaluate(x(el%dofs), e, de)
+            call el%evaluate(x(el%dofs), e(:nm), de(:nm, :nd))
             where (.not. mode_has_stress(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1) &
-                   %class)) e = 0.0_wp
+                   %class)) e(:nm) = 0.0_wp
           else
-            call m%mode_values(iel, q, e)
+            call m%mode_values(iel, q, e(:nm))
           end if
-          call el%stiffness(s)
-          en(2) = en(2) + 0.5_wp * dot_product(e, matmul(s, e))
+          call el%stiffness(s(:nm, :nm))
+          en(2) = en(2) + 0.5_wp * dot_product(e(:nm), matmul(s(:nm, :nm), e(:nm)))
           if (.not. el%has_inertia()) cycle
           call el%inertia(x(el%dofs), xd(el%dofs), me(:nd, :nd), he(:nd))
-          call el%weight(x(el%dofs), this%load_factor * m%gravity(1:m%dim), fe(:nd), pot)
+          call el%weight(x(el%dofs), g(1:m%dim), fe(:nd), pot)
           en(1) = en(1) + 0.5_wp * dot_product(xd(el%dofs), matmul(me(:nd, :nd), xd(el%dofs)))
           en(2) = en(2) + pot
         end associate

@@ -1,4 +1,4 @@
-!> Spatial beam (design note formulation.md section 3). Coordinates x (14) =
+!> Spatial beam (docs/theory.md section 2.6). Coordinates x (14) =
 !> (xp, yp, zp, lambda_p(4), xq, yq, zq, lambda_q(4)); lambda of a node is its rotation
 !> relative to the reference orientation ((1,0,0,0) undeformed), acting on the reference
 !> section axes ex0 (chord), ey0, ez0: ey_p = R(lambda_p) ey0 etc., with the homogeneous R of
@@ -12,7 +12,7 @@
 !> cubic centreline); tests/test_elements3d.f90 checks it, the other sign leaves O(e^2).
 !>
 !> Bending with c = (ex.e_l, ey.e_l, ez.e_l) in the section frame of a node:
-!>   sine form  (e3, e5) = l0 (-cz, cy) at p, (e4, e6) = l0 (cz, -cy) at q (design note);
+!>   sine form  (e3, e5) = l0 (-cz, cy) at p, (e4, e6) = l0 (cz, -cy) at q;
 !>   angle form the same times h = alpha / s, s = |(cy, cz)|, alpha = atan2(s, cx): the
 !>              (y, z) components of the rotation vector turning the nodal tangent onto the
 !>              chord, so |(e3, e5)| = l0 alpha. It is the planar angle form of elements_beam
@@ -322,7 +322,7 @@ contains
   !> S on e_bar: EA/l0, GJ/l0^3 and per bending plane EI/(l0^3 (1 + P)) [[4+P, -(2-P)],
   !> [-(2-P), 4+P]] (P = 0: Euler-Bernoulli), as for the planar beam. The torsion mode is
   !> l0 times the relative twist angle, like the bending modes l0 times angles, hence GJ/l0^3
-  !> (the design note's GJ/l0 would give l0^2 times the textbook GJ/L).
+  !> (GJ/l0 would give l0^2 times the textbook GJ/L).
   pure subroutine beam3d_stiffness(this, s)
     class(beam3d_t), intent(in) :: this
     real(wp), intent(out) :: s(:, :)

@@ -1,5 +1,5 @@
 !> Euler parameters (unit quaternions) lambda = (l0, l1, l2, l3), scalar first, for the
-!> spatial elements (design note formulation.md section 3).
+!> spatial elements (docs/theory.md section 2.6).
 !>
 !> The rotation matrix is used in its homogeneous quadratic form
 !>   R(lambda) = (l0^2 - lv.lv) I + 2 lv lv^T + 2 l0 [lv x],

@@ -10,6 +10,7 @@
 module model_system
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_MODEL, ERR_INPUT
+  use core_strings, only: int_str
   use elements_base, only: element_t, element_slot_t, MODE_RIGID, MODE_RELEASED, &
     MODE_PRESCRIBED, MODE_DYNAMIC, MODE_ELASTIC
   use motion_law, only: motion_t
@@ -264,8 +265,7 @@ contains
     type(error_t), intent(inout) :: err
     integer :: k, i
     if (this%dim /= 2 .and. this%dim /= 3) then
-      call err%set(ERR_MODEL, 'model: dim must be 2 or 3, got ' // achar(48 + modulo(this%dim, &
-        10)))
+      call err%set(ERR_MODEL, 'model: dim must be 2 or 3, got ' // int_str(this%dim))
       return
     end if
     if (this%dim == 2 .and. this%gravity(3) /= 0) then
