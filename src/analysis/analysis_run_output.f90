@@ -232,6 +232,7 @@ contains
         shape(1, :) = b%node_shapes(ic(1), :)
         shape(2, :) = b%node_shapes(ic(2), :)
         shape(3, :) = 0.0_wp
+        if (ic(4) > 0) shape(3, :) = b%node_shapes(ic(4), :)
         if (err%ok()) call h5%write_real_2d('/buckling/nodes/' // &
           this%scene%output_nodes(i)%s // '/shape', shape, err)
       end do

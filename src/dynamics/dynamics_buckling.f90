@@ -76,7 +76,8 @@ contains
         '(everything is fixed or prescribed), so nothing can buckle')
       return
     end if
-    if (.not. (any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0))) then
+    if (.not. (any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0) .or. &
+        size(dyn%model%moment_lambda) > 0)) then
       call err%set(ERR_INPUT, 'group &buckling: the scene has no load (no &force and no ' // &
         'gravity) to take the buckling multipliers of')
       return
@@ -198,19 +199,21 @@ contains
     type(dynamics_t), intent(in) :: dyn
     type(buckling_result_t), intent(inout) :: res
     real(wp) :: s, d, c
-    integer :: k, i, ix, iy
+    integer :: k, i, n_slot
+    integer, allocatable :: ic(:)
+    ! Translations: x, y and, in a spatial model, z (node_coord rows 1, 2, 4).
+    n_slot = merge(3, 2, dyn%model%dim == 3)
     do k = 1, size(res%load_factor)
       s = 0
       c = 0
       do i = 1, size(dyn%model%node_coord, 2)
-        ix = dyn%model%node_coord(1, i)
-        iy = dyn%model%node_coord(2, i)
-        if (ix <= 0 .or. iy <= 0) cycle
-        d = hypot(res%node_shapes(ix, k), res%node_shapes(iy, k))
+        ic = dyn%model%node_coord([1, 2, 4], i)
+        ic = ic(1:n_slot)
+        if (any(ic <= 0)) cycle
+        d = norm2(res%node_shapes(ic, k))
         if (d > s) then
           s = d
-          c = res%node_shapes(ix, k)
-          if (abs(res%node_shapes(iy, k)) > abs(c)) c = res%node_shapes(iy, k)
+          c = res%node_shapes(ic(maxloc(abs(res%node_shapes(ic, k)), dim=1)), k)
         end if
       end do
       if (s <= 0) then

@@ -44,7 +44,7 @@ contains
     type(dynamics_t), intent(in) :: dyn
     has_loads = dyn%model%n_elastic > 0 .or. (dyn%load_factor /= 0 .and. &
       (any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0) .or. &
-      size(dyn%model%load_motion) > 0))
+      size(dyn%model%load_motion) > 0 .or. size(dyn%model%moment_lambda) > 0))
   end function has_loads
 
   !> Load part of the generalised force, DF_dy^T f, at (t, q_dy) with the model locked.

@@ -267,7 +267,7 @@ contains
         end associate
       end do
       this%xd_now = xd
-      if (size(m%moment_lambda) > 0) call add_moments(m, this%kin%x, this%load_factor, rhs)
+      if (size(m%moment_lambda) > 0) call add_moments(m, t, this%kin%x, this%load_factor, rhs)
       if (m%n_elastic > 0) call this%elastic_forces(xd, rhs)
       this%nodal_force = rhs
       this%q_now = q
@@ -279,16 +279,16 @@ contains
   !> Nodal forces of the moments on spatial nodes: M . omega_global = M . 2 E(lambda) lambda'
   !> gives 2 E^T M on the Euler parameters, E = [-lv, l0 I + [lv x]]. A moment fixed in space
   !> is not conservative under large 3D rotations: it has no potential in the energy output.
-  pure subroutine add_moments(model, x, factor, f)
+  pure subroutine add_moments(model, t, x, factor, f)
     type(model_t), intent(in) :: model
-    real(wp), intent(in) :: x(:), factor
+    real(wp), intent(in) :: t, x(:), factor
     real(wp), intent(inout) :: f(:)
     real(wp) :: e(3, 4)
     integer :: k, i
     do k = 1, size(model%moment_lambda)
       i = model%moment_lambda(k)
       e = euler_e(x(i:i + 3))
-      f(i:i + 3) = f(i:i + 3) + 2 * factor * matmul(transpose(e), model%moment(:, k))
+      f(i:i + 3) = f(i:i + 3) + 2 * factor * matmul(transpose(e), model%moment_at(k, t))
     end do
   end subroutine add_moments
 

@@ -218,7 +218,19 @@ contains
         call err%set(ERR_INPUT, g%where() // ': variable ''orientation'' needs 3 values')
       end if
     end if
-    r%spatial_var = first_given(g, [character(len=12) :: 'Iy', 'J', 'orientation'])
+    if (g%has('rotary_inertia') .and. err%ok()) then
+      call g%get_real_array('rotary_inertia', r%rotary_inertia, e)
+      if (.not. e%ok()) then
+        err = e
+      else if (size(r%rotary_inertia) /= 3) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''rotary_inertia'' needs 3 values ' &
+          // '(per length, about the beam axis, section y and section z)')
+      else if (any(r%rotary_inertia < 0)) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''rotary_inertia'' must not be negative')
+      end if
+    end if
+    r%spatial_var = first_given(g, [character(len=16) :: 'Iy', 'J', 'orientation', &
+      'rotary_inertia'])
   end subroutine read_link
 
   subroutine read_hinge(g, r, err)
@@ -309,7 +321,7 @@ contains
     call rd_real(g, 'mz', r%m_xyz(3), err)
     r%spatial_var = first_given(g, [character(len=12) :: 'fz', 'mx', 'my', 'mz'])
     ! A spatial moment is a follower of nothing: fixed in space, so no time law for it yet.
-    r%planar_var = first_given(g, [character(len=12) :: 'moment', 'time_law'])
+    r%planar_var = first_given(g, [character(len=12) :: 'moment'])
   end subroutine read_force
 
   !> The first of `names` the group gives, '' if none.

@@ -11,12 +11,11 @@ contains
     type(error_t), intent(inout) :: err
     integer :: i
     character(len=*), parameter :: NOT_YET = ' is not in spatial scenes yet (dimension = 3 ' // &
-      'has nodes, links, masses, forces and moments; statics, modal analysis, dynamics)'
+      'has nodes, links, masses, forces and moments; statics, modal analysis, buckling, dynamics)'
     if (scene%dimension == 3) then
       if (size(scene%hinges) > 0) call err%set(ERR_INPUT, 'group &hinge' // NOT_YET)
       if (size(scene%trusses) > 0) call err%set(ERR_INPUT, 'group &truss' // NOT_YET)
       if (size(scene%sliders) > 0) call err%set(ERR_INPUT, 'group &slider' // NOT_YET)
-      if (scene%buckling%active) call err%set(ERR_INPUT, 'group &buckling' // NOT_YET)
       if (size(scene%compliance_nodes) > 0) call err%set(ERR_INPUT, 'group &output: ' // &
         'variable ''compliance_nodes''' // NOT_YET)
       if (scene%static%n_frequencies > 0) call err%set(ERR_INPUT, 'group &static: ' // &

@@ -98,7 +98,7 @@ module io_schema
     var_spec_t('node', 'fix_rotation', VK_LOGICAL, '', 'fixed', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'clamp the rotation (spatial scenes)')]
-  type(var_spec_t), parameter :: LINK_VARS(18) = [ &
+  type(var_spec_t), parameter :: LINK_VARS(19) = [ &
     var_spec_t('link', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'unique name'), &
@@ -152,7 +152,10 @@ module io_schema
       '', 'torsion constant (spatial scenes)'), &
     var_spec_t('link', 'orientation', VK_REAL_LIST, '', 'z x chord', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'section y axis direction (spatial scenes)')]
+      '', 'section y axis direction (spatial scenes)'), &
+    var_spec_t('link', 'rotary_inertia', VK_REAL_LIST, 'kg m', 'rho (Iy+I), rho Iy, rho I', &
+      .false., 0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'section rotary inertia per length about x, y, z (spatial)')]
   type(var_spec_t), parameter :: HINGE_VARS(7) = [ &
     var_spec_t('hinge', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -412,7 +415,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(118) = [ &
+  type(var_spec_t), parameter :: SCHEMA(119) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]

@@ -9,7 +9,7 @@ module model_build
   use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC, &
     MODE_ELASTIC
   use model_system, only: model_t, COORD_X, COORD_Y, COORD_PHI
-  use model_scene, only: scene_t, node_rec_t, link_rec_t, label_t
+  use model_scene, only: scene_t, node_rec_t, link_rec_t, force_rec_t, label_t
   use elements_beam, only: beam_t
   implicit none
   private
@@ -120,6 +120,15 @@ module model_build
       character(len=*), intent(in) :: label
       integer :: idx
     end function motion_index
+    !> The motion a force follows in time (its `time_law`), 0 if it is constant; an input
+    !> error naming `where` if no &motion has that label.
+    module subroutine time_law_of(scene, r, where, im, err)
+      type(scene_t), intent(in) :: scene
+      type(force_rec_t), intent(in) :: r
+      character(len=*), intent(in) :: where
+      integer, intent(out) :: im
+      type(error_t), intent(inout) :: err
+    end subroutine time_law_of
     !> The node `label` names, or an input error naming `where` and `var`.
     module subroutine require_node(scene, label, where, var, idx, err)
       type(scene_t), intent(in) :: scene
@@ -350,18 +359,8 @@ contains
           end if
           shape(b%node_rot(in)) = r%moment
         end if
-        im = 0
-        if (allocated(r%time_law)) then
-          if (len(r%time_law) > 0) then
-            im = motion_index(scene, r%time_law)
-            if (im == 0) then
-              call err%set(ERR_INPUT, 'group &force #' // int_str(i) // ': variable ' // &
-                '''time_law'': motion ''' // r%time_law // ''' is not defined (no &motion ' // &
-                'with that label)')
-              return
-            end if
-          end if
-        end if
+        call time_law_of(scene, r, 'group &force #' // int_str(i), im, err)
+        if (.not. err%ok()) return
         if (im == 0) then
           model%force = model%force + shape
         else

@@ -25,6 +25,15 @@ contains
     idx = 0
   end procedure motion_index
 
+  module procedure time_law_of
+    im = 0
+    if (.not. allocated(r%time_law)) return
+    if (len(r%time_law) == 0) return
+    im = motion_index(scene, r%time_law)
+    if (im == 0) call err%set(ERR_INPUT, where // ': variable ''time_law'': motion ''' // &
+      r%time_law // ''' is not defined (no &motion with that label)')
+  end procedure time_law_of
+
   module procedure require_node
     idx = node_index(scene, label)
     if (idx == 0) call err%set(ERR_INPUT, where // ': variable ''' // var // &

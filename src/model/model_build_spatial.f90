@@ -1,7 +1,7 @@
 !> The spatial scene (&scene dimension = 3; docs/theory.md 2.6): nodes with x, y, z and, where
 !> a link ends, four Euler parameters (reference (1, 0, 0, 0)) with a rigid normalisation
 !> unless the rotation is clamped; links meshed into spatial beams; point masses; forces and
-!> moments fixed in space. Hinges, trusses, sliders and node inputs are planar only so far
+!> moments fixed in space, constant or following time laws. Hinges, trusses, sliders and node inputs are planar only so far
 !> (io_scene refuses them in a spatial scene).
 submodule (model_build) model_build_spatial
   use elements_beam3d, only: beam3d_t, beam3d_set_geometry, B3_ANGLE => BENDING_ANGLE, &
@@ -151,6 +151,11 @@ contains
     beam%rho_j = r%density * (iy + r%inertia)
     beam%rho_iy = r%density * iy
     beam%rho_iz = r%density * r%inertia
+    if (allocated(r%rotary_inertia)) then
+      beam%rho_j = r%rotary_inertia(1)
+      beam%rho_iy = r%rotary_inertia(2)
+      beam%rho_iz = r%rotary_inertia(3)
+    end if
     beam%consistent = planar%consistent
     beam%damping = planar%damping
     beam%bending = merge(B3_ANGLE, B3_SINE, planar%bending == PLANAR_ANGLE)
@@ -162,13 +167,15 @@ contains
     end if
   end subroutine spatial_properties
 
-  !> Point masses on x, y, z; forces; moments (fixed in space) on nodes with a rotation.
+  !> Point masses on x, y, z; forces; moments (fixed in space) on nodes with a rotation; both
+  !> constant or following a time law.
   subroutine add_spatial_loads(scene, model, node_x, node_lam, err)
     type(scene_t), intent(in) :: scene
     type(model_t), intent(inout) :: model
     integer, intent(in) :: node_x(:), node_lam(:)
     type(error_t), intent(inout) :: err
-    integer :: i, in
+    real(wp) :: shape(model%n_x)
+    integer :: i, in, im
     do i = 1, size(scene%masses)
       associate (r => scene%masses(i))
         call require_node(scene, r%node, 'group &mass', 'node', in, err)
@@ -182,20 +189,29 @@ contains
       end associate
     end do
     do i = 1, size(scene%forces)
-      associate (r => scene%forces(i))
+      associate (r => scene%forces(i), where => 'group &force on node ''' // &
+          scene%forces(i)%node // '''')
         call require_node(scene, r%node, 'group &force', 'node', in, err)
+        if (err%ok()) call time_law_of(scene, r, where, im, err)
         if (.not. err%ok()) return
-        model%force(node_x(in):node_x(in) + 2) = model%force(node_x(in):node_x(in) + 2) + &
-          [r%fx, r%fy, r%fz]
+        if (im == 0) then
+          model%force(node_x(in):node_x(in) + 2) = model%force(node_x(in):node_x(in) + 2) + &
+            [r%fx, r%fy, r%fz]
+        else if (any([r%fx, r%fy, r%fz] /= 0)) then
+          shape = 0.0_wp
+          shape(node_x(in):node_x(in) + 2) = [r%fx, r%fy, r%fz]
+          call model%add_timed_load(shape, im)
+        end if
         if (any(r%m_xyz /= 0)) then
           if (node_lam(in) == 0) then
-            call err%set(ERR_INPUT, 'group &force on node ''' // r%node // ''': a moment ' // &
-              'needs a node with a rotation (the end of a link)')
+            call err%set(ERR_INPUT, where // ': a moment needs a node with a rotation (the ' &
+              // 'end of a link)')
             return
           end if
-          call model%add_moment(node_lam(in), r%m_xyz)
+          call model%add_moment(node_lam(in), r%m_xyz, im)
         end if
       end associate
     end do
   end subroutine add_spatial_loads
+
 end submodule model_build_spatial

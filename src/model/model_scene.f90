@@ -54,6 +54,9 @@ module model_scene
     !> torsion constant J, orientation the section y axis (not allocated: global z x chord).
     real(wp) :: inertia_y = -1.0_wp, torsion = 0.0_wp
     real(wp), allocatable :: orientation(:)
+    !> Rotary inertia per length about the beam axis, section y, section z [kg m]; not
+    !> allocated: rho (Iy + I), rho Iy, rho I.
+    real(wp), allocatable :: rotary_inertia(:)
     character(len=:), allocatable :: spatial_var
   end type link_rec_t
 

@@ -55,8 +55,9 @@ module model_system
     !> Moments on spatial nodes, constant in the global frame [N m]: moment(:, k) on the node
     !> whose Euler parameters start at coordinate moment_lambda(k). Their generalised force
     !> 2 E(lambda)^T M depends on the rotation, so the dynamics adds it at each evaluation.
+    !> moment_motion(k): the motion whose value scales moment k in time (0: constant).
     real(wp), allocatable :: moment(:, :)
-    integer, allocatable :: moment_lambda(:)
+    integer, allocatable :: moment_lambda(:), moment_motion(:)
     integer, allocatable :: load_motion(:)
     !> 2 (planar) or 3 (spatial): the components of gravity the elements see.
     integer :: dim = 2
@@ -92,6 +93,7 @@ module model_system
     procedure :: add_motion => model_add_motion
     procedure :: add_timed_load => model_add_timed_load
     procedure :: add_moment => model_add_moment
+    procedure :: moment_at => model_moment_at
     procedure :: loads_at => model_loads_at
     procedure :: add_node_label => model_add_node_label
     procedure :: find_node => model_find_node
@@ -115,7 +117,7 @@ contains
     allocate(this%lumped(0), this%force(0), this%elements(0), this%motions(0))
     allocate(this%node_label(0), this%node_coord(NODE_SLOTS, 0))
     allocate(this%load_shape(0, 0), this%load_motion(0))
-    allocate(this%moment(3, 0), this%moment_lambda(0))
+    allocate(this%moment(3, 0), this%moment_lambda(0), this%moment_motion(0))
     this%finalized = .false.
   end subroutine model_init
 
@@ -173,16 +175,33 @@ contains
     this%modes = [this%modes, modes]
   end function model_add_element
 
-  !> A moment m (3, global frame, constant) on the node whose Euler parameters start at
-  !> coordinate first_lambda.
-  subroutine model_add_moment(this, first_lambda, m)
+  !> A moment m (3, global frame) on the node whose Euler parameters start at coordinate
+  !> first_lambda; constant, or times the value of motion `motion` (> 0) in time.
+  subroutine model_add_moment(this, first_lambda, m, motion)
     class(model_t), intent(inout) :: this
     integer, intent(in) :: first_lambda
     real(wp), intent(in) :: m(3)
+    integer, intent(in), optional :: motion
+    integer :: law
+    law = 0
+    if (present(motion)) law = motion
     this%moment = reshape([reshape(this%moment, [size(this%moment)]), m], &
       [3, size(this%moment, 2) + 1])
     this%moment_lambda = [this%moment_lambda, first_lambda]
+    this%moment_motion = [this%moment_motion, law]
   end subroutine model_add_moment
+
+  !> Moment k at time t [N m, global frame].
+  pure function model_moment_at(this, k, t) result(m)
+    class(model_t), intent(in) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t
+    real(wp) :: m(3), p, pd, pdd
+    m = this%moment(:, k)
+    if (this%moment_motion(k) == 0) return
+    call this%motions(this%moment_motion(k))%eval(t, p, pd, pdd)
+    m = p * m
+  end function model_moment_at
 
   !> A nodal load `shape` (n_x) that follows motion `motion` in time.
   subroutine model_add_timed_load(this, shape, motion)
@@ -276,6 +295,11 @@ contains
       i = this%moment_lambda(k)
       if (i < 1 .or. i + 3 > this%n_x) then
         call err%set(ERR_MODEL, 'model: moment on coordinates outside the model')
+        return
+      end if
+      if (this%moment_motion(k) < 0 .or. this%moment_motion(k) > this%n_motions) then
+        call err%set(ERR_MODEL, 'model: a moment follows motion ' // &
+          int_str(this%moment_motion(k)) // ', which the model does not have')
         return
       end if
       if (any(this%coord_kind(i:i + 3) /= COORD_EULER)) then
