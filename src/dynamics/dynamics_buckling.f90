@@ -95,7 +95,10 @@ contains
       call err%prefix('buckling analysis: ')
       return
     end if
+    ! Symmetric for conservative loads; of a moment fixed in space only the symmetric part
+    ! enters (the linearised problem of a non-conservative load is not symmetric).
     res%kg = (kt - res%k0) / lambda_ref
+    res%kg = 0.5_wp * (res%kg + transpose(res%kg))
     z = identity(n)
     if (present(held)) then
       do i = 1, size(held)

@@ -91,7 +91,10 @@ contains
         end if
         k(:, j) = k(:, j) - d1
       end do
-      k = 0.5_wp * (k + transpose(k))
+      ! Conservative loads have a symmetric tangent: symmetrising removes difference noise.
+      ! A moment fixed in space is not conservative under 3D rotations; Newton (LU) needs its
+      ! true, unsymmetric tangent.
+      if (size(dyn%model%moment_lambda) == 0) k = 0.5_wp * (k + transpose(k))
     end if
     v0 = 0.0_wp
     if (err%ok()) call dyn%evaluate_dense(t, q_dy, v0, a, err)
@@ -126,7 +129,8 @@ contains
     do i = 1, size(k, 1)
       if (m(i, i) > 0) s = max(s, abs(k(i, i)) / m(i, i))
     end do
-    allocate(a, source=k + (STABILITY_MARGIN * s) * m)
+    ! The symmetric part decides (the tangent of a moment fixed in space is not symmetric).
+    allocate(a, source=0.5_wp * (k + transpose(k)) + (STABILITY_MARGIN * s) * m)
     call chol_factor(a, info)
     stable = info == 0
   end function stable_tangent

@@ -1,0 +1,110 @@
+"""The spatial examples named by the issue list, against closed forms and flexmor's own
+converged solutions (generators and closed forms in scripts/spatial_examples.py):
+lateral-torsional buckling, Bathe and Bolourchi's 45-degree bend, Simo and Vu-Quoc's
+right-angle cantilever, and time laws on spatial forces and moments."""
+import h5py
+import numpy as np
+import pytest
+
+from helpers import ROOT, load_driver, run_scene
+
+EX = load_driver(ROOT / "scripts" / "spatial_examples.py")
+
+
+def run_ok(tmp_path, text, name):
+    proc, out = run_scene(tmp_path, text, name=name)
+    assert proc.returncode == 0, proc.stderr
+    return out
+
+
+def test_ltb_gamma_is_the_textbook_constant():
+    """The shooting solution reproduces Timoshenko and Gere's 4.013 (to its 4 digits)."""
+    assert EX.ltb_gamma() == pytest.approx(4.013, abs=6e-4)
+
+
+def test_lateral_buckling_against_the_closed_form(tmp_path):
+    """Shear-rigid beams converge as h^2 to P = gamma sqrt(E Iy G J)/L^2: the error ratio from
+    8 to 16 beams is 4 (observed 4.03), and the Richardson value from 8 and 16 beams lies
+    2e-5 from the closed form (bound 2e-4). The example file (32 shear-flexible beams) is
+    within 0.2 % (observed 5.5e-4), and its shape turns the tip out of the loaded plane."""
+    p_cr = EX.ltb_critical_force()
+    loads = {}
+    for n in (4, 8, 16):
+        out = run_ok(tmp_path, EX.lateral_buckling_scene(n, shear_rigid=True), f"ltb{n}")
+        with h5py.File(out) as f:
+            loads[n] = f["buckling/load_factor"][0]
+    assert (loads[4] - loads[8]) / (loads[8] - loads[16]) == pytest.approx(4.0, abs=0.3)
+    richardson = loads[16] + (loads[16] - loads[8]) / 3
+    assert richardson == pytest.approx(p_cr, rel=2e-4)
+    out = run_ok(tmp_path, (ROOT / "input" / "lateral_buckling.nml").read_text(), "example")
+    with h5py.File(out) as f:
+        assert f["buckling/load_factor"][0] == pytest.approx(p_cr, rel=2e-3)
+        shape = f["buckling/nodes/tip/shape"][0]
+    # Unit largest translation: the lateral (z) one; y, in the loaded plane, stays at zero.
+    assert abs(shape[2]) == pytest.approx(1.0, abs=1e-9)
+    assert abs(shape[1]) < 1e-6
+
+
+def test_bend45_converges_and_the_example_is_within_target(tmp_path):
+    """The bend's tip error goes as h^2 (ratio 8->16 over 16->32 observed 4.0 at every load
+    step, checked in [3, 5]); the example's 8 beams are within 0.2 % of the tip displacement
+    of the Richardson value from 16 and 32 beams (observed 6e-4 of it)."""
+    tips = {}
+    for n in (8, 16, 32):
+        with h5py.File(run_ok(tmp_path, EX.bend45_scene(n), f"bend{n}")) as f:
+            tips[n] = f["static/nodes/tip/position"][:]
+    ratio = (np.abs(tips[8] - tips[16]).max(axis=1) / np.abs(tips[16] - tips[32]).max(axis=1))
+    assert np.all((ratio > 3) & (ratio < 5)), ratio
+    ref = tips[32] + (tips[32] - tips[16]) / 3
+    with h5py.File(run_ok(tmp_path, (ROOT / "input" / "bend45.nml").read_text(), "ex")) as f:
+        example = f["static/nodes/tip/position"][:]
+        start = f["model/nodes/position"][-1]
+    displacement = np.linalg.norm(ref - start, axis=1)
+    assert np.all(np.linalg.norm(example - ref, axis=1) < 2e-3 * displacement)
+    assert np.allclose(example, tips[8], rtol=0, atol=1e-9 * EX.BEND_RADIUS)
+
+
+def test_right_angle_cantilever_energy(tmp_path):
+    """Over the pulse the force does the work W = -int z F' dt = 50 (int_1^2 z - int_0^1 z)
+    (integration by parts, F = 0 at both ends), which must equal the energy at t = 2 (observed
+    4e-6 relative with Simpson on the 0.01 s output, bound 1e-3); afterwards the energy stays
+    constant (observed 3e-5 over 2 s at rtol 1e-5, bound 3e-3)."""
+    text = (ROOT / "input" / "right_angle_cantilever.nml").read_text()
+    text = text.replace("t_end = 30.0, output_dt = 0.05", "t_end = 4.0, output_dt = 0.01")
+    with h5py.File(run_ok(tmp_path, text, "elbow")) as f:
+        t = f["time"][:]
+        z = f["nodes/elbow/position"][:, 2]
+        energy = f["energy/kinetic"][:] + f["energy/potential"][:]
+    i1, i2 = np.argmin(abs(t - 1)), np.argmin(abs(t - 2))
+    assert t[i1] == pytest.approx(1.0) and t[i2] == pytest.approx(2.0)
+
+    def simpson(y, x):
+        h = x[1] - x[0]
+        return h / 3 * (y[0] + y[-1] + 4 * y[1:-1:2].sum() + 2 * y[2:-1:2].sum())
+    work = 50 * (simpson(z[i1:i2 + 1], t[i1:i2 + 1]) - simpson(z[:i1 + 1], t[:i1 + 1]))
+    assert work > 10
+    assert energy[i2] == pytest.approx(work, rel=1e-3)
+    after = energy[i2:]
+    assert np.max(np.abs(after - after[0])) < 3e-3 * after[0]
+
+
+@pytest.mark.parametrize("component,value", [("fz", 0.5), ("mz", 0.1)])
+def test_time_law_scales_spatial_loads_in_statics(tmp_path, component, value):
+    """Statics takes the loads at t = 0: a time law worth 0.7 there is the same as a constant
+    load 0.7 times as large, to the Newton tolerance (1e-11 of the model size; bound 1e-8 of
+    the deflection)."""
+    scene = ("&scene title = 'c', dimension = 3 /\n"
+             "&node label = 'root', x = 0, y = 0, z = 0, fixed = .true. /\n"
+             "&node label = 'tip', x = 1, y = 0, z = 0 /\n"
+             "&link label = 'b', from = 'root', to = 'tip', n_elements = 2, E = 7e10,\n"
+             "      A = 1e-4, I = 1e-9, Iy = 2e-9, J = 1.5e-9, G = 2.6e10, rho = 2700 /\n"
+             "&static n_steps = 1 /\n&output nodes = 'tip' /\n")
+    law = "&motion label = 'p', law = 'ramp', start = 0.7, t0 = 0, rate = 5 /\n"
+    tips = []
+    for text in (scene + f"&force node = 'tip', {component} = {0.7 * value!r} /\n",
+                 scene + law + f"&force node = 'tip', {component} = {value}, time_law = 'p' /\n"):
+        with h5py.File(run_ok(tmp_path, text, f"s{len(tips)}")) as f:
+            tips.append(f["static/nodes/tip/position"][-1] - f["model/nodes/position"][-1])
+    deflection = np.max(np.abs(tips[0]))
+    assert deflection > 1e-4
+    assert np.max(np.abs(tips[1] - tips[0])) < 1e-8 * deflection
