@@ -91,7 +91,22 @@ contains
     call suite%check(stable_tangent(k, m), 'round-off below zero: not unstable')
     k(2, 2) = -1.0e-6_wp * s * m(2, 2)
     call suite%check(.not. stable_tangent(k, m), 'omega^2 = -1e-6 of the largest: unstable')
+    ! Unsymmetric tangents (moments fixed in space): eigenvalues of K v = omega^2 M v with
+    ! M = I decide. [[2, 1], [-1, 2]] has 2 +- i (a complex pair: not counted, see
+    ! stable_tangent), [[1, 3], [0.5, 1]] has 1 +- sqrt(1.5), one negative: divergence, though
+    ! the symmetric part [[1, 1.75], [1.75, 1]] is as indefinite in both cases.
+    call suite%check(stable_tangent(reshape([2.0_wp, -1.0_wp, 1.0_wp, 2.0_wp], [2, 2]), &
+      identity2()), 'unsymmetric K, complex pair 2 +- i: not unstable')
+    call suite%check(.not. stable_tangent(reshape([1.0_wp, 0.5_wp, 3.0_wp, 1.0_wp], [2, 2]), &
+      identity2()), 'unsymmetric K with omega^2 = 1 - sqrt(1.5) < 0: unstable')
+    call suite%check(stable_tangent(reshape([4.0_wp, 0.5_wp, 3.0_wp, 1.0_wp], [2, 2]), &
+      identity2()), 'unsymmetric K with real positive omega^2 (2.5 +- sqrt(3.75)): stable')
   end subroutine matrices
+
+  pure function identity2() result(a)
+    real(wp) :: a(2, 2)
+    a = reshape([1.0_wp, 0.0_wp, 0.0_wp, 1.0_wp], [2, 2])
+  end function identity2
 
   !> P_cr of the N_EL-element model: 1 / largest mu of G v = mu S v, K_T(P) = S - P G.
   real(wp) function discrete_critical_load() result(p_cr)

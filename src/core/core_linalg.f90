@@ -3,7 +3,8 @@ module core_linalg
   use core_kinds, only: wp
   implicit none
   private
-  public :: single_thread_blas, lu_factor, lu_solve, lu_solve_vector, chol_factor, chol_solve, sym_gen_eig, solve_dense
+  public :: single_thread_blas, lu_factor, lu_solve, lu_solve_vector, chol_factor, chol_solve, sym_gen_eig, &
+    gen_eig_values, solve_dense
 
   interface
     subroutine dgetrf(m, n, a, lda, ipiv, info)
@@ -43,6 +44,15 @@ module core_linalg
       real(wp), intent(out) :: w(*), work(*)
       integer, intent(out) :: iwork(*), info
     end subroutine dsygvd
+    subroutine dggev(jobvl, jobvr, n, a, lda, b, ldb, alphar, alphai, beta, vl, ldvl, vr, &
+        ldvr, work, lwork, info)
+      import :: wp
+      character, intent(in) :: jobvl, jobvr
+      integer, intent(in) :: n, lda, ldb, ldvl, ldvr, lwork
+      real(wp), intent(inout) :: a(lda, *), b(ldb, *)
+      real(wp), intent(out) :: alphar(*), alphai(*), beta(*), vl(ldvl, *), vr(ldvr, *), work(*)
+      integer, intent(out) :: info
+    end subroutine dggev
   end interface
 
   interface
@@ -154,4 +164,32 @@ contains
     allocate(work(int(wq(1))), iwork(iwq(1)))
     call dsygvd(1, 'V', 'L', n, v, n, b, n, lambda, work, size(work), iwork, size(iwork), info)
   end subroutine sym_gen_eig
+
+  !> Eigenvalues of the general (unsymmetric) problem k v = lambda m v: real parts wr,
+  !> imaginary parts wi; an infinite eigenvalue (m singular in its direction) has
+  !> wr = huge and wi = 0.
+  subroutine gen_eig_values(k, m, wr, wi, info)
+    real(wp), intent(in) :: k(:, :), m(:, :)
+    real(wp), intent(out) :: wr(:), wi(:)
+    integer, intent(out) :: info
+    real(wp), allocatable :: a(:, :), b(:, :), work(:)
+    real(wp) :: beta(size(wr)), wq(1), dummy(1, 1)
+    integer :: n, i
+    n = size(k, 1)
+    allocate(a, source=k)
+    allocate(b, source=m)
+    call dggev('N', 'N', n, a, n, b, n, wr, wi, beta, dummy, 1, dummy, 1, wq, -1, info)
+    allocate(work(int(wq(1))))
+    call dggev('N', 'N', n, a, n, b, n, wr, wi, beta, dummy, 1, dummy, 1, work, size(work), &
+      info)
+    do i = 1, n
+      if (abs(beta(i)) > tiny(1.0_wp) * max(abs(wr(i)), abs(wi(i)), 1.0_wp)) then
+        wr(i) = wr(i) / beta(i)
+        wi(i) = wi(i) / beta(i)
+      else
+        wr(i) = huge(1.0_wp)
+        wi(i) = 0.0_wp
+      end if
+    end do
+  end subroutine gen_eig_values
 end module core_linalg

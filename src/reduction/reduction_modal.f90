@@ -55,6 +55,9 @@ contains
     allocate(res%k0(n, n))
     call tangent_stiffness(dyn, t, q_dy, res%k0, err)
     if (.not. err%ok()) return
+    ! Modes need a symmetric stiffness: of the load stiffness of a moment fixed in space (not
+    ! conservative in 3D) only the symmetric part is kept.
+    res%k0 = 0.5_wp * (res%k0 + transpose(res%k0))
     res%m0 = dyn%mbar
     call lowest_modes(res%k0, res%m0, nm, name, lambda, v, err, res%solver)
     if (.not. err%ok()) then
