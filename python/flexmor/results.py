@@ -113,14 +113,17 @@ def _check_rows(path: str, name: str, data: np.ndarray, n: int, tail: tuple[int,
 @dataclass
 class NodePath:
     """Positions (n, 3) [m] and, for nodes that have one, rotations (n,) [rad] of one node at
-    each output time (or load step). Static paths also carry the node's ``reaction`` (n, 3):
-    fx, fy [N], mz [N m] from supports and prescribed inputs, and, for ``&output
-    compliance_nodes``, its tangent ``compliance`` (n, 3, 3): d(x, y, phi)/d(fx, fy, mz)."""
+    each output time (or load step); in a spatial result the node's ``orientation`` (n, 4)
+    instead: Euler parameters (scalar first) of its rotation from the reference orientation.
+    Static paths also carry the node's ``reaction`` (n, 3): fx, fy [N], mz [N m] from supports
+    and prescribed inputs, and, for ``&output compliance_nodes``, its tangent ``compliance``
+    (n, 3, 3): d(x, y, phi)/d(fx, fy, mz) (planar results only)."""
 
     position: np.ndarray
     rotation: np.ndarray | None = None
     reaction: np.ndarray | None = None
     compliance: np.ndarray | None = None
+    orientation: np.ndarray | None = None
 
 
 @dataclass
@@ -237,7 +240,8 @@ def _paths(path: str, group: h5py.Group | None, prefix: str, n: int, against: st
         position = np.asarray(node["position"][...], dtype=float)
         _check_rows(path, f"/{prefix}/{label}/position", position, n, (3,), against)
         extra: dict[str, np.ndarray | None] = {}
-        for name, shape in (("rotation", ()), ("reaction", (3,)), ("compliance", (3, 3))):
+        for name, shape in (("rotation", ()), ("reaction", (3,)), ("compliance", (3, 3)),
+                            ("orientation", (4,))):
             extra[name] = None
             if isinstance(node.get(name), h5py.Dataset):
                 extra[name] = np.asarray(node[name][...], dtype=float)

@@ -10,8 +10,10 @@ the load factor). Open the .pvd in ParaView.
 Each .vtu holds the mechanism at that time: every beam as a polyline of --segments pieces
 along the element's cubic interpolation (docs/python.md), every truss as a line, every hinge
 as a vertex; point data ``displacement`` (m, 3 components: position minus reference position
-of the same point) and cell data ``element_type`` (1 beam, 2 truss, 3 hinge) and ``element``
-(the element's row in /model/elements, from 1). Points z = 0.
+of the same point) and cell data ``element_type`` (1 beam, 2 truss, 3 hinge, 5 spatial beam)
+and ``element`` (the element's row in /model/elements, from 1). Points of a planar model have
+z = 0; those of a spatial one (/model dimension 3) their z, spatial beams drawn along the cubic
+whose end tangents follow the nodes' Euler parameters (docs/python.md).
 
 Exit status 0 on success, 2 with a one-line message (no traceback) for a missing or unreadable
 file, a file without /model or without motion, or an unwritable folder.
