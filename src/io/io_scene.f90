@@ -300,10 +300,21 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(mass_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
+    type(error_t) :: e
     call rd_string(g, 'node', r%node, err)
     call rd_real(g, 'm', r%m, err)
     call rd_real(g, 'J', r%j, err)
+    if (g%has('inertia') .and. err%ok()) then
+      call g%get_real_array('inertia', r%inertia, e)
+      if (.not. e%ok()) then
+        err = e
+      else if (size(r%inertia) /= 6) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''inertia'' needs 6 values (Jxx, ' // &
+          'Jyy, Jzz, Jxy, Jxz, Jyz)')
+      end if
+    end if
     r%planar_var = first_given(g, [character(len=12) :: 'J'])
+    r%spatial_var = first_given(g, [character(len=12) :: 'inertia'])
   end subroutine read_mass
 
   subroutine read_force(g, r, err)
@@ -320,7 +331,6 @@ contains
     call rd_real(g, 'my', r%m_xyz(2), err)
     call rd_real(g, 'mz', r%m_xyz(3), err)
     r%spatial_var = first_given(g, [character(len=12) :: 'fz', 'mx', 'my', 'mz'])
-    ! A spatial moment is a follower of nothing: fixed in space, so no time law for it yet.
     r%planar_var = first_given(g, [character(len=12) :: 'moment'])
   end subroutine read_force
 

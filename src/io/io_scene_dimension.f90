@@ -40,8 +40,8 @@ contains
       end associate
     end do
     do i = 1, size(scene%masses)
-      call mismatch('mass', 'on node ''' // scene%masses(i)%node // '''', '', &
-        scene%masses(i)%planar_var, scene%dimension, err)
+      call mismatch('mass', 'on node ''' // scene%masses(i)%node // '''', &
+        scene%masses(i)%spatial_var, scene%masses(i)%planar_var, scene%dimension, err)
     end do
     do i = 1, size(scene%forces)
       call mismatch('force', 'on node ''' // scene%forces(i)%node // '''', &

@@ -225,7 +225,7 @@ module io_schema
     var_spec_t('slider', 'damping', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'stiffness-proportional time constant')]
-  type(var_spec_t), parameter :: MASS_VARS(3) = [ &
+  type(var_spec_t), parameter :: MASS_VARS(4) = [ &
     var_spec_t('mass', 'node', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'node label'), &
@@ -234,7 +234,10 @@ module io_schema
       '', 'point mass'), &
     var_spec_t('mass', 'J', VK_REAL, 'kg m^2', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
-      '', 'rotary inertia')]
+      '', 'rotary inertia'), &
+    var_spec_t('mass', 'inertia', VK_REAL_LIST, 'kg m^2', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'inertia tensor Jxx, Jyy, Jzz, Jxy, Jxz, Jyz (spatial)')]
   type(var_spec_t), parameter :: FORCE_VARS(9) = [ &
     var_spec_t('force', 'node', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -415,7 +418,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(119) = [ &
+  type(var_spec_t), parameter :: SCHEMA(120) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]

@@ -9,7 +9,7 @@ module model_build
   use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC, &
     MODE_ELASTIC
   use model_system, only: model_t, COORD_X, COORD_Y, COORD_PHI
-  use model_scene, only: scene_t, node_rec_t, link_rec_t, force_rec_t, label_t
+  use model_scene, only: scene_t, node_rec_t, link_rec_t, force_rec_t, mass_rec_t, label_t
   use elements_beam, only: beam_t
   implicit none
   private

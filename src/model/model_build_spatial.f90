@@ -7,6 +7,8 @@ submodule (model_build) model_build_spatial
   use elements_beam3d, only: beam3d_t, beam3d_set_geometry, B3_ANGLE => BENDING_ANGLE, &
     B3_SINE => BENDING_SINE
   use elements_euler, only: euler_norm_t
+  use elements_body3d, only: body3d_t
+  use core_linalg, only: sym_gen_eig
   use elements_beam, only: PLANAR_ANGLE => BENDING_ANGLE
   use model_system, only: COORD_Z, COORD_EULER
   implicit none
@@ -186,6 +188,8 @@ contains
           return
         end if
         model%lumped(node_x(in):node_x(in) + 2) = model%lumped(node_x(in):node_x(in) + 2) + r%m
+        if (allocated(r%inertia)) call add_body(model, r, node_x(in), node_lam(in), err)
+        if (.not. err%ok()) return
       end associate
     end do
     do i = 1, size(scene%forces)
@@ -213,5 +217,46 @@ contains
       end associate
     end do
   end subroutine add_spatial_loads
+
+  !> A rigid body's rotary inertia on a node's rotation (its mass stays a point mass on the
+  !> translations): the tensor must be that of a body, principal moments >= 0, each at most
+  !> the sum of the other two.
+  subroutine add_body(model, r, ix, ilam, err)
+    type(model_t), intent(inout) :: model
+    type(mass_rec_t), intent(in) :: r
+    integer, intent(in) :: ix, ilam
+    type(error_t), intent(inout) :: err
+    type(body3d_t) :: body
+    real(wp) :: j(3, 3), eye(3, 3), p(3), v(3, 3), tol
+    integer :: info, k, idx
+    character(len=:), allocatable :: where
+    where = 'group &mass on node ''' // r%node // ''': variable ''inertia'''
+    if (ilam == 0) then
+      ! A free node's rotation would need Euler parameters as dynamic coordinates, whose
+      ! partition is singular at half a turn (docs/theory.md 12).
+      call err%set(ERR_INPUT, where // ': the node has no rotation (no link ends there); a ' &
+        // 'free rigid body is not in spatial scenes yet')
+      return
+    end if
+    j = reshape([r%inertia(1), r%inertia(4), r%inertia(5), r%inertia(4), r%inertia(2), &
+      r%inertia(6), r%inertia(5), r%inertia(6), r%inertia(3)], [3, 3])
+    eye = 0
+    do k = 1, 3
+      eye(k, k) = 1
+    end do
+    call sym_gen_eig(j, eye, p, v, info)
+    tol = 1.0e-12_wp * maxval(abs(r%inertia))
+    if (info /= 0 .or. any(p < -tol) .or. p(3) > p(1) + p(2) + tol) then
+      call err%set(ERR_INPUT, where // ' is not the inertia tensor of a body (principal ' // &
+        'moments ' // approx_str(p(1)) // ', ' // approx_str(p(2)) // ', ' // &
+        approx_str(p(3)) // ': each must be >= 0 and at most the sum of the other two)')
+      return
+    end if
+    body%label = 'body on node ''' // r%node // ''''
+    body%dofs = [ix, ix + 1, ix + 2, ilam, ilam + 1, ilam + 2, ilam + 3]
+    allocate(body%mode_class(0))
+    body%inertia_tensor = j
+    idx = model%add_element(body, [integer ::])
+  end subroutine add_body
 
 end submodule model_build_spatial

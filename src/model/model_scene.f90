@@ -81,7 +81,10 @@ module model_scene
   type :: mass_rec_t
     character(len=:), allocatable :: node
     real(wp) :: m = 0.0_wp, j = 0.0_wp
-    character(len=:), allocatable :: planar_var
+    !> Spatial: inertia tensor about the node in the reference axes, (Jxx, Jyy, Jzz, Jxy,
+    !> Jxz, Jyz) [kg m^2]; not allocated: none.
+    real(wp), allocatable :: inertia(:)
+    character(len=:), allocatable :: planar_var, spatial_var
   end type mass_rec_t
 
   type :: force_rec_t
