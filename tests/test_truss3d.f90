@@ -48,8 +48,8 @@ contains
     integer :: k
     t%label = 'truss'
     t%dim = dim
-    t%dofs = [(k, k=1, 2 * dim)]
-    t%mode_class = [MODE_DYNAMIC]
+    allocate(t%dofs, source=[(k, k=1, 2 * dim)])
+    allocate(t%mode_class, source=[MODE_DYNAMIC])
     t%l0 = l0
     t%ea = 2.5e4_wp
     t%rho_a = 1.7_wp
