@@ -1,4 +1,5 @@
-!> Planar truss: one mode, the elongation e1 = l - l0. Coordinates x = (xp, yp, xq, yq).
+!> Truss in the plane (dim = 2, the default) or in space (dim = 3): one mode, the elongation
+!> e1 = l - l0. Coordinates x = (xp, yp, [zp], xq, yq, [zq]), dim per node.
 !> Its consistent mass (linear interpolation) is constant, so it is passed on as a lumped
 !> diagonal only when lumping is asked for; otherwise as a constant full matrix.
 module elements_truss
@@ -9,6 +10,7 @@ module elements_truss
   public :: truss_t
 
   type, extends(element_t) :: truss_t
+    integer :: dim = 2             !< components per node: 2 (planar) or 3 (spatial)
     real(wp) :: l0 = 1.0_wp
     real(wp) :: ea = 0.0_wp, rho_a = 0.0_wp
     logical :: consistent = .true.
@@ -29,8 +31,10 @@ contains
     class(truss_t), intent(in) :: this
     real(wp), intent(in) :: x(:)
     real(wp), intent(out) :: e(:), de(:, :)
-    real(wp) :: lv(2), l
-    lv = x(3:4) - x(1:2)
+    real(wp) :: lv(this%dim), l
+    integer :: n
+    n = this%dim
+    lv = x(n + 1:2 * n) - x(1:n)
     l = norm2(lv)
     e(1) = l - this%l0
     de(1, :) = [-lv / l, lv / l]
@@ -40,9 +44,11 @@ contains
     class(truss_t), intent(in) :: this
     real(wp), intent(in) :: x(:), v(:)
     real(wp), intent(out) :: d2e(:)
-    real(wp) :: lv(2), dv(2), l
-    lv = x(3:4) - x(1:2)
-    dv = v(3:4) - v(1:2)
+    real(wp) :: lv(this%dim), dv(this%dim), l
+    integer :: n
+    n = this%dim
+    lv = x(n + 1:2 * n) - x(1:n)
+    dv = v(n + 1:2 * n) - v(1:n)
     l = norm2(lv)
     d2e(1) = (dot_product(dv, dv) - (dot_product(lv, dv) / l)**2) / l
   end subroutine truss_second
@@ -62,15 +68,16 @@ contains
     class(truss_t), intent(in) :: this
     real(wp), intent(in) :: x(:), xd(:)
     real(wp), intent(out) :: m(:, :), h(:)
-    integer :: i
+    integer :: i, n
     m = 0.0_wp
     h = 0.0_wp
     if (.not. this%has_inertia()) return
-    do i = 1, 2
+    n = this%dim
+    do i = 1, n
       m(i, i) = this%rho_a * this%l0 / 3
-      m(i + 2, i + 2) = this%rho_a * this%l0 / 3
-      m(i, i + 2) = this%rho_a * this%l0 / 6
-      m(i + 2, i) = this%rho_a * this%l0 / 6
+      m(i + n, i + n) = this%rho_a * this%l0 / 3
+      m(i, i + n) = this%rho_a * this%l0 / 6
+      m(i + n, i) = this%rho_a * this%l0 / 6
     end do
   end subroutine truss_inertia
 
@@ -78,12 +85,14 @@ contains
     class(truss_t), intent(in) :: this
     real(wp), intent(in) :: x(:), g(:)
     real(wp), intent(out) :: f(:), potential
+    integer :: n
     f = 0.0_wp
     potential = 0.0_wp
     if (.not. this%has_inertia()) return
-    ! A planar element: the first two components of gravity.
-    f = this%rho_a * this%l0 / 2 * [g(1:2), g(1:2)]
-    potential = -this%rho_a * this%l0 * dot_product(g(1:2), (x(1:2) + x(3:4)) / 2)
+    ! The first dim components of gravity: a planar truss ignores a z component.
+    n = this%dim
+    f = this%rho_a * this%l0 / 2 * [g(1:n), g(1:n)]
+    potential = -this%rho_a * this%l0 * dot_product(g(1:n), (x(1:n) + x(n + 1:2 * n)) / 2)
   end subroutine truss_weight
 
   pure subroutine truss_lumped_mass(this, diag)
