@@ -237,6 +237,8 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(hinge_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
+    type(error_t) :: e
+    real(wp), allocatable :: axis(:)
     call rd_label(g, r%label, err)
     call rd_string(g, 'node', r%node, err)
     call rd_string(g, 'link', r%link, err)
@@ -251,6 +253,19 @@ contains
     call rd_real(g, 'damping', r%damping, err)
     if (err%ok() .and. r%mode == 'prescribed' .and. len(r%motion) == 0) call err%set(ERR_INPUT, &
       g%where() // ': variable ''motion'' is required when mode = ''prescribed''')
+    if (g%has('axis') .and. err%ok()) then
+      call g%get_real_array('axis', axis, e)
+      if (.not. e%ok()) then
+        err = e
+      else if (size(axis) /= 3) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''axis'' needs 3 values')
+      else if (.not. norm2(axis) > 0) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''axis'' must not be zero')
+      else
+        r%axis = axis
+      end if
+    end if
+    r%spatial_var = first_given(g, [character(len=12) :: 'axis'])
   end subroutine read_hinge
 
   subroutine read_truss(g, r, err)

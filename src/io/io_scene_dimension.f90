@@ -11,9 +11,8 @@ contains
     type(error_t), intent(inout) :: err
     integer :: i
     character(len=*), parameter :: NOT_YET = ' is not in spatial scenes yet (dimension = 3 ' // &
-      'has nodes, links, masses, forces and moments; statics, modal analysis, buckling, dynamics)'
+      'has nodes, links, hinges, masses, forces and moments; statics, modal analysis, buckling, dynamics)'
     if (scene%dimension == 3) then
-      if (size(scene%hinges) > 0) call err%set(ERR_INPUT, 'group &hinge' // NOT_YET)
       if (size(scene%trusses) > 0) call err%set(ERR_INPUT, 'group &truss' // NOT_YET)
       if (size(scene%sliders) > 0) call err%set(ERR_INPUT, 'group &slider' // NOT_YET)
       if (size(scene%compliance_nodes) > 0) call err%set(ERR_INPUT, 'group &output: ' // &
@@ -38,6 +37,10 @@ contains
             'stiffness G J; it also makes the bending shear-flexible)')
         end if
       end associate
+    end do
+    do i = 1, size(scene%hinges)
+      call mismatch('hinge', scene%hinges(i)%label, scene%hinges(i)%spatial_var, '', &
+        scene%dimension, err)
     end do
     do i = 1, size(scene%masses)
       call mismatch('mass', 'on node ''' // scene%masses(i)%node // '''', &

@@ -156,7 +156,7 @@ module io_schema
     var_spec_t('link', 'rotary_inertia', VK_REAL_LIST, 'kg m', 'rho (Iy+I), rho Iy, rho I', &
       .false., 0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'section rotary inertia per length about x, y, z (spatial)')]
-  type(var_spec_t), parameter :: HINGE_VARS(7) = [ &
+  type(var_spec_t), parameter :: HINGE_VARS(8) = [ &
     var_spec_t('hinge', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'name'), &
@@ -177,7 +177,10 @@ module io_schema
       '', 'torsion spring'), &
     var_spec_t('hinge', 'damping', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
-      '', 'stiffness-proportional time constant')]
+      '', 'stiffness-proportional time constant'), &
+    var_spec_t('hinge', 'axis', VK_REAL_LIST, '', '0, 0, 1', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hinge axis direction (spatial)')]
   type(var_spec_t), parameter :: TRUSS_VARS(9) = [ &
     var_spec_t('truss', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -418,7 +421,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(120) = [ &
+  type(var_spec_t), parameter :: SCHEMA(121) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]

@@ -9,7 +9,7 @@ module model_build
   use elements_base, only: MODE_RIGID, MODE_RELEASED, MODE_PRESCRIBED, MODE_DYNAMIC, &
     MODE_ELASTIC
   use model_system, only: model_t, COORD_X, COORD_Y, COORD_PHI
-  use model_scene, only: scene_t, node_rec_t, link_rec_t, force_rec_t, mass_rec_t, label_t
+  use model_scene, only: scene_t, node_rec_t, link_rec_t, force_rec_t, mass_rec_t, hinge_rec_t, label_t
   use elements_beam, only: beam_t
   implicit none
   private
@@ -129,6 +129,20 @@ module model_build
       integer, intent(out) :: im
       type(error_t), intent(inout) :: err
     end subroutine time_law_of
+    !> Each hinge names a node and a link that ends there, at most one hinge per (link, node).
+    module subroutine check_hinge_ends(scene, err)
+      type(scene_t), intent(in) :: scene
+      type(error_t), intent(inout) :: err
+    end subroutine check_hinge_ends
+    !> A hinge's mode class and motion (0 unless prescribed), with the checks of its mode,
+    !> motion, stiffness and damping.
+    module subroutine hinge_class(scene, r, where, c, im, err)
+      type(scene_t), intent(in) :: scene
+      type(hinge_rec_t), intent(in) :: r
+      character(len=*), intent(in) :: where
+      integer, intent(out) :: c, im
+      type(error_t), intent(inout) :: err
+    end subroutine hinge_class
     !> The node `label` names, or an input error naming `where` and `var`.
     module subroutine require_node(scene, label, where, var, idx, err)
       type(scene_t), intent(in) :: scene
@@ -285,33 +299,9 @@ contains
     type(scene_t), intent(in) :: scene
     type(builder_t), intent(inout) :: b
     type(error_t), intent(inout) :: err
-    integer :: h, k, il, in
     allocate(b%hinge_rot(size(scene%hinges)))
     b%hinge_rot = 0
-    do h = 1, size(scene%hinges)
-      associate (r => scene%hinges(h), where => 'group &hinge ''' // scene%hinges(h)%label // '''')
-        call require_node(scene, r%node, where, 'node', in, err)
-        if (.not. err%ok()) return
-        il = link_index(scene, r%link)
-        if (il == 0) then
-          call err%set(ERR_INPUT, where // ': variable ''link'': link ''' // r%link // &
-            ''' is not defined (no &link with that label)')
-          return
-        end if
-        if (scene%links(il)%from /= r%node .and. scene%links(il)%to /= r%node) then
-          call err%set(ERR_INPUT, where // ': link ''' // r%link // ''' does not end at node ''' &
-            // r%node // '''')
-          return
-        end if
-        do k = 1, h - 1
-          if (scene%hinges(k)%node == r%node .and. scene%hinges(k)%link == r%link) then
-            call err%set(ERR_INPUT, where // ': link ''' // r%link // ''' already has a hinge ' &
-              // 'at node ''' // r%node // '''')
-            return
-          end if
-        end do
-      end associate
-    end do
+    call check_hinge_ends(scene, err)
   end subroutine check_hinges
 
   subroutine add_masses_and_loads(scene, model, b, err)

@@ -129,33 +129,8 @@ contains
     do h = 1, size(scene%hinges)
       associate (r => scene%hinges(h), where => 'group &hinge ''' // scene%hinges(h)%label // '''')
         in = node_index(scene, r%node)
-        c = mode_class_from_name(r%mode)
-        if (c == 0) then
-          call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
-            ''' is not rigid, released, prescribed, dynamic or elastic')
-          return
-        end if
-        im = 0
-        if (c == MODE_PRESCRIBED) then
-          im = motion_index(scene, r%motion)
-          if (im == 0) then
-            call err%set(ERR_INPUT, where // ': variable ''motion'': motion ''' // r%motion // &
-              ''' is not defined (no &motion with that label)')
-            return
-          end if
-        end if
-        if (r%stiffness < 0 .or. r%damping < 0) then
-          call err%set(ERR_INPUT, where // ': stiffness and damping must not be negative')
-          return
-        end if
-        ! Damping is stiffness-proportional (sigma = k (e + damping e_dot)): on a free hinge
-        ! it would silently do nothing.
-        if (r%damping > 0 .and. (r%stiffness == 0 .or. (c /= MODE_DYNAMIC .and. &
-            c /= MODE_ELASTIC))) then
-          call err%set(ERR_INPUT, where // ': variable ''damping'' (a time constant, ' // &
-            'sigma = k (e + damping de/dt)) needs a dynamic or elastic hinge with stiffness > 0')
-          return
-        end if
+        call hinge_class(scene, r, where, c, im, err)
+        if (.not. err%ok()) return
         hinge%label = r%label
         hinge%dofs = [node_rotation(scene, model, b, in), b%hinge_rot(h)]
         hinge%phi0 = model%x0(hinge%dofs)

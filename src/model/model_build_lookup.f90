@@ -34,6 +34,63 @@ contains
       r%time_law // ''' is not defined (no &motion with that label)')
   end procedure time_law_of
 
+  module procedure check_hinge_ends
+    integer :: h, k, il, in
+    do h = 1, size(scene%hinges)
+      associate (r => scene%hinges(h), where => 'group &hinge ''' // scene%hinges(h)%label // '''')
+        call require_node(scene, r%node, where, 'node', in, err)
+        if (.not. err%ok()) return
+        il = link_index(scene, r%link)
+        if (il == 0) then
+          call err%set(ERR_INPUT, where // ': variable ''link'': link ''' // r%link // &
+            ''' is not defined (no &link with that label)')
+          return
+        end if
+        if (scene%links(il)%from /= r%node .and. scene%links(il)%to /= r%node) then
+          call err%set(ERR_INPUT, where // ': link ''' // r%link // ''' does not end at node ''' &
+            // r%node // '''')
+          return
+        end if
+        do k = 1, h - 1
+          if (scene%hinges(k)%node == r%node .and. scene%hinges(k)%link == r%link) then
+            call err%set(ERR_INPUT, where // ': link ''' // r%link // ''' already has a hinge ' &
+              // 'at node ''' // r%node // '''')
+            return
+          end if
+        end do
+      end associate
+    end do
+  end procedure check_hinge_ends
+
+  module procedure hinge_class
+    c = mode_class_from_name(r%mode)
+    im = 0
+    if (c == 0) then
+      call err%set(ERR_INPUT, where // ': variable ''mode'': ''' // r%mode // &
+        ''' is not rigid, released, prescribed, dynamic or elastic')
+      return
+    end if
+    if (c == MODE_PRESCRIBED) then
+      im = motion_index(scene, r%motion)
+      if (im == 0) then
+        call err%set(ERR_INPUT, where // ': variable ''motion'': motion ''' // r%motion // &
+          ''' is not defined (no &motion with that label)')
+        return
+      end if
+    end if
+    if (r%stiffness < 0 .or. r%damping < 0) then
+      call err%set(ERR_INPUT, where // ': stiffness and damping must not be negative')
+      return
+    end if
+    ! Damping is stiffness-proportional (sigma = k (e + damping e_dot)): on a free hinge
+    ! it would silently do nothing.
+    if (r%damping > 0 .and. (r%stiffness == 0 .or. (c /= MODE_DYNAMIC .and. &
+        c /= MODE_ELASTIC))) then
+      call err%set(ERR_INPUT, where // ': variable ''damping'' (a time constant, ' // &
+        'sigma = k (e + damping de/dt)) needs a dynamic or elastic hinge with stiffness > 0')
+    end if
+  end procedure hinge_class
+
   module procedure require_node
     idx = node_index(scene, label)
     if (idx == 0) call err%set(ERR_INPUT, where // ': variable ''' // var // &

@@ -1,13 +1,16 @@
 !> The spatial scene (&scene dimension = 3; docs/theory.md 2.6): nodes with x, y, z and, where
 !> a link ends, four Euler parameters (reference (1, 0, 0, 0)) with a rigid normalisation
 !> unless the rotation is clamped; links meshed into spatial beams; point masses; forces and
-!> moments fixed in space, constant or following time laws. Hinges, trusses, sliders and node inputs are planar only so far
+!> moments fixed in space, constant or following time laws; hinges (elements_hinge3d: the
+!> hinged link end gets four Euler parameters of its own). Trusses, sliders and node inputs
+!> are planar only so far
 !> (io_scene refuses them in a spatial scene).
 submodule (model_build) model_build_spatial
   use elements_beam3d, only: beam3d_t, beam3d_set_geometry, B3_ANGLE => BENDING_ANGLE, &
     B3_SINE => BENDING_SINE
   use elements_euler, only: euler_norm_t
   use elements_body3d, only: body3d_t
+  use elements_hinge3d, only: hinge3d_t, hinge3d_set_axis
   use core_linalg, only: sym_gen_eig
   use elements_beam, only: PLANAR_ANGLE => BENDING_ANGLE
   use model_system, only: COORD_Z, COORD_EULER
@@ -16,7 +19,7 @@ submodule (model_build) model_build_spatial
 contains
 
   module procedure build_spatial
-    integer, allocatable :: node_x(:), node_lam(:)
+    integer, allocatable :: node_x(:), node_lam(:), hinge_lam(:)
     integer :: i, ix
     model%dim = 3
     allocate(node_x(size(scene%nodes)), node_lam(size(scene%nodes)))
@@ -30,7 +33,12 @@ contains
         ix = model%add_coord(n%z, COORD_Z, n%fix_z, 'node ''' // n%label // ''' z')
       end associate
     end do
-    call add_spatial_links(scene, model, node_x, node_lam, err)
+    call check_hinge_ends(scene, err)
+    if (.not. err%ok()) return
+    allocate(hinge_lam(size(scene%hinges)))
+    hinge_lam = 0
+    call add_spatial_links(scene, model, node_x, node_lam, hinge_lam, err)
+    if (err%ok()) call add_spatial_hinges(scene, model, node_lam, hinge_lam, err)
     if (err%ok()) call add_spatial_loads(scene, model, node_x, node_lam, err)
     if (.not. err%ok()) return
     call check_connected(model, err)
@@ -62,11 +70,11 @@ contains
     idx = model%add_element(norm, [0])
   end function euler_coords
 
-  subroutine add_spatial_links(scene, model, node_x, node_lam, err)
+  subroutine add_spatial_links(scene, model, node_x, node_lam, hinge_lam, err)
     type(scene_t), intent(in) :: scene
     type(model_t), intent(inout) :: model
     integer, intent(in) :: node_x(:)
-    integer, intent(inout) :: node_lam(:)
+    integer, intent(inout) :: node_lam(:), hinge_lam(:)
     type(error_t), intent(inout) :: err
     type(beam_t) :: planar
     type(beam3d_t) :: beam
@@ -97,11 +105,7 @@ contains
             return
           end if
         end if
-        if (node_lam(ia) == 0) node_lam(ia) = euler_coords(model, 'node ''' // r%from // '''', &
-          scene%nodes(ia)%fix_rotation)
-        if (node_lam(ib) == 0) node_lam(ib) = euler_coords(model, 'node ''' // r%to // '''', &
-          scene%nodes(ib)%fix_rotation)
-        p = [(node_x(ia) + m, m = 0, 2), (node_lam(ia) + m, m = 0, 3)]
+        p = [(node_x(ia) + m, m = 0, 2), (end_rotation(ia, r%from) + m, m = 0, 3)]
         do k = 1, r%n_elements
           write(num, '(i0)') k
           if (k < r%n_elements) then
@@ -113,7 +117,7 @@ contains
             q(5:7) = q(4) + [1, 2, 3]
             call model%add_node_label(r%label // '.' // trim(num), [q(1), q(2), 0, q(3), q(4)])
           else
-            q = [(node_x(ib) + m, m = 0, 2), (node_lam(ib) + m, m = 0, 3)]
+            q = [(node_x(ib) + m, m = 0, 2), (end_rotation(ib, r%to) + m, m = 0, 3)]
           end if
           beam%label = r%label // '#' // trim(num)
           beam%dofs = [p, q]
@@ -133,7 +137,56 @@ contains
         end do
       end associate
     end do
+
+  contains
+
+    !> First Euler parameter of the link's end at node `in`: its hinge's own rotation if a
+    !> hinge names this (link, node), else the node's; created on first use.
+    integer function end_rotation(in, label) result(first)
+      integer, intent(in) :: in
+      character(len=*), intent(in) :: label
+      integer :: h
+      do h = 1, size(scene%hinges)
+        if (scene%hinges(h)%node == label .and. scene%hinges(h)%link == scene%links(i)%label) then
+          if (hinge_lam(h) == 0) hinge_lam(h) = euler_coords(model, 'hinge ''' // &
+            scene%hinges(h)%label // '''', .false.)
+          first = hinge_lam(h)
+          return
+        end if
+      end do
+      if (node_lam(in) == 0) node_lam(in) = euler_coords(model, 'node ''' // label // '''', &
+        scene%nodes(in)%fix_rotation)
+      first = node_lam(in)
+    end function end_rotation
   end subroutine add_spatial_links
+
+  !> Spatial hinges between a node's rotation and the hinged link end's (elements_hinge3d):
+  !> the rotation about the axis takes the hinge's mode, the two bending modes are rigid.
+  subroutine add_spatial_hinges(scene, model, node_lam, hinge_lam, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    integer, intent(inout) :: node_lam(:)
+    integer, intent(in) :: hinge_lam(:)
+    type(error_t), intent(inout) :: err
+    type(hinge3d_t) :: hinge
+    integer :: h, in, c, im, idx, m
+    do h = 1, size(scene%hinges)
+      associate (r => scene%hinges(h), where => 'group &hinge ''' // scene%hinges(h)%label // '''')
+        call hinge_class(scene, r, where, c, im, err)
+        if (err%ok()) call hinge3d_set_axis(hinge, r%axis, err)
+        if (.not. err%ok()) return
+        in = node_index(scene, r%node)
+        if (node_lam(in) == 0) node_lam(in) = euler_coords(model, 'node ''' // r%node // '''', &
+          scene%nodes(in)%fix_rotation)
+        hinge%label = r%label
+        hinge%dofs = [(node_lam(in) + m, m = 0, 3), (hinge_lam(h) + m, m = 0, 3)]
+        hinge%mode_class = [c, MODE_RIGID, MODE_RIGID]
+        hinge%k = r%stiffness
+        hinge%damping = r%damping
+        idx = model%add_element(hinge, [im, 0, 0])
+      end associate
+    end do
+  end subroutine add_spatial_hinges
 
   !> Section properties: I about the section z axis (bending in the x-y plane, as in the
   !> plane), Iy about y (default I), torsion G J, rotary inertia rho (Iy + I) about the axis;

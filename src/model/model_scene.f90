@@ -64,6 +64,9 @@ module model_scene
   type :: hinge_rec_t
     character(len=:), allocatable :: label, node, link, mode, motion
     real(wp) :: stiffness = 0.0_wp, damping = 0.0_wp
+    !> Spatial: the hinge axis in the reference frame (turns with the node's rotation).
+    real(wp) :: axis(3) = [0.0_wp, 0.0_wp, 1.0_wp]
+    character(len=:), allocatable :: spatial_var
   end type hinge_rec_t
 
   type :: truss_rec_t

@@ -94,8 +94,16 @@ def test_planar_motion_equals_the_planar_scene(tmp_path):
 
 
 @pytest.mark.parametrize("text,fragments", [
-    (cantilever("&hinge label = 'h', node = 'root', link = 'beam', mode = 'released' /\n"),
-     ["&hinge", "not in spatial scenes yet"]),
+    (cantilever("&hinge label = 'h', node = 'root', link = 'beam', axis = 0, 0, 0 /\n"),
+     ["&hinge", "'axis'", "zero"]),
+    (cantilever("&hinge label = 'h', node = 'root', link = 'beam', axis = 0, 1 /\n"),
+     ["&hinge", "'axis'", "3 values"]),
+    (cantilever("&hinge label = 'h', node = 'root', link = 'beam', axis = 0, 0, 1 /\n", dim=2),
+     ["&hinge 'h'", "'axis'", "dimension = 3"]),
+    (cantilever("&hinge label = 'h', node = 'tip', link = 'nope' /\n"),
+     ["&hinge 'h'", "'nope'", "not defined"]),
+    (cantilever("&hinge label = 'h', node = 'root', link = 'beam', mode = 'prescribed', "
+                "motion = 'm' /\n"), ["&hinge 'h'", "'m'", "not defined"]),
     (cantilever("&force node = 'tip', fz = 1, time_law = 'pulse' /\n"),
      ["&force", "'time_law'", "'pulse'", "not defined"]),
     (cantilever("", link_extra=", rotary_inertia = 1, 2"), ["'rotary_inertia'", "3 values"]),
@@ -170,3 +178,20 @@ def test_tip_body_twists_the_cantilever(tmp_path):
 def test_body_errors(tmp_path, text, fragments):
     proc, out = run_scene(tmp_path, text)
     assert_clean_error(proc, out, *fragments)
+
+
+@pytest.mark.parametrize("axis,force,i_bend", [("0, 0, 1", "fy", I_Z), ("0, 2, 0", "fz", I_Y)])
+def test_hinge_spring_at_the_root(tmp_path, axis, force, i_bend):
+    """A dynamic hinge with a torsion spring k at the clamped root, about z or y: the tip
+    deflection under a small tip force is the cantilever's plus the hinge's rigid turn,
+    P L^3/(3 E I) + P L/(k_s G A) + P L^2/k (the bending modes of the hinge are rigid);
+    bound 1e-6 relative, as in the hinge-free closed form above."""
+    p, k = 1.0e-3, 50.0
+    proc, out = run_scene(tmp_path, cantilever(
+        f"&hinge label = 'h', node = 'root', link = 'beam', mode = 'dynamic', stiffness = {k},"
+        f" axis = {axis} /\n&force node = 'tip', {force} = {p} /\n&static n_steps = 1 /\n"))
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        tip = f["static/nodes/tip/position"][-1]
+    expected = p * L**3 / (3 * E * i_bend) + p * L / (K * G * A) + p * L**2 / k
+    assert tip[1 if force == "fy" else 2] == pytest.approx(expected, rel=1e-6)
