@@ -11,9 +11,9 @@ contains
     type(error_t), intent(inout) :: err
     integer :: i
     character(len=*), parameter :: NOT_YET = ' is not in spatial scenes yet (dimension = 3 ' // &
-      'has nodes, links, hinges, masses, forces and moments; statics, modal analysis, buckling, dynamics)'
+      'has nodes, links, hinges, trusses, masses, forces and moments; statics, modal ' // &
+      'analysis, buckling, dynamics)'
     if (scene%dimension == 3) then
-      if (size(scene%trusses) > 0) call err%set(ERR_INPUT, 'group &truss' // NOT_YET)
       if (size(scene%sliders) > 0) call err%set(ERR_INPUT, 'group &slider' // NOT_YET)
       if (size(scene%compliance_nodes) > 0) call err%set(ERR_INPUT, 'group &output: ' // &
         'variable ''compliance_nodes''' // NOT_YET)

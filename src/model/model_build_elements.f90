@@ -144,7 +144,7 @@ contains
 
   module procedure add_trusses
     type(truss_t) :: truss
-    integer :: i, ia, ib, idx, c
+    integer :: i, ia, ib, idx, c, k
     do i = 1, size(scene%trusses)
       associate (r => scene%trusses(i), where => 'group &truss ''' // scene%trusses(i)%label // '''')
         call require_node(scene, r%from, where, 'from', ia, err)
@@ -159,8 +159,9 @@ contains
           return
         end if
         truss%label = r%label
-        truss%dofs = [b%node_xy(ia), b%node_xy(ia) + 1, b%node_xy(ib), b%node_xy(ib) + 1]
-        truss%l0 = norm2(model%x0(truss%dofs(3:4)) - model%x0(truss%dofs(1:2)))
+        truss%dim = dim
+        truss%dofs = [(node_x(ia) + k, k = 0, dim - 1), (node_x(ib) + k, k = 0, dim - 1)]
+        truss%l0 = norm2(model%x0(truss%dofs(dim + 1:)) - model%x0(truss%dofs(1:dim)))
         if (truss%l0 <= 0) then
           call err%set(ERR_INPUT, where // ': nodes ''' // r%from // ''' and ''' // r%to // &
             ''' are at the same place: a truss needs a positive length')
