@@ -123,6 +123,32 @@ def ltb_critical_force():
     return ltb_gamma() * np.sqrt(e * iy * g * j) / LTB_L**2
 
 
+def pivot_support_stiffness(e=2.1e11, nu=0.3, width=0.01, thickness=2.0e-4, length=0.05,
+                            shear_factor=5 / 6):
+    """Out-of-plane stiffness [N/m] of input/cross_spring_pivot_spatial.nml at the crossing
+    (the body's node): the two leaves, clamped at the ground, carry the body's z translation
+    and its rotations about x and y through their bending in the wide direction (Timoshenko,
+    exact for end loads) and their torsion G J / L; the body's rotations settle where the
+    moments vanish. Leaf i runs along d_i at +-45 degrees from y, its body end at
+    p_i = (L/2) d_i."""
+    g = e / (2 * (1 + nu))
+    area, i_wide = width * thickness, thickness * width**3 / 12
+    j = torsion_constant(width, thickness)
+    phi = 12 * e * i_wide / (shear_factor * g * area * length**2)
+    bend = e * i_wide / (length**3 * (1 + phi)) * np.array(
+        [[12, -6 * length], [-6 * length, (4 + phi) * length**2]])
+    k = np.zeros((3, 3))
+    for d in (np.array([1.0, 1.0, 0.0]) / np.sqrt(2), np.array([-1.0, 1.0, 0.0]) / np.sqrt(2)):
+        p, n = length / 2 * d, np.cross([0.0, 0.0, 1.0], d)
+        # End deflection w, slope dw/ds = -theta.n and twist theta.d from (z, theta_x, theta_y).
+        t = np.array([[1.0, p[1], -p[0]], [0.0, -n[0], -n[1]], [0.0, d[0], d[1]]])
+        leaf = np.zeros((3, 3))
+        leaf[:2, :2] = bend
+        leaf[2, 2] = g * j / length
+        k += t.T @ leaf @ t
+    return 1 / np.linalg.inv(k)[0, 0]
+
+
 def run(binary, folder, name, text):
     """Run flexmor on `text`; returns the result path and the wall time [s]."""
     nml, out = Path(folder) / f"{name}.nml", Path(folder) / f"{name}.h5"

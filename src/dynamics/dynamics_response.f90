@@ -67,7 +67,8 @@ contains
     need_compliance = size(this%compliance_coords, 2) > 0
     ! The tangent (2 or 4 n_dy evaluations) only when asked for; reactions need one evaluation.
     if (need_compliance .or. this%n_frequencies > 0) then
-      call tangent_stiffness(dyn, t, q_dy, k, err, accurate=need_compliance)
+      call tangent_stiffness(dyn, t, q_dy, k, err, &
+        accurate=need_compliance .or. dyn%model%n_elastic > 0)
     else
       call dyn%evaluate_dense(t, q_dy, 0.0_wp * q_dy, acc, err)
     end if

@@ -61,7 +61,8 @@ contains
 
   !> Tangent stiffness K_T at (t, q_dy); leaves the mass matrix of that state in dyn%mbar.
   !> `accurate` extrapolates the central differences (Richardson, steps h and 2h: error
-  !> O(h^4) instead of O(h^2)) at twice the cost. Newton does not need it; a compliance does
+  !> O(h^4) instead of O(h^2)) at twice the cost; the default with elastic modes. Newton does
+  !> not need it; stability, frequencies and compliances do
   !> when stiff elastic modes (EA/l0) sit beside a soft direction: the O(h^2) error of their
   !> difference tangent, about 1e-5 of a bending stiffness, is 1e-3 of a guide's lateral one.
   subroutine tangent_stiffness(dyn, t, q_dy, k, err, accurate)
@@ -76,7 +77,11 @@ contains
     logical :: was_locked, extrapolate
     was_locked = dyn%locked
     dyn%locked = .true.
-    extrapolate = .false.
+    ! Elastic (calculable) modes put their stiffness into the difference too, beside the soft
+    ! direction a compliant mechanism exists for: a spatial cross-spring pivot turns at
+    ! 2EI/L = 0.06 N m/rad beside leaves stiff at 1e7 N/m, and the O(h^2) error of the plain
+    ! difference made that stiffness negative. Extrapolated, it is right.
+    extrapolate = dyn%model%n_elastic > 0
     if (present(accurate)) extrapolate = accurate
     call dyn%mode_stiffness(k, d_mode)
     if (has_loads(dyn)) then
