@@ -6,7 +6,7 @@ module elements_sd
   use core_kinds, only: wp
   implicit none
   private
-  public :: sd_t, sd_lin, sd_scale, sd_mul, N_X
+  public :: sd_t, sd_lin, sd_scale, sd_mul, sd_atan2, sd_sqrt, N_X
 
   integer, parameter :: N_X = 14     !< coordinates of the spatial beam
 
@@ -46,4 +46,30 @@ contains
     s%d1 = a%f * b%d1 + b%f * a%d1
     s%d2 = a%d2 * b%f + 2 * a%d1 * b%d1 + a%f * b%d2
   end function sd_mul
+
+  !> atan2(a, b): d(atan2) = (b da - a db) / r^2 with r^2 = a^2 + b^2, and along v the
+  !> derivative of that quotient for the second.
+  pure function sd_atan2(a, b) result(s)
+    type(sd_t), intent(in) :: a, b
+    type(sd_t) :: s
+    real(wp) :: r2, num1
+    ! Both zero only at a degenerate state (lambda = 0, a section axis along the other's
+    ! normal); the floor keeps the result finite there.
+    r2 = max(a%f**2 + b%f**2, 1.0e-30_wp)
+    s%f = atan2(a%f, b%f)
+    s%g = (b%f * a%g - a%f * b%g) / r2
+    num1 = b%f * a%d1 - a%f * b%d1
+    s%d1 = num1 / r2
+    s%d2 = (b%f * a%d2 - a%f * b%d2) / r2 - num1 * 2 * (a%f * a%d1 + b%f * b%d1) / r2**2
+  end function sd_atan2
+
+  !> sqrt(a), a > 0 (floored like sd_atan2's radius).
+  pure function sd_sqrt(a) result(s)
+    type(sd_t), intent(in) :: a
+    type(sd_t) :: s
+    s%f = sqrt(max(a%f, 1.0e-30_wp))
+    s%g = a%g / (2 * s%f)
+    s%d1 = a%d1 / (2 * s%f)
+    s%d2 = a%d2 / (2 * s%f) - a%d1**2 / (4 * s%f**3)
+  end function sd_sqrt
 end module elements_sd

@@ -197,7 +197,8 @@ def test_roll_up_draws_a_circle(roll_up_result):
     assert rho.min() == pytest.approx(math.cos(a) + k / 4 * math.sin(a), rel=1e-15)
 
     pts = mesh.points(result.static.x[-1])
-    assert np.abs(pts[:, 2]).max() == 0.0  # bending about z: the strip stays in z = 0
+    # Bending about z: the strip stays in z = 0, to round-off of the Newton solution.
+    assert np.abs(pts[:, 2]).max() < 1e-12 * length
     np.testing.assert_array_equal(pts[tip], result.static.nodes["tip"].position[-1])
     about_nodes = np.linalg.norm(pts - [0.0, r_nodes, 0.0], axis=1)
     np.testing.assert_allclose(about_nodes[:model.n_nodes], r_nodes, rtol=0, atol=1e-6 * r_exact)
