@@ -251,3 +251,20 @@ def test_helix_under_an_inclined_end_moment(tmp_path):
     err = {n: np.linalg.norm(tips[n] - helix) for n in tips}
     assert 3 < err[4] / err[8] < 5 and 3 < err[8] / err[16] < 5, err
     assert np.linalg.norm(tips[16] + (tips[16] - tips[8]) / 3 - helix) < 1e-3 * L
+
+
+def test_large_twist_is_exact(tmp_path):
+    """A torque M = G J theta / L on the tip twists the cantilever by theta: the angle form's
+    torsion mode is l0 times the twist, so any mesh is exact up to pi per element (here
+    theta = 3 rad on 4 elements, 0.75 rad each, past the sine form's limit point at 45
+    degrees); bound 1e-9 rad (Newton)."""
+    theta = 3.0
+    proc, out = run_scene(tmp_path, cantilever(
+        f"&force node = 'tip', mx = {G * J * theta / L!r} /\n&static n_steps = 6 /\n"
+        "&output nodes = 'tip' /\n", n=4))
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        lam = f["static/nodes/tip/orientation"][-1]
+        tip = f["static/nodes/tip/position"][-1]
+    assert 2 * math.atan2(lam[1], lam[0]) == pytest.approx(theta, abs=1e-9)
+    assert np.allclose(tip, [L, 0, 0], rtol=0, atol=1e-12 * L)
