@@ -265,7 +265,11 @@ contains
         r%axis = axis
       end if
     end if
-    r%spatial_var = first_given(g, [character(len=12) :: 'axis'])
+    call rd_choice(g, 'type', r%joint_type, err)
+    if (err%ok() .and. r%joint_type /= 'revolute' .and. r%mode == 'prescribed') &
+      call err%set(ERR_INPUT, g%where() // ': variable ''type'': a ' // r%joint_type // &
+      ' joint cannot be prescribed (one motion cannot drive two or three rotations)')
+    r%spatial_var = first_given(g, [character(len=12) :: 'axis', 'type'])
   end subroutine read_hinge
 
   subroutine read_truss(g, r, err)

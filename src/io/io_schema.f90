@@ -156,7 +156,7 @@ module io_schema
     var_spec_t('link', 'rotary_inertia', VK_REAL_LIST, 'kg m', 'rho (Iy+I), rho Iy, rho I', &
       .false., 0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'section rotary inertia per length about x, y, z (spatial)')]
-  type(var_spec_t), parameter :: HINGE_VARS(8) = [ &
+  type(var_spec_t), parameter :: HINGE_VARS(9) = [ &
     var_spec_t('hinge', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'name'), &
@@ -180,7 +180,10 @@ module io_schema
       '', 'stiffness-proportional time constant'), &
     var_spec_t('hinge', 'axis', VK_REAL_LIST, '', '0, 0, 1', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'hinge axis direction (spatial)')]
+      '', 'hinge axis direction (spatial)'), &
+    var_spec_t('hinge', 'type', VK_CHOICE, '', 'revolute', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'revolute|universal|spherical', 'joint type (spatial)')]
   type(var_spec_t), parameter :: TRUSS_VARS(9) = [ &
     var_spec_t('truss', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -421,7 +424,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(121) = [ &
+  type(var_spec_t), parameter :: SCHEMA(122) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]

@@ -162,7 +162,8 @@ contains
   end subroutine add_spatial_links
 
   !> Spatial hinges between a node's rotation and the hinged link end's (elements_hinge3d):
-  !> the rotation about the axis takes the hinge's mode, the two bending modes are rigid.
+  !> revolute, the rotation about the axis takes the hinge's mode and the two normal to it are
+  !> rigid; universal, the other way round; spherical, all three take it.
   subroutine add_spatial_hinges(scene, model, node_lam, hinge_lam, err)
     type(scene_t), intent(in) :: scene
     type(model_t), intent(inout) :: model
@@ -181,9 +182,18 @@ contains
           scene%nodes(in)%fix_rotation)
         hinge%label = r%label
         hinge%dofs = [(node_lam(in) + m, m = 0, 3), (hinge_lam(h) + m, m = 0, 3)]
-        hinge%mode_class = [c, MODE_RIGID, MODE_RIGID]
         hinge%k = r%stiffness
         hinge%damping = r%damping
+        select case (r%joint_type)
+        case ('universal')
+          hinge%mode_class = [MODE_RIGID, c, c]
+          hinge%k_b = r%stiffness
+        case ('spherical')
+          hinge%mode_class = [c, c, c]
+          hinge%k_b = r%stiffness
+        case default
+          hinge%mode_class = [c, MODE_RIGID, MODE_RIGID]
+        end select
         idx = model%add_element(hinge, [im, 0, 0])
       end associate
     end do

@@ -66,6 +66,10 @@ module model_scene
     real(wp) :: stiffness = 0.0_wp, damping = 0.0_wp
     !> Spatial: the hinge axis in the reference frame (turns with the node's rotation).
     real(wp) :: axis(3) = [0.0_wp, 0.0_wp, 1.0_wp]
+    !> Spatial joint type: revolute (the rotation about `axis` takes `mode`), universal (the
+    !> two rotations normal to `axis` take it, the one about it is rigid) or spherical (all
+    !> three take it).
+    character(len=:), allocatable :: joint_type
     character(len=:), allocatable :: spatial_var
   end type hinge_rec_t
 

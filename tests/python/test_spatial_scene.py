@@ -268,3 +268,73 @@ def test_large_twist_is_exact(tmp_path):
         tip = f["static/nodes/tip/position"][-1]
     assert 2 * math.atan2(lam[1], lam[0]) == pytest.approx(theta, abs=1e-9)
     assert np.allclose(tip, [L, 0, 0], rtol=0, atol=1e-12 * L)
+
+
+@pytest.mark.parametrize("joint,moment,expected", [
+    ("universal", "mx", lambda m, k: m * L / (G * J)),
+    ("universal", "mz", lambda m, k: m / k + m * L / (E * I_Z)),
+    ("spherical", "mx", lambda m, k: m / k + m * L / (G * J)),
+    ("spherical", "my", lambda m, k: m / k + m * L / (E * I_Y)),
+    ("revolute", "my", lambda m, k: m * L / (E * I_Y)),
+])
+def test_joint_types_at_the_root(tmp_path, joint, moment, expected):
+    """A joint with springs k at the root of a cantilever along x, axis x: a small end moment
+    turns the tip by the beam's compliance plus the joint's where the joint type releases that
+    rotation (universal: the two normal to the axis; spherical: all three; revolute: only the
+    one about the axis). Bound 1e-6 relative (rotations of 1e-3 rad: non-linearity 1e-6)."""
+    k, m = 20.0, 1.0e-3 * 20.0
+    axis = {"mx": 1, "my": 2, "mz": 3}[moment]
+    proc, out = run_scene(tmp_path, cantilever(
+        f"&hinge label = 'h', node = 'root', link = 'beam', mode = 'dynamic', stiffness = {k},"
+        f" axis = 1, 0, 0, type = '{joint}' /\n&force node = 'tip', {moment} = {m} /\n"
+        "&static n_steps = 1 /\n&output nodes = 'tip' /\n"))
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        lam = f["static/nodes/tip/orientation"][-1]
+    angle = 2 * math.atan2(lam[axis], lam[0])
+    assert angle == pytest.approx(expected(m, k), rel=1e-6)
+
+
+def test_spherical_pendulum_period(tmp_path):
+    """A bob (mass m, rotary inertia j about its centre) on a rigid, nearly massless rod from
+    a spherical joint, released from rest at 60 degrees from the vertical in a plane between x
+    and y: it swings in that plane with the physical pendulum's period
+    4 sqrt((m L^2 + j)/(m g L)) K(sin(30 deg)) (complete elliptic integral by the AGM). The
+    bob's j also gives the spin about the rod, free in a spherical joint, an inertia (a
+    massless spin would make the mass matrix nearly singular). The zero crossings of the
+    horizontal offset give the period to the output step's interpolation (1e-5 of it):
+    observed 3e-6; bound 1e-3."""
+    length, g, theta0, psi, j = 1.0, 9.81, math.radians(60), math.radians(30), 1.0e-2
+    k_mod = math.sin(theta0 / 2)
+    a, b = 1.0, math.sqrt(1 - k_mod**2)
+    for _ in range(30):
+        a, b = (a + b) / 2, math.sqrt(a * b)
+    period = 4 * math.sqrt((length**2 + j) / (g * length)) * math.pi / (2 * a)
+    bob = length * np.array([math.sin(theta0) * math.cos(psi), math.sin(theta0) * math.sin(psi),
+                             -math.cos(theta0)])
+    text = (f"&scene title = 'pendulum', dimension = 3, gravity = 0, 0, {-g} /\n"
+            "&node label = 'pivot', x = 0, y = 0, z = 0, fixed = .true. /\n"
+            f"&node label = 'bob', x = {float(bob[0])!r}, y = {float(bob[1])!r}, "
+            f"z = {float(bob[2])!r} /\n"
+            "&link label = 'rod', from = 'pivot', to = 'bob', E = 2e11, A = 1e-4, I = 1e-8,\n"
+            "      J = 2e-8, G = 8e10, rho = 1e-3, elongation = 'rigid', bending = 'rigid',\n"
+            "      orientation = 0, 0, 1 /\n"
+            "&hinge label = 'ball', node = 'pivot', link = 'rod', mode = 'dynamic', "
+            "type = 'spherical' /\n"
+            f"&mass node = 'bob', m = 1.0, inertia = {j}, {j}, {j}, 0, 0, 0 /\n"
+            f"&dynamic t_end = {2.2 * period}, output_dt = 1e-3, integrator = 'galpha_adaptive',"
+            " rtol = 1e-7, atol = 1e-9 /\n&output nodes = 'bob' /\n")
+    proc, out = run_scene(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        t = f["time"][:]
+        p = f["nodes/bob/position"][:]
+    # In the tilt plane: the offset along (cos psi, sin psi); none across it.
+    along = p[:, 0] * math.cos(psi) + p[:, 1] * math.sin(psi)
+    across = -p[:, 0] * math.sin(psi) + p[:, 1] * math.cos(psi)
+    assert np.max(np.abs(across)) < 1e-6 * length
+    crossings = [t[i] - along[i] * (t[i + 1] - t[i]) / (along[i + 1] - along[i])
+                 for i in range(len(t) - 1) if along[i] > 0 >= along[i + 1]]
+    assert len(crossings) >= 2
+    assert crossings[1] - crossings[0] == pytest.approx(period, rel=1e-3)
+    assert np.max(np.abs(np.linalg.norm(p, axis=1) - length)) < 1e-9
