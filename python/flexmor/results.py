@@ -117,7 +117,8 @@ class NodePath:
     instead: Euler parameters (scalar first) of its rotation from the reference orientation.
     Static paths also carry the node's ``reaction`` (n, 3): fx, fy [N], mz [N m] from supports
     and prescribed inputs, and, for ``&output compliance_nodes``, its tangent ``compliance``
-    (n, 3, 3): d(x, y, phi)/d(fx, fy, mz) (planar results only)."""
+    (n, 3, 3): d(x, y, phi)/d(fx, fy, mz); in a spatial result (n, 6) and (n, 6, 6) with
+    components x, y, z and the rotations (moments) about x, y, z."""
 
     position: np.ndarray
     rotation: np.ndarray | None = None
@@ -228,8 +229,8 @@ def _float(path: str, f: h5py.File, name: str) -> np.ndarray | None:
     return np.asarray(obj[...], dtype=float)
 
 
-def _paths(path: str, group: h5py.Group | None, prefix: str, n: int, against: str
-           ) -> dict[str, NodePath]:
+def _paths(path: str, group: h5py.Group | None, prefix: str, n: int, against: str,
+           spatial: bool = False) -> dict[str, NodePath]:
     out: dict[str, NodePath] = {}
     if not isinstance(group, h5py.Group):
         return out
@@ -240,7 +241,9 @@ def _paths(path: str, group: h5py.Group | None, prefix: str, n: int, against: st
         position = np.asarray(node["position"][...], dtype=float)
         _check_rows(path, f"/{prefix}/{label}/position", position, n, (3,), against)
         extra: dict[str, np.ndarray | None] = {}
-        for name, shape in (("rotation", ()), ("reaction", (3,)), ("compliance", (3, 3)),
+        # Per node 3 components in a planar result (x, y, phi), 6 in a spatial one.
+        k = 6 if spatial else 3
+        for name, shape in (("rotation", ()), ("reaction", (k,)), ("compliance", (k, k)),
                             ("orientation", (4,))):
             extra[name] = None
             if isinstance(node.get(name), h5py.Dataset):
@@ -280,8 +283,10 @@ def _read_static(path: str, f: h5py.File, model: Model | None) -> Static | None:
     if freq is not None and (freq.ndim != 2 or freq.shape[0] != n):
         raise ResultFileError(f"{path}: /static/frequency_hz has shape {freq.shape}, expected "
                               f"({n}, n) to match {against}")
+    spatial = isinstance(f.get("model"), h5py.Group) and \
+        int(f["model"].attrs.get("dimension", 2)) == 3
     return Static(load, _float(path, f, "static/q"), _paths(path, f.get("static/nodes"),
-                  "static/nodes", n, against), x, stable, freq)
+                  "static/nodes", n, against, spatial), x, stable, freq)
 
 
 def _read_shapes(path: str, f: h5py.File, name: str, values: str

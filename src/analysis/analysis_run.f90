@@ -9,7 +9,7 @@ module analysis_run
   use io_namelist, only: nml_file_t, string_t
   use io_scene, only: read_scene
   use model_scene, only: scene_t, dynamic_rec_t, auto_by_stiffness
-  use model_system, only: model_t
+  use model_system, only: model_t, NODE_SLOTS
   use elements_base, only: MODE_DYNAMIC
   use model_build, only: build_model, unused_motions
   use dynamics_system, only: dynamics_t
@@ -275,7 +275,7 @@ contains
       end if
     end associate
     ! Reactions and compliances are planar (x, y, phi) so far: a spatial scene has none.
-    if (err%ok() .and. this%dyn%model%dim == 2) call static_responses(this, q_steps, .not. arc, &
+    if (err%ok()) call static_responses(this, q_steps, .not. arc, &
       err)
     if (.not. err%ok()) return
     if (this%verbose) write(*, '(a,i0,a,a,i0,a)') 'static: ', size(this%static_load_factor), &
@@ -295,12 +295,13 @@ contains
     integer, allocatable :: out_coords(:, :), comp_coords(:, :)
     integer :: i, k
     associate (m => this%dyn%model, sc => this%scene)
-      allocate(out_coords(3, size(sc%output_nodes)), comp_coords(3, size(sc%compliance_nodes)))
+      allocate(out_coords(NODE_SLOTS, size(sc%output_nodes)), &
+        comp_coords(NODE_SLOTS, size(sc%compliance_nodes)))
       do i = 1, size(sc%output_nodes)
-        out_coords(:, i) = m%node_coord(1:3, m%find_node(sc%output_nodes(i)%s))
+        out_coords(:, i) = m%node_coord(:, m%find_node(sc%output_nodes(i)%s))
       end do
       do i = 1, size(sc%compliance_nodes)
-        comp_coords(:, i) = m%node_coord(1:3, m%find_node(sc%compliance_nodes(i)%s))
+        comp_coords(:, i) = m%node_coord(:, m%find_node(sc%compliance_nodes(i)%s))
       end do
       if (sc%static%n_frequencies > m%n_dy) then
         call err%set(ERR_INPUT, 'group &static: variable ''n_frequencies'' = ' // &
@@ -309,10 +310,11 @@ contains
         return
       end if
       call this%static_response%init(out_coords, comp_coords, sc%static%n_frequencies, &
-        size(q_steps, 2))
+        size(q_steps, 2), m%dim)
       this%dyn%ramp_prescribed = ramped
       do k = 1, size(q_steps, 2)
         this%dyn%load_factor = this%static_load_factor(k)
+        call this%dyn%kin%restart_from(this%x_static(:, k))
         call this%static_response%record(this%dyn, 0.0_wp, q_steps(:, k), k, err)
         if (.not. err%ok()) exit
       end do

@@ -174,13 +174,13 @@ contains
     if (err%ok()) call h5%write_real_2d('/static/x', this%x_static, err)
     if (err%ok()) call h5%write_int_1d('/static/stable', merge(1, 0, this%static_stable), err)
     call write_nodes(this, h5, '/static', this%x_static, err)
-    if (this%dyn%model%dim /= 2) return   ! no reactions or compliances in space yet
     associate (r => this%static_response, sc => this%scene)
       if (sc%static%n_frequencies > 0 .and. err%ok()) call h5%write_real_2d( &
         '/static/frequency_hz', r%frequency_hz, err, units='Hz')
       do i = 1, size(sc%output_nodes)
         if (err%ok()) call h5%write_real_2d('/static/nodes/' // sc%output_nodes(i)%s // &
-          '/reaction', r%reaction(:, i, :), err, units='N, N, N m')
+          '/reaction', r%reaction(:, i, :), err, units=trim(merge('N, N, N m             ', &
+          'N, N, N, N m, N m, N m', r%n_comp == 3)))
       end do
       do i = 1, size(sc%compliance_nodes)
         if (err%ok()) call h5%write_real_3d('/static/nodes/' // sc%compliance_nodes(i)%s // &

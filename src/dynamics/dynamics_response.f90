@@ -11,12 +11,20 @@
 !> Compliance: a force df on the node's coordinates does work DF_n^T df on q_dy, so
 !> dx_n = DF_n K_T^-1 DF_n^T df; rows of held coordinates of DF_n are zero, hence those rows
 !> and columns of the compliance are zero.
+!>
+!> Per node the components are (x, y, phi) in a planar model and (x, y, z, rotation about x,
+!> y, z) in a spatial one. There a node's small rotation in global axes is
+!> d(theta) = 2 E(lambda) d(lambda), so its rows of DF_n are 2 E DF_lambda, and a moment M does
+!> the work of the force 2 E^T M on lambda: the moment of a reaction r_lambda on the Euler
+!> parameters is E r_lambda / 2 (E E^T = I; the normalisation's multiplier, along lambda,
+!> drops out since E lambda = 0).
 module dynamics_response
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC
   use core_linalg, only: lu_factor, lu_solve, sym_gen_eig
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: tangent_stiffness
+  use elements_rotation, only: euler_e
   implicit none
   private
   public :: static_response_t
@@ -24,11 +32,14 @@ module dynamics_response
   real(wp), parameter :: PI = 4 * atan(1.0_wp)
 
   type :: static_response_t
-    !> Coordinates (x, y, phi; 0 if none) of the nodes whose reactions and compliances are kept.
+    !> Coordinates (the model's node_coord columns: x, y, phi, z, first Euler parameter; 0 if
+    !> none) of the nodes whose reactions and compliances are kept.
     integer, allocatable :: reaction_coords(:, :), compliance_coords(:, :)
     integer :: n_frequencies = 0
-    real(wp), allocatable :: reaction(:, :, :)       !< (3, node, step): fx, fy, mz [N, N m]
-    real(wp), allocatable :: compliance(:, :, :, :)  !< (3, 3, node, step)
+    integer :: n_comp = 3                            !< 3 (planar) or 6 (spatial) per node
+    !> (n_comp, node, step): fx, fy, mz or fx, fy, fz, mx, my, mz [N, N m]
+    real(wp), allocatable :: reaction(:, :, :)
+    real(wp), allocatable :: compliance(:, :, :, :)  !< (n_comp, n_comp, node, step)
     real(wp), allocatable :: frequency_hz(:, :)      !< (n_frequencies, step)
   contains
     procedure :: init => response_init
@@ -37,15 +48,17 @@ module dynamics_response
 
 contains
 
-  subroutine response_init(this, reaction_coords, compliance_coords, n_frequencies, n_steps)
+  subroutine response_init(this, reaction_coords, compliance_coords, n_frequencies, n_steps, &
+      dim)
     class(static_response_t), intent(inout) :: this
     integer, intent(in) :: reaction_coords(:, :), compliance_coords(:, :)
-    integer, intent(in) :: n_frequencies, n_steps
+    integer, intent(in) :: n_frequencies, n_steps, dim
     this%reaction_coords = reaction_coords
     this%compliance_coords = compliance_coords
     this%n_frequencies = n_frequencies
-    allocate(this%reaction(3, size(reaction_coords, 2), n_steps))
-    allocate(this%compliance(3, 3, size(compliance_coords, 2), n_steps))
+    this%n_comp = merge(6, 3, dim == 3)
+    allocate(this%reaction(this%n_comp, size(reaction_coords, 2), n_steps))
+    allocate(this%compliance(this%n_comp, this%n_comp, size(compliance_coords, 2), n_steps))
     allocate(this%frequency_hz(n_frequencies, n_steps))
     this%reaction = 0.0_wp
     this%compliance = 0.0_wp
@@ -62,6 +75,7 @@ contains
     type(error_t), intent(out) :: err
     real(wp) :: k(size(q_dy), size(q_dy)), r(dyn%model%n_x), acc(size(q_dy))
     logical :: was_locked, need_compliance
+    integer :: i
     was_locked = dyn%locked
     dyn%locked = .true.
     need_compliance = size(this%compliance_coords, 2) > 0
@@ -74,8 +88,11 @@ contains
     end if
     if (err%ok()) then
       r = reactions(dyn)
-      this%reaction(:, :, step) = gather(r, this%reaction_coords)
-      if (need_compliance) call compliance(dyn, k, this%compliance_coords, &
+      do i = 1, size(this%reaction_coords, 2)
+        this%reaction(:, i, step) = node_reaction(dyn, r, this%reaction_coords(:, i), &
+          this%n_comp)
+      end do
+      if (need_compliance) call compliance(dyn, k, this%compliance_coords, this%n_comp, &
         this%compliance(:, :, :, step), err)
     end if
     if (err%ok() .and. this%n_frequencies > 0) &
@@ -111,29 +128,62 @@ contains
     end associate
   end function reactions
 
-  !> Values of a per-coordinate vector at the nodes' (x, y, phi); 0 where a node has none.
-  pure function gather(v, coords) result(g)
-    real(wp), intent(in) :: v(:)
-    integer, intent(in) :: coords(:, :)
-    real(wp) :: g(3, size(coords, 2))
-    integer :: i, a
+  !> A node's reaction from the per-coordinate reactions r: (x, y, phi) in the plane,
+  !> (x, y, z, moment) in space; 0 where the node has no such coordinate.
+  function node_reaction(dyn, r, ic, n_comp) result(g)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: r(:)
+    integer, intent(in) :: ic(:), n_comp
+    real(wp) :: g(n_comp)
+    integer :: a, il
+    integer, parameter :: PLANAR(3) = [1, 2, 3], SPATIAL(3) = [1, 2, 4]
     g = 0.0_wp
-    do i = 1, size(coords, 2)
-      do a = 1, 3
-        if (coords(a, i) > 0) g(a, i) = v(coords(a, i))
-      end do
+    do a = 1, 3
+      if (n_comp == 3) then
+        if (ic(PLANAR(a)) > 0) g(a) = r(ic(PLANAR(a)))
+      else
+        if (ic(SPATIAL(a)) > 0) g(a) = r(ic(SPATIAL(a)))
+      end if
     end do
-  end function gather
+    if (n_comp == 6) then
+      il = ic(5)
+      if (il > 0) g(4:6) = 0.5_wp * matmul(euler_e(dyn%kin%x(il:il + 3)), r(il:il + 3))
+    end if
+  end function node_reaction
 
-  subroutine compliance(dyn, k, coords, c, err)
+  !> Rows of DF_dy for a node's components: d(x, y, phi) in the plane, d(x, y, z) and the
+  !> global rotation 2 E(lambda) d(lambda) in space; zero rows where the node has none.
+  function node_rows(dyn, ic, n_comp) result(d)
+    type(dynamics_t), intent(in) :: dyn
+    integer, intent(in) :: ic(:), n_comp
+    real(wp) :: d(n_comp, dyn%model%n_dy)
+    integer :: a, nr, il
+    integer, parameter :: PLANAR(3) = [1, 2, 3], SPATIAL(3) = [1, 2, 4]
+    nr = dyn%model%n_rh
+    d = 0.0_wp
+    do a = 1, 3
+      if (n_comp == 3) then
+        if (ic(PLANAR(a)) > 0) d(a, :) = dyn%kin%df(ic(PLANAR(a)), nr + 1:)
+      else
+        if (ic(SPATIAL(a)) > 0) d(a, :) = dyn%kin%df(ic(SPATIAL(a)), nr + 1:)
+      end if
+    end do
+    if (n_comp == 6) then
+      il = ic(5)
+      if (il > 0) d(4:6, :) = 2 * matmul(euler_e(dyn%kin%x(il:il + 3)), &
+        dyn%kin%df(il:il + 3, nr + 1:))
+    end if
+  end function node_rows
+
+  subroutine compliance(dyn, k, coords, n_comp, c, err)
     type(dynamics_t), intent(in) :: dyn
     real(wp), intent(in) :: k(:, :)
-    integer, intent(in) :: coords(:, :)
+    integer, intent(in) :: coords(:, :), n_comp
     real(wp), intent(out) :: c(:, :, :)
     type(error_t), intent(inout) :: err
-    real(wp) :: dfn(3, size(k, 1)), y(size(k, 1), 3), kf(size(k, 1), size(k, 1)), rcond
-    integer :: i, a, info, nr, ipiv(size(k, 1)), worst
-    nr = dyn%model%n_rh
+    real(wp) :: dfn(n_comp, size(k, 1)), y(size(k, 1), n_comp), kf(size(k, 1), size(k, 1))
+    real(wp) :: rcond
+    integer :: i, info, ipiv(size(k, 1)), worst
     kf = k
     call lu_factor(kf, ipiv, info, rcond, worst)
     if (info /= 0 .or. rcond < 1.0e-13_wp) then
@@ -142,10 +192,7 @@ contains
       return
     end if
     do i = 1, size(coords, 2)
-      dfn = 0.0_wp
-      do a = 1, 3
-        if (coords(a, i) > 0) dfn(a, :) = dyn%kin%df(coords(a, i), nr + 1:)
-      end do
+      dfn = node_rows(dyn, coords(:, i), n_comp)
       y = transpose(dfn)
       call lu_solve(kf, ipiv, y)
       c(:, :, i) = matmul(dfn, y)
@@ -160,7 +207,8 @@ contains
     type(error_t), intent(inout) :: err
     real(wp) :: lambda(size(k, 1)), v(size(k, 1), size(k, 1))
     integer :: info
-    call sym_gen_eig(k, mbar, lambda, v, info)
+    ! Symmetric part: the tangent of a moment fixed in space is not symmetric (dynamics_static).
+    call sym_gen_eig(0.5_wp * (k + transpose(k)), mbar, lambda, v, info)
     if (info /= 0) then
       call err%set(ERR_NUMERIC, 'static frequencies: the eigenvalue problem failed (is the ' // &
         'mass matrix positive definite?)')

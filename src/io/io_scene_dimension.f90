@@ -11,14 +11,10 @@ contains
     type(error_t), intent(inout) :: err
     integer :: i
     character(len=*), parameter :: NOT_YET = ' is not in spatial scenes yet (dimension = 3 ' // &
-      'has nodes, links, hinges, trusses, masses, forces and moments; statics, modal ' // &
-      'analysis, buckling, dynamics)'
+      'has nodes, links, hinges, trusses, masses, forces and moments; statics with ' // &
+      'reactions and compliances, modal analysis, buckling, dynamics)'
     if (scene%dimension == 3) then
       if (size(scene%sliders) > 0) call err%set(ERR_INPUT, 'group &slider' // NOT_YET)
-      if (size(scene%compliance_nodes) > 0) call err%set(ERR_INPUT, 'group &output: ' // &
-        'variable ''compliance_nodes''' // NOT_YET)
-      if (scene%static%n_frequencies > 0) call err%set(ERR_INPUT, 'group &static: ' // &
-        'variable ''n_frequencies''' // NOT_YET)
       if (.not. err%ok()) return
     end if
     do i = 1, size(scene%nodes)

@@ -50,6 +50,7 @@ module model_kinematics
     procedure :: second => kin_second
     procedure :: residual => kin_residual
     procedure :: jacobian_solve => kin_jacobian_solve
+    procedure :: restart_from => kin_restart_from
     procedure :: save_state => kin_save_state
     procedure :: restore_state => kin_restore_state
     procedure, private :: free_modes_moved => kin_free_modes_moved
@@ -199,6 +200,17 @@ contains
   !> Solve the kinematic equations for q, starting from the last solution moved along the
   !> first-order transfer function (a cheap predictor that keeps Newton on the right branch).
   !> On success the Jacobian at the solution is factorised and DF is NOT yet updated.
+  !> Start the next solve from the nodal coordinates x (a known nearby solution), without the
+  !> predictor from the last one: revisiting stored static steps in another order jumps too
+  !> far for it (a spatial roll-up from its full turn back to its first step).
+  subroutine kin_restart_from(this, x)
+    class(kinematics_t), intent(inout) :: this
+    real(wp), intent(in) :: x(:)
+    this%x = x
+    this%has_factors = .false.
+    this%has_df = .false.
+  end subroutine kin_restart_from
+
   subroutine kin_solve(this, model, q, err)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model

@@ -111,7 +111,6 @@ def test_planar_motion_equals_the_planar_scene(tmp_path):
      ["'rotary_inertia'", "negative"]),
     (cantilever("", dim=2, link_extra=", rotary_inertia = 1, 2, 1"),
      ["'rotary_inertia'", "dimension = 3"]),
-    (cantilever("&static n_steps = 1, n_frequencies = 2 /\n"), ["'n_frequencies'", "not in"]),
     (cantilever("", dim=2).replace("y = 0 /", "y = 0, z = 1 /", 1), ["'z'", "dimension = 3"]),
     (cantilever("&force node = 'tip', fz = 1 /\n", dim=2), ["&force", "'fz'", "dimension = 3"]),
     (cantilever("&force node = 'tip', moment = 1 /\n"), ["'moment'", "planar only"]),
@@ -338,3 +337,24 @@ def test_spherical_pendulum_period(tmp_path):
     assert len(crossings) >= 2
     assert crossings[1] - crossings[0] == pytest.approx(period, rel=1e-3)
     assert np.max(np.abs(np.linalg.norm(p, axis=1) - length)) < 1e-9
+
+
+def test_root_reaction_and_static_frequencies(tmp_path):
+    """A tip force F = (0, fy, fz) on the cantilever: the clamp's reaction is -F and the
+    moment -(r_tip x F) about the root, to the Newton tolerance (bound 1e-9 relative); with
+    n_frequencies the static step's frequencies equal &modal's at the same state."""
+    fy, fz = 1.0e-3, -2.0e-3
+    proc, out = run_scene(tmp_path, cantilever(
+        f"&force node = 'tip', fy = {fy}, fz = {fz} /\n&static n_steps = 1, n_frequencies = 3 /\n"
+        "&modal n_modes = 3 /\n&output nodes = 'root', 'tip' /\n"))
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        reaction = f["static/nodes/root/reaction"][-1]
+        tip = f["static/nodes/tip/position"][-1]
+        static_f = f["static/frequency_hz"][-1]
+        modal_f = f["modal/frequency_hz"][:]
+        assert f["static/nodes/root/reaction"].attrs["units"] == "N, N, N, N m, N m, N m"
+    force = np.array([0.0, fy, fz])
+    assert np.allclose(reaction[:3], -force, rtol=0, atol=1e-9 * abs(fz))
+    assert np.allclose(reaction[3:], -np.cross(tip, force), rtol=0, atol=1e-9 * abs(fz) * L)
+    assert np.allclose(static_f, modal_f, rtol=1e-9)
