@@ -34,7 +34,7 @@ program test_slider
     call sl%set_direction(dir)
     sl%x_ref = rng%uniform_vec(2, -2.0_wp, 2.0_wp)
     n = [-dir(2), dir(1)] / norm2(dir)
-    call ts%check(abs(norm2(sl%normal) - 1) <= 4 * epsilon(1.0_wp), trim(what) // &
+    call ts%check(abs(norm2(sl%normal(:, 1)) - 1) <= 4 * epsilon(1.0_wp), trim(what) // &
       ': normal has unit length')
     x = rng%uniform_vec(2, -3.0_wp, 3.0_wp)
     v = rng%uniform_vec(2, -1.0_wp, 1.0_wp)
@@ -74,11 +74,45 @@ program test_slider
       4 * epsilon(1.0_wp), trim(what) // ': de^T S de = k n n^T')
   end do
   write(*, '(a,es10.2,a,es10.2)') '-- worst: de vs FD', worst_de, ', |FD second|', worst_d2
+  call spatial_cases()
   call ts%check(sl%type_name() == 'slider', 'type name')
   call ts%check(.not. sl%has_inertia(), 'a slider has no consistent inertia')
   call ts%finish()
 
 contains
+
+  !> Spatial guides (two modes): the normals are orthonormal and normal to the guide (any
+  !> direction, also along a coordinate axis), points on the guide give e = 0, a step along
+  !> n_k moves e_k alone, and de holds the normals (the modes are linear: exact to round-off).
+  subroutine spatial_cases()
+    type(slider_t) :: s3
+    real(wp) :: d(3), p(3), e3(2), de3(2, 3), g(2, 2)
+    integer :: c3
+    character(len=40) :: label
+    s3%dofs = [1, 2, 3]
+    s3%mode_class = [MODE_DYNAMIC, MODE_DYNAMIC]
+    do c3 = 1, 5
+      write(label, '(a,i0)') 'spatial slider cfg ', c3
+      d = rng%uniform_vec(3, -5.0_wp, 5.0_wp)
+      if (c3 == 5) d = [0.0_wp, 0.0_wp, 2.0_wp]
+      call s3%set_direction(d)
+      s3%x_ref = rng%uniform_vec(3, -2.0_wp, 2.0_wp)
+      g = matmul(transpose(s3%normal), s3%normal)
+      call ts%check(maxval(abs(g - reshape([1.0_wp, 0.0_wp, 0.0_wp, 1.0_wp], [2, 2]))) <= &
+        8 * epsilon(1.0_wp), trim(label) // ': normals orthonormal')
+      call ts%check(maxval(abs(matmul(d, s3%normal))) <= 8 * epsilon(1.0_wp) * norm2(d), &
+        trim(label) // ': normals normal to the guide')
+      call s3%evaluate(s3%x_ref + rng%uniform(-3.0_wp, 3.0_wp) * d, e3, de3)
+      call ts%check(maxval(abs(e3)) <= 10 * epsilon(1.0_wp) * 40, trim(label) // &
+        ': e = 0 on the guide')
+      p = s3%x_ref + 0.7_wp * s3%normal(:, 2) + 0.1_wp * d
+      call s3%evaluate(p, e3, de3)
+      call ts%check(abs(e3(1)) <= 100 * epsilon(1.0_wp) .and. abs(e3(2) - 0.7_wp) <= &
+        100 * epsilon(1.0_wp), trim(label) // ': a step along n_2 moves e_2 alone')
+      call ts%check(maxval(abs(de3 - transpose(s3%normal))) == 0, trim(label) // &
+        ': de rows are the normals')
+    end do
+  end subroutine spatial_cases
 
   pure function unit(k) result(u)
     integer, intent(in) :: k

@@ -1,9 +1,10 @@
-!> Planar slider (prismatic joint of a point on a straight guide): one mode, the distance of a
-!> node from the line through its reference position x_ref along the unit `direction` d,
-!> e1 = n . (x - x_ref) with n = (-d_y, d_x) the guide's unit normal. Coordinates x = (x, y).
-!> The mode is linear in x, so its second derivative vanishes. A dynamic slider is a linear
-!> guide spring of stiffness k [N/m] across the guide; a slider leaves the node's rotation
-!> free (a prismatic joint on a body also needs the body's rotation held, e.g. fix_phi).
+!> Slider (prismatic joint of a point on a straight guide), planar or spatial: the distances
+!> of a node from the line through its reference position x_ref along the unit `direction` d,
+!> e_k = n_k . (x - x_ref). In the plane one mode, n = (-d_y, d_x); in space two, along unit
+!> normals n_1, n_2 = d x n_1. Coordinates x = (x, y) or (x, y, z). The modes are linear in
+!> x, so their second derivatives vanish. A dynamic slider is a linear guide spring of
+!> stiffness k [N/m] across the guide (each normal); a slider leaves the node's rotation free
+!> (a prismatic joint on a body also needs the body's rotation held, e.g. fix_phi).
 module elements_slider
   use core_kinds, only: wp
   use elements_base, only: element_t
@@ -12,8 +13,9 @@ module elements_slider
   public :: slider_t
 
   type, extends(element_t) :: slider_t
-    real(wp) :: x_ref(2) = 0.0_wp                  !< a point of the guide [m]
-    real(wp) :: normal(2) = [0.0_wp, 1.0_wp]       !< unit normal of the guide (guide along x)
+    real(wp), allocatable :: x_ref(:)              !< a point of the guide (dim) [m]
+    !> Unit normals of the guide (dim, dim - 1); set_direction fills them.
+    real(wp), allocatable :: normal(:, :)
     real(wp) :: k = 0.0_wp                         !< stiffness across the guide [N/m]
   contains
     procedure :: evaluate => slider_evaluate
@@ -25,19 +27,36 @@ module elements_slider
 
 contains
 
-  !> Guide along `direction` (any length > 0; the caller refuses a zero vector).
+  !> Guide along `direction` (2 or 3 values, any length > 0; the caller refuses a zero
+  !> vector). In space n_1 is orthogonalised from the coordinate axis least aligned with d.
   pure subroutine slider_set_direction(this, direction)
     class(slider_t), intent(inout) :: this
-    real(wp), intent(in) :: direction(2)
-    this%normal = [-direction(2), direction(1)] / norm2(direction)
+    real(wp), intent(in) :: direction(:)
+    real(wp) :: d(3), t(3)
+    integer :: i
+    if (size(direction) == 2) then
+      this%normal = reshape([-direction(2), direction(1)] / norm2(direction), [2, 1])
+      return
+    end if
+    d = direction / norm2(direction)
+    i = minloc(abs(d), 1)
+    t = -d(i) * d
+    t(i) = t(i) + 1
+    t = t / norm2(t)
+    this%normal = reshape([t, d(2) * t(3) - d(3) * t(2), d(3) * t(1) - d(1) * t(3), &
+      d(1) * t(2) - d(2) * t(1)], [3, 2])
   end subroutine slider_set_direction
 
   pure subroutine slider_evaluate(this, x, e, de)
     class(slider_t), intent(in) :: this
     real(wp), intent(in) :: x(:)
     real(wp), intent(out) :: e(:), de(:, :)
-    e(1) = dot_product(this%normal, x(1:2) - this%x_ref)
-    de(1, :) = this%normal
+    integer :: k, n
+    n = size(this%x_ref)
+    do k = 1, size(e)
+      e(k) = dot_product(this%normal(:, k), x(1:n) - this%x_ref)
+      de(k, :) = this%normal(:, k)
+    end do
   end subroutine slider_evaluate
 
   pure subroutine slider_second(this, x, v, d2e)
@@ -50,7 +69,11 @@ contains
   pure subroutine slider_stiffness(this, s)
     class(slider_t), intent(in) :: this
     real(wp), intent(out) :: s(:, :)
-    s(1, 1) = this%k
+    integer :: k
+    s = 0.0_wp
+    do k = 1, size(s, 1)
+      s(k, k) = this%k
+    end do
   end subroutine slider_stiffness
 
   pure function slider_type_name() result(name)

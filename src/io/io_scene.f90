@@ -305,8 +305,9 @@ contains
     call g%get_real_array('direction', direction, e)
     if (.not. e%ok()) then
       err = e
-    else if (size(direction) /= 2) then
-      call err%set(ERR_INPUT, g%where() // ': variable ''direction'' needs 2 values (dx, dy)')
+    else if (size(direction) /= 2 .and. size(direction) /= 3) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''direction'' needs 2 values (dx, dy; ' &
+        // '3 in a spatial scene)')
     else if (norm2(direction) == 0) then
       call err%set(ERR_INPUT, g%where() // ': variable ''direction'' is the zero vector: ' // &
         'give the guide''s direction (dx, dy), e.g. 1, 0 for a guide along x')

@@ -11,10 +11,9 @@ contains
     type(error_t), intent(inout) :: err
     integer :: i
     character(len=*), parameter :: NOT_YET = ' is not in spatial scenes yet (dimension = 3 ' // &
-      'has nodes, links, hinges, trusses, masses, forces and moments; statics with ' // &
+      'has nodes, links, hinges, trusses, sliders, masses, forces and moments; statics with ' // &
       'reactions and compliances, modal analysis, buckling, dynamics)'
     if (scene%dimension == 3) then
-      if (size(scene%sliders) > 0) call err%set(ERR_INPUT, 'group &slider' // NOT_YET)
       if (.not. err%ok()) return
     end if
     do i = 1, size(scene%nodes)
@@ -33,6 +32,13 @@ contains
             'stiffness G J; it also makes the bending shear-flexible)')
         end if
       end associate
+    end do
+    do i = 1, size(scene%sliders)
+      if (.not. err%ok()) exit
+      if (size(scene%sliders(i)%direction) /= scene%dimension) call err%set(ERR_INPUT, &
+        'group &slider ''' // scene%sliders(i)%label // ''': variable ''direction'' needs ' // &
+        trim(merge('2 values (dx, dy) in a planar scene     ', &
+        '3 values (dx, dy, dz) in a spatial scene', scene%dimension == 2)))
     end do
     do i = 1, size(scene%hinges)
       call mismatch('hinge', scene%hinges(i)%label, scene%hinges(i)%spatial_var, '', &

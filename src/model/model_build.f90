@@ -52,10 +52,11 @@ module model_build
       integer, intent(in) :: node_x(:), dim
       type(error_t), intent(inout) :: err
     end subroutine add_trusses
-    module subroutine add_sliders(scene, model, b, err)
+    !> Sliders on nodes whose translations start at node_x (dim of them: 2 or 3).
+    module subroutine add_sliders(scene, model, node_x, dim, err)
       type(scene_t), intent(in) :: scene
       type(model_t), intent(inout) :: model
-      type(builder_t), intent(in) :: b
+      integer, intent(in) :: node_x(:), dim
       type(error_t), intent(inout) :: err
     end subroutine add_sliders
     !> Beam properties and mode classes shared by all elements of a link (checked).
@@ -206,7 +207,7 @@ contains
     call add_links(scene, model, b, err); if (.not. err%ok()) return
     call add_hinges(scene, model, b, err); if (.not. err%ok()) return
     call add_trusses(scene, model, b%node_xy, 2, err); if (.not. err%ok()) return
-    call add_sliders(scene, model, b, err); if (.not. err%ok()) return
+    call add_sliders(scene, model, b%node_xy, 2, err); if (.not. err%ok()) return
     call add_masses_and_loads(scene, model, b, err); if (.not. err%ok()) return
     call add_node_inputs(scene, model, b, err); if (.not. err%ok()) return
     call check_connected(model, err); if (.not. err%ok()) return

@@ -181,7 +181,7 @@ contains
   !> leave `sliders` unallocated: no sliders.
   module procedure add_sliders
     type(slider_t) :: slider
-    integer :: i, in, idx, c
+    integer :: i, in, idx, c, k
     if (.not. allocated(scene%sliders)) return
     do i = 1, size(scene%sliders)
       associate (r => scene%sliders(i), where => 'group &slider ''' // scene%sliders(i)%label // '''')
@@ -207,13 +207,13 @@ contains
         end if
         if (.not. err%ok()) return
         slider%label = r%label
-        slider%dofs = [b%node_xy(in), b%node_xy(in) + 1]
+        slider%dofs = [(node_x(in) + k, k = 0, dim - 1)]
         slider%x_ref = model%x0(slider%dofs)
         call slider%set_direction(r%direction)
-        slider%mode_class = [c]
+        slider%mode_class = [(c, k = 1, dim - 1)]
         slider%k = r%stiffness
         slider%damping = r%damping
-        idx = model%add_element(slider, [0])
+        idx = model%add_element(slider, [(0, k = 1, dim - 1)])
       end associate
     end do
   end procedure add_sliders

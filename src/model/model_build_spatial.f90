@@ -2,7 +2,7 @@
 !> a link ends, four Euler parameters (reference (1, 0, 0, 0)) with a rigid normalisation
 !> unless the rotation is clamped; links meshed into spatial beams; point masses; forces and
 !> moments fixed in space, constant or following time laws; hinges (elements_hinge3d: the
-!> hinged link end gets four Euler parameters of its own); trusses. Sliders and node inputs
+!> hinged link end gets four Euler parameters of its own); trusses; sliders. Node inputs
 !> are planar only so far
 !> (io_scene refuses them in a spatial scene).
 submodule (model_build) model_build_spatial
@@ -40,6 +40,7 @@ contains
     call add_spatial_links(scene, model, node_x, node_lam, hinge_lam, err)
     if (err%ok()) call add_spatial_hinges(scene, model, node_lam, hinge_lam, err)
     if (err%ok()) call add_trusses(scene, model, node_x, 3, err)
+    if (err%ok()) call add_sliders(scene, model, node_x, 3, err)
     if (err%ok()) call add_spatial_loads(scene, model, node_x, node_lam, err)
     if (.not. err%ok()) return
     call check_connected(model, err)

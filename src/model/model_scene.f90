@@ -81,7 +81,7 @@ module model_scene
   !> A slider: `node` moves along the line through its reference position along `direction`.
   type :: slider_rec_t
     character(len=:), allocatable :: label, node, mode
-    real(wp) :: direction(2) = 0.0_wp
+    real(wp), allocatable :: direction(:)   !< 2 values (planar) or 3 (spatial)
     real(wp) :: stiffness = 0.0_wp, damping = 0.0_wp
   end type slider_rec_t
 

@@ -107,6 +107,10 @@ def test_planar_motion_equals_the_planar_scene(tmp_path):
     (cantilever("&force node = 'tip', fz = 1, time_law = 'pulse' /\n"),
      ["&force", "'time_law'", "'pulse'", "not defined"]),
     (cantilever("", link_extra=", rotary_inertia = 1, 2"), ["'rotary_inertia'", "3 values"]),
+    (cantilever("&slider label = 's', node = 'tip', direction = 1, 0 /\n"),
+     ["&slider 's'", "'direction'", "3 values"]),
+    (cantilever("&slider label = 's', node = 'tip', direction = 1, 0, 0 /\n", dim=2),
+     ["&slider 's'", "'direction'", "2 values"]),
     (cantilever("", link_extra=", rotary_inertia = 1, -2, 1"),
      ["'rotary_inertia'", "negative"]),
     (cantilever("", dim=2, link_extra=", rotary_inertia = 1, 2, 1"),
@@ -358,3 +362,37 @@ def test_root_reaction_and_static_frequencies(tmp_path):
     assert np.allclose(reaction[:3], -force, rtol=0, atol=1e-9 * abs(fz))
     assert np.allclose(reaction[3:], -np.cross(tip, force), rtol=0, atol=1e-9 * abs(fz) * L)
     assert np.allclose(static_f, modal_f, rtol=1e-9)
+
+
+def test_spatial_slider_block(tmp_path):
+    """A block on a guide along d (inclined in space), held by a truss spring along the guide
+    from a fixed anchor: gravity's component along the guide, m g.d, moves it by m (g.d) L0/EA
+    and it stays on the guide (bound 1e-10 m, Newton). With guide springs K across (mode
+    'dynamic') and no gravity it has the frequencies sqrt(EA/(L0 m)) and sqrt(K/m) twice
+    (a 3 x 3 eigenproblem, 1e-9 relative)."""
+    m_blk, ea, l0, k_guide, g = 2.0, 1.0e4, 0.5, 3.0e3, 9.81
+    d = np.array([1.0, 2.0, 2.0]) / 3
+    block = [float(v) for v in l0 * d]
+    base = ("&scene title = 'block', dimension = 3, gravity = 0, 0, {gz} /\n"
+            "&node label = 'anchor', x = 0, y = 0, z = 0, fixed = .true. /\n"
+            f"&node label = 'block', x = {block[0]!r}, y = {block[1]!r}, z = {block[2]!r} /\n"
+            f"&truss label = 'spring', from = 'anchor', to = 'block', E = {ea}, A = 1.0, "
+            "mode = 'dynamic' /\n"
+            "&slider label = 'guide', node = 'block', {extra}direction = 1, 2, 2 /\n"
+            f"&mass node = 'block', m = {m_blk} /\n&output nodes = 'block' /\n")
+    proc, out = run_scene(tmp_path, base.format(gz=-g, extra="") + "&static n_steps = 1 /\n",
+                          name="sag")
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        pos = f["static/nodes/block/position"][-1]
+    along = pos @ d - l0
+    assert abs(along - m_blk * (-g * d[2]) * l0 / ea) < 1e-10
+    assert np.linalg.norm(pos - (pos @ d) * d) < 1e-10
+    text = base.format(gz=0, extra=f"mode = 'dynamic', stiffness = {k_guide}, ") + "&modal /\n"
+    proc, out = run_scene(tmp_path, text, name="modes")
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        omega = f["modal/frequency_hz"][:] * 2 * math.pi
+    expected = sorted([math.sqrt(ea / l0 / m_blk), math.sqrt(k_guide / m_blk),
+                       math.sqrt(k_guide / m_blk)])
+    assert np.allclose(omega, expected, rtol=1e-9, atol=0), (omega, expected)
