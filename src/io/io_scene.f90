@@ -145,36 +145,40 @@ contains
     call rd_logical(g, 'fix_x', n%fix_x, err, default=fixed)
     call rd_logical(g, 'fix_y', n%fix_y, err, default=fixed)
     call rd_logical(g, 'fix_phi', n%fix_phi, err, default=fixed)
-    call read_node_inputs(g, n, err)
     call rd_real(g, 'z', n%z, err)
     call rd_logical(g, 'fix_z', n%fix_z, err, default=fixed)
     call rd_logical(g, 'fix_rotation', n%fix_rotation, err, default=fixed)
-    n%spatial_var = first_given(g, [character(len=12) :: 'z', 'fix_z', 'fix_rotation'])
-    n%planar_var = first_given(g, [character(len=12) :: 'fix_phi', 'dynamic', 'motion_x', &
-      'motion_y', 'motion_phi'])
+    call read_node_inputs(g, n, err)
+    n%spatial_var = first_given(g, [character(len=12) :: 'z', 'fix_z', 'fix_rotation', &
+      'motion_z'])
+    if (len(n%spatial_var) == 0 .and. n%dynamic(4)) n%spatial_var = 'dynamic'
+    ! A node's rotation as an input is planar only: a free spatial rotation needs Euler
+    ! parameters as degrees of freedom (docs/theory.md 12).
+    n%planar_var = first_given(g, [character(len=12) :: 'fix_phi', 'motion_phi'])
+    if (len(n%planar_var) == 0 .and. n%dynamic(3)) n%planar_var = 'dynamic'
   end subroutine read_node
 
   !> Coordinates of a node that are inputs: `dynamic = 'x', 'phi'` makes them degrees of
-  !> freedom, `motion_x = 'label'` (and _y, _phi) prescribes them. A coordinate that is fixed
+  !> freedom, `motion_x = 'label'` (and _y, _phi, _z) prescribes them. A coordinate that is fixed
   !> cannot be either, nor both.
   subroutine read_node_inputs(g, n, err)
     type(nml_group_t), intent(inout) :: g
     type(node_rec_t), intent(inout) :: n
     type(error_t), intent(inout) :: err
-    character(len=3), parameter :: names(3) = ['x  ', 'y  ', 'phi']
+    character(len=3), parameter :: names(4) = ['x  ', 'y  ', 'phi', 'z  ']
     type(string_t), allocatable :: dyn(:)
-    logical :: fixed(3)
+    logical :: fixed(4)
     integer :: i, k
     if (.not. err%ok()) return
     call rd_choices(g, 'dynamic', dyn, err)
     if (.not. err%ok()) return
     do i = 1, size(dyn)
-      do k = 1, 3
+      do k = 1, 4
         if (trim(names(k)) == dyn(i)%s) n%dynamic(k) = .true.
       end do
     end do
-    fixed = [n%fix_x, n%fix_y, n%fix_phi]
-    do k = 1, 3
+    fixed = [n%fix_x, n%fix_y, n%fix_phi, n%fix_z]
+    do k = 1, 4
       call rd_string(g, 'motion_' // trim(names(k)), n%motion(k)%s, err)
       if (.not. err%ok()) return
       if (fixed(k) .and. (n%dynamic(k) .or. len(n%motion(k)%s) > 0)) then

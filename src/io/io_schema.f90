@@ -55,7 +55,7 @@ module io_schema
     var_spec_t('scene', 'dimension', VK_INT, '', '2', .false., &
       2.0_wp, .false., 3.0_wp, .false., &
       '', 'planar (2) or spatial (3)')]
-  type(var_spec_t), parameter :: NODE_VARS(14) = [ &
+  type(var_spec_t), parameter :: NODE_VARS(15) = [ &
     var_spec_t('node', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'unique name'), &
@@ -79,7 +79,7 @@ module io_schema
       '', 'hold that coordinate'), &
     var_spec_t('node', 'dynamic', VK_CHOICE_LIST, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      'x|y|phi', 'coordinates that are degrees of freedom'), &
+      'x|y|phi|z', 'coordinates that are degrees of freedom'), &
     var_spec_t('node', 'motion_x', VK_STRING, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'motion prescribing that coordinate'), &
@@ -89,6 +89,9 @@ module io_schema
     var_spec_t('node', 'motion_phi', VK_STRING, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'motion prescribing that coordinate'), &
+    var_spec_t('node', 'motion_z', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion prescribing that coordinate (spatial)'), &
     var_spec_t('node', 'z', VK_REAL, 'm', '0', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'reference position (spatial scenes)'), &
@@ -424,7 +427,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(122) = [ &
+  type(var_spec_t), parameter :: SCHEMA(123) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]

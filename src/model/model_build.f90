@@ -145,6 +145,21 @@ module model_build
       integer, intent(out) :: c, im
       type(error_t), intent(inout) :: err
     end subroutine hinge_class
+    !> Label of the motion prescribing coordinate k (x, y, phi, z) of a node, '' if none.
+    pure module function node_motion(n, k) result(label)
+      type(node_rec_t), intent(in) :: n
+      integer, intent(in) :: k
+      character(len=:), allocatable :: label
+    end function node_motion
+    !> Nodal coordinates that are inputs (`dynamic`, `motion_*` of &node): x, y, z from the
+    !> first translation node_x of each node, phi from node_rot (0: the node has none). A
+    !> rotation exists only when an element uses it, so this runs after all elements.
+    module subroutine add_node_inputs(scene, model, node_x, node_rot, err)
+      type(scene_t), intent(in) :: scene
+      type(model_t), intent(inout) :: model
+      integer, intent(in) :: node_x(:), node_rot(:)
+      type(error_t), intent(inout) :: err
+    end subroutine add_node_inputs
     !> The node `label` names, or an input error naming `where` and `var`.
     module subroutine require_node(scene, label, where, var, idx, err)
       type(scene_t), intent(in) :: scene
@@ -209,7 +224,8 @@ contains
     call add_trusses(scene, model, b%node_xy, 2, err); if (.not. err%ok()) return
     call add_sliders(scene, model, b%node_xy, 2, err); if (.not. err%ok()) return
     call add_masses_and_loads(scene, model, b, err); if (.not. err%ok()) return
-    call add_node_inputs(scene, model, b, err); if (.not. err%ok()) return
+    call add_node_inputs(scene, model, b%node_xy, b%node_rot, err)
+    if (.not. err%ok()) return
     call check_connected(model, err); if (.not. err%ok()) return
     do i = 1, size(scene%nodes)
       call model%add_node_label(scene%nodes(i)%label, [b%node_xy(i), b%node_xy(i) + 1, &
@@ -230,7 +246,7 @@ contains
       used(i) = any([(scene%hinges(h)%motion == scene%motions(i)%label, h = 1, size(scene%hinges))])
       do h = 1, size(scene%nodes)
         used(i) = used(i) .or. any([(node_motion(scene%nodes(h), k) == scene%motions(i)%label, &
-          k = 1, 3)])
+          k = 1, 4)])
       end do
       do h = 1, size(scene%forces)
         if (allocated(scene%forces(h)%time_law)) used(i) = used(i) .or. &
@@ -369,50 +385,5 @@ contains
     model%newton_tol = 1.0e-11_wp * max(1.0e-3_wp, maxval(abs(model%x0)))
   end subroutine add_masses_and_loads
 
-  !> Label of the motion prescribing coordinate k (x, y, phi) of a node, '' if none.
-  pure function node_motion(n, k) result(label)
-    type(node_rec_t), intent(in) :: n
-    integer, intent(in) :: k
-    character(len=:), allocatable :: label
-    label = ''
-    if (allocated(n%motion(k)%s)) label = n%motion(k)%s
-  end function node_motion
-
-  !> Nodal coordinates that are inputs (`dynamic`, `motion_*` of &node). A rotation exists
-  !> only when an element uses it, so this runs after all elements are added.
-  subroutine add_node_inputs(scene, model, b, err)
-    type(scene_t), intent(in) :: scene
-    type(model_t), intent(inout) :: model
-    type(builder_t), intent(in) :: b
-    type(error_t), intent(inout) :: err
-    character(len=3), parameter :: names(3) = ['x  ', 'y  ', 'phi']
-    integer :: i, k, idx, im
-    do i = 1, size(scene%nodes)
-      associate (n => scene%nodes(i), where => 'group &node ''' // scene%nodes(i)%label // '''')
-        do k = 1, 3
-          if (.not. n%dynamic(k) .and. len(node_motion(n, k)) == 0) cycle
-          idx = b%node_xy(i) + k - 1
-          if (k == 3) idx = b%node_rot(i)
-          if (idx == 0) then
-            call err%set(ERR_INPUT, where // ': coordinate phi is dynamic or prescribed but ' // &
-              'the node has no rotation (no link end without a hinge and no hinge there)')
-            return
-          end if
-          if (n%dynamic(k)) then
-            call model%set_coord_input(idx, MODE_DYNAMIC, 0)
-            cycle
-          end if
-          im = motion_index(scene, node_motion(n, k))
-          if (im == 0) then
-            call err%set(ERR_INPUT, where // ': variable ''motion_' // trim(names(k)) // &
-              ''': motion ''' // node_motion(n, k) // ''' is not defined (no &motion with ' // &
-              'that label)')
-            return
-          end if
-          call model%set_coord_input(idx, MODE_PRESCRIBED, im)
-        end do
-      end associate
-    end do
-  end subroutine add_node_inputs
 
 end module model_build

@@ -91,6 +91,46 @@ contains
     end if
   end procedure hinge_class
 
+  module procedure node_motion
+    label = ''
+    if (allocated(n%motion(k)%s)) label = n%motion(k)%s
+  end procedure node_motion
+
+  module procedure add_node_inputs
+    character(len=3), parameter :: names(4) = ['x  ', 'y  ', 'phi', 'z  ']
+    integer, parameter :: OFFSET(4) = [0, 1, -1, 2]
+    integer :: i, k, idx, im
+    do i = 1, size(scene%nodes)
+      associate (n => scene%nodes(i), where => 'group &node ''' // scene%nodes(i)%label // '''')
+        do k = 1, 4
+          if (.not. n%dynamic(k) .and. len(node_motion(n, k)) == 0) cycle
+          if (k == 3) then
+            idx = node_rot(i)
+          else
+            idx = node_x(i) + OFFSET(k)
+          end if
+          if (idx == 0) then
+            call err%set(ERR_INPUT, where // ': coordinate phi is dynamic or prescribed but ' // &
+              'the node has no rotation (no link end without a hinge and no hinge there)')
+            return
+          end if
+          if (n%dynamic(k)) then
+            call model%set_coord_input(idx, MODE_DYNAMIC, 0)
+            cycle
+          end if
+          im = motion_index(scene, node_motion(n, k))
+          if (im == 0) then
+            call err%set(ERR_INPUT, where // ': variable ''motion_' // trim(names(k)) // &
+              ''': motion ''' // node_motion(n, k) // ''' is not defined (no &motion with ' // &
+              'that label)')
+            return
+          end if
+          call model%set_coord_input(idx, MODE_PRESCRIBED, im)
+        end do
+      end associate
+    end do
+  end procedure add_node_inputs
+
   module procedure require_node
     idx = node_index(scene, label)
     if (idx == 0) call err%set(ERR_INPUT, where // ': variable ''' // var // &

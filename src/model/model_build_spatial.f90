@@ -2,8 +2,8 @@
 !> a link ends, four Euler parameters (reference (1, 0, 0, 0)) with a rigid normalisation
 !> unless the rotation is clamped; links meshed into spatial beams; point masses; forces and
 !> moments fixed in space, constant or following time laws; hinges (elements_hinge3d: the
-!> hinged link end gets four Euler parameters of its own); trusses; sliders. Node inputs
-!> are planar only so far
+!> hinged link end gets four Euler parameters of its own); trusses; sliders; translations
+!> as node inputs (rotations are planar only so far)
 !> (io_scene refuses them in a spatial scene).
 submodule (model_build) model_build_spatial
   use elements_beam3d, only: beam3d_t, beam3d_set_geometry, B3_ANGLE => BENDING_ANGLE, &
@@ -42,6 +42,9 @@ contains
     if (err%ok()) call add_trusses(scene, model, node_x, 3, err)
     if (err%ok()) call add_sliders(scene, model, node_x, 3, err)
     if (err%ok()) call add_spatial_loads(scene, model, node_x, node_lam, err)
+    if (.not. err%ok()) return
+    ! Node rotations are never inputs in space (io_scene refuses phi): no rotation index.
+    call add_node_inputs(scene, model, node_x, 0 * node_x, err)
     if (.not. err%ok()) return
     call check_connected(model, err)
     if (.not. err%ok()) return

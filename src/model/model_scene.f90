@@ -24,11 +24,11 @@ module model_scene
     character(len=:), allocatable :: label
     real(wp) :: x = 0.0_wp, y = 0.0_wp
     logical :: fix_x = .false., fix_y = .false., fix_phi = .false.
-    !> Coordinates that are inputs themselves: degrees of freedom (x, y, phi) ...
-    logical :: dynamic(3) = .false.
+    !> Coordinates that are inputs themselves: degrees of freedom (x, y, phi, z) ...
+    logical :: dynamic(4) = .false.
     !> ... or prescribed by the motion of that label (not allocated or '': not prescribed),
     !> x = x0 + p(t).
-    type(label_t) :: motion(3)
+    type(label_t) :: motion(4)
     !> Spatial scenes: z, its support, and the clamp of the node's rotation.
     real(wp) :: z = 0.0_wp
     logical :: fix_z = .false., fix_rotation = .false.

@@ -116,6 +116,10 @@ def test_planar_motion_equals_the_planar_scene(tmp_path):
     (cantilever("", dim=2, link_extra=", rotary_inertia = 1, 2, 1"),
      ["'rotary_inertia'", "dimension = 3"]),
     (cantilever("", dim=2).replace("y = 0 /", "y = 0, z = 1 /", 1), ["'z'", "dimension = 3"]),
+    (cantilever("").replace(f"x = {L}, y = 0 /", f"x = {L}, y = 0, dynamic = 'phi' /"),
+     ["&node 'tip'", "'dynamic'", "planar only"]),
+    (cantilever("", dim=2).replace(f"x = {L}, y = 0 /", f"x = {L}, y = 0, motion_z = 'm' /"),
+     ["&node 'tip'", "'motion_z'", "dimension = 3"]),
     (cantilever("&force node = 'tip', fz = 1 /\n", dim=2), ["&force", "'fz'", "dimension = 3"]),
     (cantilever("&force node = 'tip', moment = 1 /\n"), ["'moment'", "planar only"]),
     (cantilever("").replace(f", J = {J}", ""), ["'J'", "torsion constant"]),
@@ -396,3 +400,36 @@ def test_spatial_slider_block(tmp_path):
     expected = sorted([math.sqrt(ea / l0 / m_blk), math.sqrt(k_guide / m_blk),
                        math.sqrt(k_guide / m_blk)])
     assert np.allclose(omega, expected, rtol=1e-9, atol=0), (omega, expected)
+
+
+def test_node_inputs_in_space(tmp_path):
+    """Translations as node inputs in a spatial scene. (1) The root's z prescribed (motion_z,
+    a 'constant' law of 0.01 m, stepped by &static): the cantilever moves up rigidly, tip z
+    = 0.01 m to the Newton tolerance. (2) A block whose z is a degree of freedom (dynamic =
+    'z') on a vertical truss spring (its elongation then follows from z: 'elastic'): static
+    sag m g L / EA and frequency sqrt(EA / (L m)) (bounds 1e-9 relative)."""
+    text = cantilever("&motion label = 'lift', law = 'constant', start = 0.01 /\n"
+                      "&static n_steps = 2 /\n&output nodes = 'tip' /\n")
+    text = text.replace("z = 0, fixed = .true. /", "z = 0, fixed = .true., fix_z = .false., "
+                        "motion_z = 'lift' /")
+    proc, out = run_scene(tmp_path, text, name="lift")
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        tip = f["static/nodes/tip/position"][-1]
+    assert np.allclose(tip, [L, 0, 0.01], rtol=0, atol=1e-10)
+    m_blk, ea, length, g = 3.0, 2.0e4, 0.4, 9.81
+    text = (f"&scene title = 'block', dimension = 3, gravity = 0, 0, {-g} /\n"
+            f"&node label = 'anchor', x = 0, y = 0, z = {-length}, fixed = .true. /\n"
+            "&node label = 'block', x = 0, y = 0, z = 0, fix_x = .true., fix_y = .true., "
+            "dynamic = 'z' /\n"
+            f"&truss label = 'spring', from = 'anchor', to = 'block', E = {ea}, A = 1, "
+            "mode = 'elastic' /\n"
+            f"&mass node = 'block', m = {m_blk} /\n&static n_steps = 1 /\n&modal /\n"
+            "&output nodes = 'block' /\n")
+    proc, out = run_scene(tmp_path, text, name="block")
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        z = f["static/nodes/block/position"][-1, 2]
+        omega = f["modal/frequency_hz"][0] * 2 * math.pi
+    assert z == pytest.approx(-m_blk * g * length / ea, rel=1e-9)
+    assert omega == pytest.approx(math.sqrt(ea / (length * m_blk)), rel=1e-9)
