@@ -21,7 +21,7 @@ program test_hinge3d
   use element_fd, only: modes, jacobian, second, fd_jacobian, fd_second, fd_hessian, &
     polar_hessian
   use elements_base, only: MODE_DYNAMIC, MODE_RIGID
-  use elements_rotation, only: rotvec_to_euler, euler_to_matrix, euler_product
+  use elements_rotation, only: rotvec_to_euler, euler_to_matrix, euler_product, cross
   use elements_hinge3d, only: hinge3d_t, hinge3d_set_axis
   implicit none
 
@@ -96,12 +96,6 @@ contains
     end if
     e(1) = atan2(dot_product(b, h%perp2), dot_product(b, h%perp1))
   end function expected_modes
-
-  pure function cross(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-  end function cross
 
   ! ------------------------------------------------------------------ frame
 

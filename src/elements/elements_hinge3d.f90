@@ -25,7 +25,7 @@ module elements_hinge3d
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
   use elements_base, only: element_t
-  use elements_rotation, only: euler_product
+  use elements_rotation, only: euler_product, cross, unit_normal
   implicit none
   private
   public :: hinge3d_t, hinge3d_set_axis
@@ -60,7 +60,6 @@ contains
     type(error_t), intent(out) :: err
     real(wp), intent(in), optional :: perp(3)
     real(wp) :: n(3), t(3), a
-    integer :: i
     a = norm2(axis)
     if (.not. a > 0) then
       call err%set(ERR_INPUT, 'hinge3d: the hinge axis has zero length')
@@ -75,20 +74,12 @@ contains
         return
       end if
     else
-      i = minloc(abs(n), 1)
-      t = -n(i) * n
-      t(i) = t(i) + 1
+      t = unit_normal(n)
     end if
     h%axis = n
     h%perp1 = t / norm2(t)
     h%perp2 = cross(n, h%perp1)
   end subroutine hinge3d_set_axis
-
-  pure function cross(a, b) result(c)
-    real(wp), intent(in) :: a(3), b(3)
-    real(wp) :: c(3)
-    c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
-  end function cross
 
   pure function conj(l) result(c)
     real(wp), intent(in) :: l(4)

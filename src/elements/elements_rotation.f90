@@ -13,7 +13,7 @@ module elements_rotation
   private
   public :: rot_matrix, rot_apply, rot_apply_jac, rot_apply_second
   public :: rotvec_to_euler, euler_to_matrix, matrix_to_euler, euler_product, skew
-  public :: euler_g, euler_e
+  public :: euler_g, euler_e, cross, unit_normal
 
   !> Below this angle sin(theta/2)/theta is summed as its series: the closed form loses
   !> accuracy as theta^2 / theta^2 and is 0/0 at theta = 0.
@@ -51,6 +51,18 @@ contains
     real(wp) :: c(3)
     c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
   end function cross
+
+  !> A unit vector normal to the unit vector n, orthogonalised from the coordinate axis least
+  !> aligned with n (the first of equals): a deterministic frame for a hinge axis or a guide.
+  pure function unit_normal(n) result(t)
+    real(wp), intent(in) :: n(3)
+    real(wp) :: t(3)
+    integer :: i
+    i = minloc(abs(n), 1)
+    t = -n(i) * n
+    t(i) = t(i) + 1
+    t = t / norm2(t)
+  end function unit_normal
 
   !> Homogeneous quadratic R(lambda): the rotation times |lambda|^2.
   pure function rot_matrix(lam) result(r)

@@ -8,6 +8,7 @@
 module elements_slider
   use core_kinds, only: wp
   use elements_base, only: element_t
+  use elements_rotation, only: cross, unit_normal
   implicit none
   private
   public :: slider_t
@@ -33,18 +34,13 @@ contains
     class(slider_t), intent(inout) :: this
     real(wp), intent(in) :: direction(:)
     real(wp) :: d(3), t(3)
-    integer :: i
     if (size(direction) == 2) then
       this%normal = reshape([-direction(2), direction(1)] / norm2(direction), [2, 1])
       return
     end if
     d = direction / norm2(direction)
-    i = minloc(abs(d), 1)
-    t = -d(i) * d
-    t(i) = t(i) + 1
-    t = t / norm2(t)
-    this%normal = reshape([t, d(2) * t(3) - d(3) * t(2), d(3) * t(1) - d(1) * t(3), &
-      d(1) * t(2) - d(2) * t(1)], [3, 2])
+    t = unit_normal(d)
+    this%normal = reshape([t, cross(d, t)], [3, 2])
   end subroutine slider_set_direction
 
   pure subroutine slider_evaluate(this, x, e, de)
