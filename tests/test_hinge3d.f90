@@ -16,6 +16,7 @@ program test_hinge3d
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use core_kinds, only: wp
   use core_error, only: error_t
+  use core_strings, only: real_str
   use testing, only: suite_t
   use fd_helpers, only: lcg_t, relerr, flat, random_rotvec
   use element_fd, only: modes, jacobian, second, fd_jacobian, fd_second, fd_hessian, &
@@ -197,13 +198,6 @@ contains
       all(ieee_is_finite(d2)), 'bending of pi (z = 0): e, de, second finite')
   end subroutine closed_forms
 
-  function real_str(a) result(s)
-    real(wp), intent(in) :: a
-    character(len=:), allocatable :: s
-    character(len=16) :: buf
-    write(buf, '(f8.4)') a
-    s = trim(adjustl(buf))
-  end function real_str
 
   ! ------------------------------------------------------------------ small rotations
 

@@ -1,14 +1,15 @@
 !> Finite-difference machinery shared by the element tests: allocating wrappers of an
 !> element's evaluate and second, central differences of its modes (Jacobian), a 5-point rule
 !> for the second directional derivative, the Hessian of one mode by differences of the
-!> analytic gradient, and the exact Hessian by polarisation of `second`.
+!> analytic gradient, the exact Hessian by polarisation of `second`, and the weight's nodal
+!> force as minus the central difference of its potential.
 module element_fd
   use core_kinds, only: wp
   use elements_base, only: element_t
   implicit none
   private
   public :: evaluate, modes, jacobian, second, fd_jacobian, fd_second, fd_hessian, &
-    polar_hessian
+    polar_hessian, fd_weight_force
 
 contains
 
@@ -108,4 +109,20 @@ contains
       end do
     end do
   end function polar_hessian
+
+  !> -dV/dx of the element's weight potential under gravity g, central differences, step h.
+  function fd_weight_force(el, x, g, h) result(f)
+    class(element_t), intent(in) :: el
+    real(wp), intent(in) :: x(:), g(:), h
+    real(wp) :: f(size(x)), xp(size(x)), fw(size(x)), potp, potm
+    integer :: k
+    do k = 1, size(x)
+      xp = x
+      xp(k) = x(k) + h
+      call el%weight(xp, g, fw, potp)
+      xp(k) = x(k) - h
+      call el%weight(xp, g, fw, potm)
+      f(k) = -(potp - potm) / (2 * h)
+    end do
+  end function fd_weight_force
 end module element_fd
