@@ -230,8 +230,12 @@ contains
     ! program without flushing buffers.
     flush(output_unit)
     if (this%scene%modal%active) then
+      ! The modes may be asked for at a time far along the motions (a shaft turned many
+      ! radians): the kinematics gets there in steps if it must.
+      this%dyn%kin%continuation = .true.
       call modal_analysis(this%dyn, this%scene%modal%time, this%q_static, &
-        this%scene%modal%n_modes, this%modal, err)
+        this%scene%modal%n_modes, this%modal, err, along_motion=this%scene%modal%along_motion)
+      this%dyn%kin%continuation = .false.
       if (.not. err%ok()) return
       if (this%verbose) write(*, '(a,*(f0.3,:,", "))') 'modal: frequencies [Hz]: ', &
         this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz)))

@@ -27,7 +27,7 @@ module dynamics_static
   use core_progress, only: progress_t
   implicit none
   private
-  public :: tangent_stiffness, static_solve, stable_tangent, STABILITY_MARGIN
+  public :: tangent_stiffness, motion_tangent, static_solve, stable_tangent, STABILITY_MARGIN
 
   !> omega^2 above -STABILITY_MARGIN s counts as stable (see the module comment): above the
   !> round-off of the Cholesky factors and of the difference tangent, and below the lowest
@@ -105,6 +105,57 @@ contains
     if (err%ok()) call dyn%evaluate_dense(t, q_dy, v0, a, err)
     dyn%locked = was_locked
   end subroutine tangent_stiffness
+
+  !> Tangent stiffness along a motion: K = -dF/dq_dy of the generalised force F = Mbar a of
+  !> the equations of motion at rest relative to the prescribed motion (v_dy = 0), the
+  !> prescribed coordinates moving with their rates and accelerations at t. Beside the load
+  !> and geometric stiffness it holds the dynamic stiffening and softening of that motion
+  !> (a spinning beam's centrifugal tension; docs/theory.md 8). Differenced and extrapolated
+  !> like tangent_stiffness' accurate form; symmetrised (at a relative equilibrium, a = 0,
+  !> the centrifugal potential makes it symmetric; the rest is difference noise). Leaves
+  !> dyn%mbar at q_dy.
+  subroutine motion_tangent(dyn, t, q_dy, k, err)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    real(wp), intent(out) :: k(:, :)
+    type(error_t), intent(out) :: err
+    real(wp) :: h, d1(size(q_dy)), d2(size(q_dy)), v0(size(q_dy)), a(size(q_dy))
+    integer :: j
+    logical :: was_locked
+    was_locked = dyn%locked
+    dyn%locked = .false.
+    v0 = 0.0_wp
+    h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+    do j = 1, size(q_dy)
+      call force_difference(h, d1)
+      if (err%ok()) call force_difference(2 * h, d2)
+      if (.not. err%ok()) exit
+      k(:, j) = -(4 * d1 - d2) / 3
+    end do
+    if (err%ok()) then
+      k = 0.5_wp * (k + transpose(k))
+      call dyn%evaluate_dense(t, q_dy, v0, a, err)
+    end if
+    dyn%locked = was_locked
+
+  contains
+
+    !> Central difference of Mbar a along q_dy(j), step hs.
+    subroutine force_difference(hs, d)
+      real(wp), intent(in) :: hs
+      real(wp), intent(out) :: d(:)
+      real(wp) :: qp(size(q_dy)), fp(size(q_dy))
+      qp = q_dy
+      qp(j) = q_dy(j) + hs
+      call dyn%evaluate_dense(t, qp, v0, a, err)
+      if (.not. err%ok()) return
+      fp = matmul(dyn%mbar, a)
+      qp(j) = q_dy(j) - hs
+      call dyn%evaluate_dense(t, qp, v0, a, err)
+      if (.not. err%ok()) return
+      d = (fp - matmul(dyn%mbar, a)) / (2 * hs)
+    end subroutine force_difference
+  end subroutine motion_tangent
 
   !> Central difference of the load force in the direction of q_dy(j), step h.
   subroutine central_difference(dyn, t, q_dy, j, h, d, err)

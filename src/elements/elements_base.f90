@@ -32,6 +32,7 @@ module elements_base
     !> 'beam', 'hinge', 'truss': names the element type in result files.
     procedure(type_name_iface), deferred, nopass :: type_name
     procedure :: n_modes => element_n_modes
+    procedure :: mode_period => element_no_period
     procedure :: has_inertia => element_no_inertia
     procedure :: inertia => element_zero_inertia
     procedure :: weight => element_zero_weight
@@ -77,6 +78,15 @@ contains
     class(element_t), intent(in) :: this
     element_n_modes = size(this%mode_class)
   end function element_n_modes
+
+  !> Period of mode j in its coordinate (0: none). A mode that is an angle defined only up to
+  !> whole turns (a spatial hinge's rotation) matches its coordinate modulo the period, so a
+  !> joint can turn on without bound.
+  pure real(wp) function element_no_period(this, j) result(p)
+    class(element_t), intent(in) :: this
+    integer, intent(in) :: j
+    p = 0.0_wp
+  end function element_no_period
 
   !> True when the element has a configuration-dependent (consistent) mass.
   pure logical function element_no_inertia(this)

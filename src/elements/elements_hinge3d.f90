@@ -47,6 +47,7 @@ module elements_hinge3d
     procedure :: second => hinge3d_second
     procedure :: stiffness => hinge3d_stiffness
     procedure, nopass :: type_name => hinge3d_type_name
+    procedure :: mode_period => hinge3d_period
   end type hinge3d_t
 
 contains
@@ -182,4 +183,13 @@ contains
     character(len=:), allocatable :: name
     name = 'hinge3d'
   end function hinge3d_type_name
+  !> e1 = 2 arg z is defined modulo 4 pi (lambda and -lambda give e1 values 2 pi apart, and
+  !> a full turn takes lambda to -lambda): the kinematics matches a hinge angle beyond a turn
+  !> modulo 4 pi, so a shaft can spin on.
+  pure real(wp) function hinge3d_period(this, j) result(p)
+    class(hinge3d_t), intent(in) :: this
+    integer, intent(in) :: j
+    p = 0.0_wp
+    if (j == 1) p = 16 * atan(1.0_wp)
+  end function hinge3d_period
 end module elements_hinge3d

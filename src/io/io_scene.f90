@@ -493,6 +493,7 @@ contains
     scene%modal%active = .true.
     call rd_int(g, 'n_modes', scene%modal%n_modes, err)
     call rd_real(g, 'time', scene%modal%time, err)
+    call rd_logical(g, 'along_motion', scene%modal%along_motion, err)
   end subroutine read_modal
 
   subroutine read_buckling(g, scene, err)

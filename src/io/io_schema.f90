@@ -340,13 +340,16 @@ module io_schema
     var_spec_t('static', 'max_load_factor', VK_REAL, '', 'none', .false., &
       0.0_wp, .true., huge(1.0_wp), .false., &
       '', 'arc-length stops beyond this load factor')]
-  type(var_spec_t), parameter :: MODAL_VARS(2) = [ &
+  type(var_spec_t), parameter :: MODAL_VARS(3) = [ &
     var_spec_t('modal', 'n_modes', VK_INT, '', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'lowest modes kept, 0 = all'), &
     var_spec_t('modal', 'time', VK_REAL, 's', '0', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'time of the prescribed motions')]
+      '', 'time of the prescribed motions'), &
+    var_spec_t('modal', 'along_motion', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'dynamic stiffening of the motion at time')]
   type(var_spec_t), parameter :: BUCKLING_VARS(2) = [ &
     var_spec_t('buckling', 'n_modes', VK_INT, '', '6', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
@@ -427,7 +430,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(123) = [ &
+  type(var_spec_t), parameter :: SCHEMA(124) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]

@@ -39,6 +39,10 @@ module model_kinematics
     real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer (allocated there)
     logical :: has_df = .false.          !< df belongs to x
     logical :: has_factors = .false.     !< the factors belong to x (up to the last correction)
+    !> On a failed Newton solve, retry in steps from the last solution (kin_solve). Off where a
+    !> failure must reach the caller: arc-length and the integrators cut their own steps, and
+    !> continuation could land on another branch of a snapping structure.
+    logical :: continuation = .false.
     integer :: n_solves = 0, n_iterations = 0
   contains
     procedure :: init => kin_init
@@ -145,7 +149,12 @@ contains
           row = model%modes(model%mode_first(iel) + j - 1)%row
           if (row == 0) cycle
           r(row) = e(j)
-          if (model%row_q(row) > 0) r(row) = e(j) - q(model%row_q(row))
+          if (model%row_q(row) > 0) then
+            r(row) = e(j) - q(model%row_q(row))
+            associate (period => model%modes(model%mode_first(iel) + j - 1)%period)
+              if (period > 0) r(row) = modulo(r(row) + period / 2, period) - period / 2
+            end associate
+          end if
           if (.not. with_jac) cycle
           do k = 1, size(el%dofs)
             col = model%calc_index(el%dofs(k))
@@ -200,6 +209,45 @@ contains
   !> Solve the kinematic equations for q, starting from the last solution moved along the
   !> first-order transfer function (a cheap predictor that keeps Newton on the right branch).
   !> On success the Jacobian at the solution is factorised and DF is NOT yet updated.
+  !> The kinematic solution at q: Newton from the last solution (kin_newton). If that fails and
+  !> `continuation` is on, the step from the last q is cut into 2, 4, ... 64 equal parts, each
+  !> solved from the one before: a far jump, such as a modal analysis at a time when a shaft
+  !> has turned 10 rad, defeats Newton from the reference but not in steps. The first
+  !> failure's error is returned if no subdivision succeeds.
+  subroutine kin_solve(this, model, q, err)
+    class(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: q(:)
+    type(error_t), intent(out) :: err
+    real(wp), allocatable :: x_last(:), q_last(:)
+    type(error_t) :: sub_err
+    integer :: n, i, n_solves
+    x_last = this%x
+    q_last = this%q
+    n_solves = this%n_solves
+    call kin_newton(this, model, q, err)
+    if (err%ok() .or. .not. this%continuation) return
+    n = 1
+    do while (n < 64)
+      n = 2 * n
+      this%x = x_last
+      this%q = q_last
+      this%has_factors = .false.
+      do i = 1, n
+        call kin_newton(this, model, q_last + (real(i, wp) / n) * (q - q_last), sub_err)
+        if (.not. sub_err%ok()) exit
+      end do
+      if (sub_err%ok()) then
+        call err%clear()
+        this%n_solves = n_solves + 1
+        return
+      end if
+    end do
+    this%x = x_last
+    this%q = q_last
+    this%has_factors = .false.
+  end subroutine kin_solve
+
   !> Start the next solve from the nodal coordinates x (a known nearby solution), without the
   !> predictor from the last one: revisiting stored static steps in another order jumps too
   !> far for it (a spatial roll-up from its full turn back to its first step).
@@ -211,7 +259,7 @@ contains
     this%has_df = .false.
   end subroutine kin_restart_from
 
-  subroutine kin_solve(this, model, q, err)
+  subroutine kin_newton(this, model, q, err)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: q(:)
@@ -282,7 +330,7 @@ contains
       ' iterations, residual ', rmax
     call err%set(ERR_NUMERIC, trim(msg))
     this%x = x_start
-  end subroutine kin_solve
+  end subroutine kin_newton
 
   !> Why J_c is singular, from a dense factorisation (also in sparse mode: this is the error
   !> path, and the dense factors name the undetermined coordinate and the modes it moves).

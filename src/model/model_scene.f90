@@ -128,6 +128,8 @@ module model_scene
     logical :: active = .false.
     integer :: n_modes = 0          !< 0 = all
     real(wp) :: time = 0.0_wp       !< prescribed motions are evaluated (and locked) at this time
+    !> ... or, .true., kept moving: the motion's dynamic stiffening enters the modes.
+    logical :: along_motion = .false.
   end type modal_rec_t
 
   !> Linearised buckling (docs/input.md, &buckling).

@@ -32,6 +32,7 @@ module model_system
     integer :: row = 0          !< row in the kinematic equations, 0 for released modes
     integer :: q = 0            !< index in q for prescribed and dynamic modes, else 0
     integer :: motion = 0       !< motion index for prescribed modes
+    real(wp) :: period = 0.0_wp !< the mode's period in its coordinate (0: none)
   end type mode_ref_t
 
   type :: model_t
@@ -170,7 +171,8 @@ contains
     this%mode_first = [this%mode_first, size(this%modes) + 1]
     allocate(modes(elem%n_modes()))
     do j = 1, elem%n_modes()
-      modes(j) = mode_ref_t(element=idx, local=j, class=elem%mode_class(j), motion=motion(j))
+      modes(j) = mode_ref_t(element=idx, local=j, class=elem%mode_class(j), motion=motion(j), &
+        period=elem%mode_period(j))
     end do
     this%modes = [this%modes, modes]
   end function model_add_element

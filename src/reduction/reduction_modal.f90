@@ -7,7 +7,7 @@ module reduction_modal
   use core_error, only: error_t, ERR_INPUT
   use reduction_eigen, only: lowest_modes
   use dynamics_system, only: dynamics_t
-  use dynamics_static, only: tangent_stiffness
+  use dynamics_static, only: tangent_stiffness, motion_tangent
   implicit none
   private
   public :: modal_result_t, modal_analysis
@@ -27,13 +27,16 @@ contains
 
   !> n_modes = 0 asks for all of them (always LAPACK). solver: 'auto' (default), 'lapack' or
   !> 'arpack', as reduction_eigen's lowest_modes.
-  subroutine modal_analysis(dyn, t, q_dy, n_modes, res, err, solver)
+  subroutine modal_analysis(dyn, t, q_dy, n_modes, res, err, solver, along_motion)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     integer, intent(in) :: n_modes
     type(modal_result_t), intent(out) :: res
     type(error_t), intent(out) :: err
     character(len=*), intent(in), optional :: solver
+    !> With the prescribed motion's rates at t (dynamic stiffening: motion_tangent), not held.
+    logical, intent(in), optional :: along_motion
+    logical :: moving
     real(wp), allocatable :: lambda(:), v(:, :)
     character(len=:), allocatable :: name
     integer :: n, nm
@@ -53,7 +56,13 @@ contains
       return
     end if
     allocate(res%k0(n, n))
-    call tangent_stiffness(dyn, t, q_dy, res%k0, err)
+    moving = .false.
+    if (present(along_motion)) moving = along_motion
+    if (moving) then
+      call motion_tangent(dyn, t, q_dy, res%k0, err)
+    else
+      call tangent_stiffness(dyn, t, q_dy, res%k0, err)
+    end if
     if (.not. err%ok()) return
     ! Modes need a symmetric stiffness: of the load stiffness of a moment fixed in space (not
     ! conservative in 3D) only the symmetric part is kept.
