@@ -12,6 +12,8 @@ checked against, and the convergence tables of the two spatial bending forms (an
 - right_angle_cantilever: Simo and Vu-Quoc's elbow; the energy at the end of the pulse equals
   the work of the force, and it is conserved afterwards.
 
+It also times the elbow on meshes of 10 to 160 beams (cost per step against the mesh).
+
 Usage (--bin defaults to build/bin/flexmor in the repository):
 
     python3 scripts/spatial_examples.py [--bin BIN] [--out docs/bench/spatial_convergence.md]
@@ -222,6 +224,27 @@ def convergence_tables(binary, folder):
     return "\n".join(rows) + "\n"
 
 
+def elbow_scaling(binary, folder, per_leg=(5, 10, 20, 40, 80)):
+    """Markdown table: wall time per step and per evaluation of the elbow (fixed-step
+    generalized-alpha, dt 1 ms, 1 s) against the number of beams: the cost per step of a
+    spatial model grows linearly with the mesh."""
+    text = (ROOT / "input" / "right_angle_cantilever.nml").read_text().replace(
+        "&dynamic t_end = 30.0, output_dt = 0.05, rtol = 1.0e-5, atol = 1.0e-6 /",
+        "&dynamic t_end = 1.0, output_dt = 0.05, integrator = 'galpha', dt = 1.0e-3 /")
+    rows = ["## Cost per step of a spatial model (the elbow, 1 s at dt = 1 ms)", "",
+            "| beams | steps | evaluations | wall [s] | per step [ms] | per evaluation and beam [us] |",
+            "| --- | --- | --- | --- | --- | --- |"]
+    for n in per_leg:
+        out, _ = run(binary, folder, f"elbow_{n}", text.replace("n_elements = 10",
+                                                                 f"n_elements = {n}"))
+        with h5py.File(out) as f:
+            wall, steps = f.attrs["wall_time_s"], int(f.attrs["n_steps"])
+            evals = int(f.attrs["n_model_evals"])
+        rows.append(f"| {2 * n} | {steps} | {evals} | {wall:.2f} | {1e3 * wall / steps:.3f} | "
+                    f"{1e6 * wall / evals / (2 * n):.1f} |")
+    return "\n".join(rows) + "\n"
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--bin", default=str(ROOT / "build" / "bin" / "flexmor"))
@@ -230,7 +253,7 @@ def main():
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
     with tempfile.TemporaryDirectory() as folder:
-        tables = convergence_tables(args.bin, folder)
+        tables = convergence_tables(args.bin, folder) + "\n" + elbow_scaling(args.bin, folder)
     head = ("# Spatial beams: convergence of the angle and sine forms\n\n"
             f"`python3 scripts/spatial_examples.py` on {platform.node()} "
             f"({platform.processor() or platform.machine()}), commit {commit}.\n\n")
