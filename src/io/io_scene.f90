@@ -337,8 +337,22 @@ contains
           'Jyy, Jzz, Jxy, Jxz, Jyz)')
       end if
     end if
+    if (g%has('rotation') .and. err%ok()) then
+      call g%get_real_array('rotation', r%rotation, e)
+      if (.not. e%ok()) then
+        err = e
+      else if (size(r%rotation) /= 4) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'' needs 4 values (an ' // &
+          'axis ax, ay, az and an angle in rad)')
+      else if (.not. norm2(r%rotation(1:3)) > 0) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'': the axis is zero')
+      else if (.not. allocated(r%inertia)) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'' turns the axes of ' // &
+          '''inertia'', which is not given')
+      end if
+    end if
     r%planar_var = first_given(g, [character(len=12) :: 'J'])
-    r%spatial_var = first_given(g, [character(len=12) :: 'inertia'])
+    r%spatial_var = first_given(g, [character(len=12) :: 'inertia', 'rotation'])
   end subroutine read_mass
 
   subroutine read_force(g, r, err)

@@ -176,6 +176,12 @@ def test_tip_body_twists_the_cantilever(tmp_path):
     (cantilever("&mass node = 'tip', inertia = 1, 1, 1, 2, 0, 0 /\n"),
      ["'inertia'", "not the inertia tensor of a body"]),
     (cantilever("&mass node = 'tip', inertia = 1, 1, 1 /\n"), ["'inertia'", "6 values"]),
+    (cantilever("&mass node = 'tip', m = 1, rotation = 0, 0, 1, 0.5 /\n"),
+     ["'rotation'", "'inertia'", "not given"]),
+    (cantilever("&mass node = 'tip', inertia = 1, 1, 1, 0, 0, 0, rotation = 0, 0, 1 /\n"),
+     ["'rotation'", "4 values"]),
+    (cantilever("&mass node = 'tip', inertia = 1, 1, 1, 0, 0, 0, rotation = 0, 0, 0, 1 /\n"),
+     ["'rotation'", "axis is zero"]),
     (cantilever("&mass node = 'tip', inertia = 1, 1, 1, 0, 0, 0 /\n", dim=2),
      ["'inertia'", "dimension = 3"]),
     (cantilever("&node label = 'lone', x = 0, y = 1, z = 0 /\n"
@@ -458,3 +464,18 @@ def test_shaft_spins_many_turns(tmp_path):
     angle = np.unwrap(np.arctan2(tip[:, 1], tip[:, 0]))
     assert angle[-1] == pytest.approx(10.0 * (3.0 - 0.5), abs=1e-4)
     assert np.max(np.abs(tip[:, 2])) == 0
+
+
+def test_inertia_in_rotated_axes(tmp_path):
+    """&mass rotation: the inertia given in axes turned by 90 degrees about z (body x along
+    global y) is the tensor with Jxx and Jyy swapped: the same frequencies as that tensor
+    given directly (round-off of the rotation, 1e-12 relative)."""
+    freqs = []
+    for mass in ("inertia = 0.02, 0.01, 0.02, 0, 0, 0, rotation = 0, 0, 1, "
+                 f"{math.pi / 2!r}", "inertia = 0.01, 0.02, 0.02, 0, 0, 0"):
+        proc, out = run_scene(tmp_path, cantilever(f"&mass node = 'tip', {mass} /\n&modal /\n"),
+                              name=f"m{len(freqs)}")
+        assert proc.returncode == 0, proc.stderr
+        with h5py.File(out) as f:
+            freqs.append(f["modal/frequency_hz"][:])
+    assert np.allclose(freqs[0], freqs[1], rtol=1e-12, atol=0)
