@@ -8,7 +8,8 @@ module analysis_run
   use core_version, only: FLEXMOR_VERSION
   use io_namelist, only: nml_file_t, string_t
   use io_scene, only: read_scene
-  use model_scene, only: scene_t, dynamic_rec_t, auto_by_stiffness
+  use model_scene, only: scene_t, dynamic_rec_t, label_t, auto_by_stiffness
+  use io_hdf5, only: h5_writer_t
   use model_system, only: model_t, NODE_SLOTS
   use elements_base, only: MODE_DYNAMIC
   use model_build, only: build_model, unused_motions
@@ -18,6 +19,7 @@ module analysis_run
   use dynamics_response, only: static_response_t
   use reduction_modal, only: modal_result_t, modal_analysis
   use dynamics_buckling, only: buckling_result_t, buckling_analysis
+  use dynamics_linear, only: linear_model_t
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use core_progress, only: progress_t
   use integrators_driver, only: integrate
@@ -41,6 +43,7 @@ module analysis_run
     type(dynamics_t) :: dyn
     type(modal_result_t) :: modal
     type(buckling_result_t) :: buckling
+    type(linear_model_t) :: linear              !< the &linear state-space model
     real(wp), allocatable :: q_static(:), x_static(:, :)
     logical, allocatable :: static_stable(:)  !< per load step (dynamics_static: stable_tangent)
     real(wp), allocatable :: static_load_factor(:)  !< per load step
@@ -77,6 +80,16 @@ module analysis_run
       character(len=*), intent(in) :: path
       type(error_t), intent(out) :: err
     end subroutine run_write
+    !> &linear: the state-space model at the configuration of &modal (analysis_run_linear).
+    module subroutine run_linear(this, err)
+      type(run_t), intent(inout) :: this
+      type(error_t), intent(out) :: err
+    end subroutine run_linear
+    module subroutine write_linear(this, h5, err)
+      type(run_t), intent(in) :: this
+      type(h5_writer_t), intent(inout) :: h5
+      type(error_t), intent(inout) :: err
+    end subroutine write_linear
   end interface
 
 contains
@@ -244,6 +257,14 @@ contains
     if (this%scene%buckling%active) then
       call run_buckling(this, err)
       if (.not. err%ok()) return
+      flush(output_unit)
+    end if
+    if (this%scene%linear%active) then
+      call run_linear(this, err)
+      if (.not. err%ok()) return
+      if (this%verbose) write(*, '(a,i0,a,i0,a,i0,a)') 'linear: state-space model, ', &
+        size(this%linear%a, 1), ' states, ', size(this%linear%b, 2), ' inputs, ', &
+        size(this%linear%c, 1), ' outputs'
       flush(output_unit)
     end if
     if (this%scene%dynamic%active) then

@@ -1,6 +1,5 @@
 !> The result file of one run (layout: docs/output.md): the writers of analysis_run.
 submodule (analysis_run) analysis_run_output
-  use io_hdf5, only: h5_writer_t
   use model_system, only: COORD_PHI, COORD_Y, COORD_Z, COORD_EULER, NODE_SLOTS
   implicit none
 
@@ -18,6 +17,7 @@ contains
     if (err%ok() .and. this%scene%static%active) call write_static(this, h5, err)
     if (err%ok() .and. this%scene%modal%active) call write_modal(this, h5, err)
     if (err%ok() .and. this%scene%buckling%active) call write_buckling(this, h5, err)
+    if (err%ok() .and. this%scene%linear%active) call write_linear(this, h5, err)
     if (err%ok() .and. this%scene%dynamic%active) call write_dynamic(this, h5, err)
     if (err%ok() .and. allocated(this%red)) call write_reduction(this, h5, err)
     if (err%ok()) call h5%commit(err)

@@ -27,7 +27,7 @@ module dynamics_response
   use elements_rotation, only: euler_e
   implicit none
   private
-  public :: static_response_t
+  public :: static_response_t, node_rows
 
   real(wp), parameter :: PI = 4 * atan(1.0_wp)
 

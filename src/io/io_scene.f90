@@ -11,7 +11,7 @@ module io_scene
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, &
     rd_classes, rd_label, only_with
   use model_scene, only: auto_integrator, scene_t, node_rec_t, link_rec_t, hinge_rec_t, &
-    truss_rec_t, mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t
+    truss_rec_t, mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t, label_t
   use motion_law, only: table_problem
   use io_table, only: read_table_csv, relative_to
   implicit none
@@ -77,6 +77,7 @@ contains
         case ('static'); call read_static(g, scene, err)
         case ('modal'); call read_modal(g, scene, err)
         case ('buckling'); call read_buckling(g, scene, err)
+        case ('linear'); call read_linear(g, scene, err)
         case ('dynamic'); call read_dynamic(g, scene, err)
         case ('reduction'); call read_reduction(g, scene, err)
         case ('output'); call read_output(g, scene, err)
@@ -518,6 +519,40 @@ contains
     call rd_int(g, 'n_modes', scene%buckling%n_modes, err)
     call rd_real(g, 'load_factor', scene%buckling%load_factor, err)
   end subroutine read_buckling
+
+  subroutine read_linear(g, scene, err)
+    type(nml_group_t), intent(inout) :: g
+    type(scene_t), intent(inout) :: scene
+    type(error_t), intent(inout) :: err
+    scene%linear%active = .true.
+    call rd_real(g, 'time', scene%linear%time, err)
+    call rd_logical(g, 'along_motion', scene%linear%along_motion, err)
+    call rd_labels(g, 'inputs', scene%linear%inputs, err)
+    call rd_labels(g, 'outputs', scene%linear%outputs, err)
+  end subroutine read_linear
+
+  !> A required list of strings as labels.
+  subroutine rd_labels(g, name, labels, err)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: name
+    type(label_t), allocatable, intent(out) :: labels(:)
+    type(error_t), intent(inout) :: err
+    type(string_t), allocatable :: values(:)
+    type(error_t) :: e
+    integer :: i
+    allocate(labels(0))
+    if (.not. err%ok()) return
+    call g%get_string_array(name, values, e)
+    if (.not. e%ok()) then
+      err = e
+      return
+    end if
+    deallocate(labels)
+    allocate(labels(size(values)))
+    do i = 1, size(values)
+      labels(i)%s = values(i)%s
+    end do
+  end subroutine rd_labels
 
   subroutine read_dynamic(g, scene, err)
     type(nml_group_t), intent(inout) :: g

@@ -17,11 +17,11 @@ module io_schema
     VK_REAL_LIST = 6, VK_STRING_LIST = 7, VK_CHOICE_LIST = 8
 
   !> Groups of a scene file, and those that may appear at most once.
-  character(len=9), parameter :: SCENE_GROUPS(15) = [character(len=9) :: 'scene', 'node', &
+  character(len=9), parameter :: SCENE_GROUPS(16) = [character(len=9) :: 'scene', 'node', &
     'link', 'hinge', 'truss', 'slider', 'mass', 'force', 'motion', 'static', 'modal', &
-    'buckling', 'dynamic', 'reduction', 'output']
-  character(len=9), parameter :: SINGLE_GROUPS(7) = [character(len=9) :: 'scene', 'static', &
-    'modal', 'buckling', 'dynamic', 'reduction', 'output']
+    'buckling', 'linear', 'dynamic', 'reduction', 'output']
+  character(len=9), parameter :: SINGLE_GROUPS(8) = [character(len=9) :: 'scene', 'static', &
+    'modal', 'buckling', 'linear', 'dynamic', 'reduction', 'output']
 
   !> One variable. `default` is the text shown in docs ('' with `required`; a word such as
   !> 'law' where it depends on other variables); numbers are parsed from it. The range is
@@ -353,6 +353,19 @@ module io_schema
     var_spec_t('modal', 'along_motion', VK_LOGICAL, '', '.false.', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'dynamic stiffening of the motion at time')]
+  type(var_spec_t), parameter :: LINEAR_VARS(4) = [ &
+    var_spec_t('linear', 'inputs', VK_STRING_LIST, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'inputs node.component (forces, moments)'), &
+    var_spec_t('linear', 'outputs', VK_STRING_LIST, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'outputs node.component (displacements, rotations)'), &
+    var_spec_t('linear', 'time', VK_REAL, 's', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'time of the prescribed motions'), &
+    var_spec_t('linear', 'along_motion', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'linearise along the motion (joints moving)')]
   type(var_spec_t), parameter :: BUCKLING_VARS(2) = [ &
     var_spec_t('buckling', 'n_modes', VK_INT, '', '6', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
@@ -433,10 +446,11 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(125) = [ &
+  type(var_spec_t), parameter :: SCHEMA(129) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
-    STATIC_VARS, MODAL_VARS, BUCKLING_VARS, DYNAMIC_VARS, REDUCTION_VARS, OUTPUT_VARS]
+    STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &
+    OUTPUT_VARS]
 
 contains
 

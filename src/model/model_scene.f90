@@ -7,7 +7,7 @@ module model_scene
   private
   public :: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
     force_rec_t, motion_rec_t, static_rec_t, modal_rec_t, dynamic_rec_t, reduction_rec_t, label_t, &
-    buckling_rec_t, slider_rec_t, auto_integrator, auto_by_stiffness
+    buckling_rec_t, slider_rec_t, linear_rec_t, auto_integrator, auto_by_stiffness
 
   !> integrator = 'auto' takes generalized-alpha with error control from this rtol up; below,
   !> BDF when the model is not stiff (auto_by_stiffness).
@@ -142,6 +142,16 @@ module model_scene
     real(wp) :: load_factor = 1.0_wp   !< load factor at which K_G is differenced
   end type buckling_rec_t
 
+  !> A linearised state-space model (docs/input.md, &linear).
+  type :: linear_rec_t
+    logical :: active = .false.
+    real(wp) :: time = 0.0_wp             !< time of the prescribed motions
+    logical :: along_motion = .false.     !< joints moving (as &modal along_motion), else held
+    !> Inputs 'node.component' (fx, fy, moment | fx, fy, fz, mx, my, mz) and outputs
+    !> 'node.component' (x, y, phi | x, y, z, rx, ry, rz).
+    type(label_t), allocatable :: inputs(:), outputs(:)
+  end type linear_rec_t
+
   type :: dynamic_rec_t
     logical :: active = .false.
     real(wp) :: t_end = 0.0_wp, output_dt = 1.0e-3_wp
@@ -183,6 +193,7 @@ module model_scene
     type(static_rec_t) :: static
     type(modal_rec_t) :: modal
     type(buckling_rec_t) :: buckling
+    type(linear_rec_t) :: linear
     type(dynamic_rec_t) :: dynamic
     type(reduction_rec_t) :: reduction
     type(label_t), allocatable :: output_nodes(:)

@@ -1,0 +1,128 @@
+!> &linear (docs/input.md): the linearised state-space model of the run's configuration, and
+!> its datasets in the result file (docs/output.md).
+submodule (analysis_run) analysis_run_linear
+  use model_system, only: NODE_SLOTS
+  use dynamics_linear, only: linearise
+  implicit none
+
+  !> Component names of inputs (forces, moments) and outputs (displacements, rotations):
+  !> planar x, y, phi; spatial x, y, z and the rotations about x, y, z.
+  character(len=6), parameter :: PLANAR_IN(3) = ['fx    ', 'fy    ', 'moment']
+  character(len=6), parameter :: SPATIAL_IN(6) = ['fx', 'fy', 'fz', 'mx', 'my', 'mz']
+  character(len=6), parameter :: PLANAR_OUT(3) = ['x  ', 'y  ', 'phi']
+  character(len=6), parameter :: SPATIAL_OUT(6) = ['x ', 'y ', 'z ', 'rx', 'ry', 'rz']
+
+contains
+
+  module subroutine run_linear(this, err)
+    type(run_t), intent(inout) :: this
+    type(error_t), intent(out) :: err
+    integer, allocatable :: inputs(:, :), outputs(:, :)
+    associate (lin => this%scene%linear, spatial => this%dyn%model%dim == 3)
+      if (spatial) then
+        call components(this, lin%inputs, 'inputs', SPATIAL_IN, inputs, err)
+        if (err%ok()) call components(this, lin%outputs, 'outputs', SPATIAL_OUT, outputs, err)
+      else
+        call components(this, lin%inputs, 'inputs', PLANAR_IN, inputs, err)
+        if (err%ok()) call components(this, lin%outputs, 'outputs', PLANAR_OUT, outputs, err)
+      end if
+      if (.not. err%ok()) return
+      this%dyn%kin%continuation = .true.
+      call linearise(this%dyn, lin%time, this%q_static, inputs, outputs, lin%along_motion, &
+        this%linear, err)
+      this%dyn%kin%continuation = .false.
+      if (.not. err%ok()) call err%prefix('linearisation: ')
+    end associate
+  end subroutine run_linear
+
+  !> 'node.component' names as node coordinates plus the component number (the last dot
+  !> splits: link nodes are named 'link.3').
+  subroutine components(this, names, var, known, which, err)
+    type(run_t), intent(in) :: this
+    type(label_t), intent(in) :: names(:)
+    character(len=*), intent(in) :: var, known(:)
+    integer, allocatable, intent(out) :: which(:, :)
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: node, comp, where
+    integer :: i, k, dot, in, nr
+    allocate(which(NODE_SLOTS + 1, size(names)))
+    nr = merge(5, 3, this%dyn%model%dim == 3)
+    where = 'group &linear: variable ''' // var // ''': '
+    do i = 1, size(names)
+      dot = index(names(i)%s, '.', back=.true.)
+      node = names(i)%s(1:max(dot - 1, 0))
+      comp = names(i)%s(dot + 1:)
+      in = 0
+      if (dot > 1) in = this%dyn%model%find_node(node)
+      if (in == 0) then
+        call err%set(ERR_INPUT, where // '''' // names(i)%s // ''' is not node.component ' // &
+          'with a node of the model')
+        return
+      end if
+      k = findloc([(trim(known(k)) == comp, k = 1, size(known))], .true., 1)
+      if (k == 0) then
+        call err%set(ERR_INPUT, where // '''' // names(i)%s // ''': component ''' // comp // &
+          ''' is not one of ' // join(known))
+        return
+      end if
+      which(1:NODE_SLOTS, i) = this%dyn%model%node_coord(:, in)
+      which(NODE_SLOTS + 1, i) = k
+      if (k > 3 .or. (nr == 3 .and. k == 3)) then
+        if (which(nr, i) == 0) then
+          call err%set(ERR_INPUT, where // '''' // names(i)%s // ''': node ''' // node // &
+            ''' has no rotation')
+          return
+        end if
+      end if
+    end do
+  end subroutine components
+
+  pure function join(words) result(s)
+    character(len=*), intent(in) :: words(:)
+    character(len=:), allocatable :: s
+    integer :: i
+    s = trim(words(1))
+    do i = 2, size(words)
+      s = s // ', ' // trim(words(i))
+    end do
+  end function join
+
+  !> /linear: time (1), A (1, n_z, n_z), B (1, n_z, n_u), C (1, n_y, n_z), D (1, n_y, n_u)
+  !> and the names of the inputs and outputs.
+  module subroutine write_linear(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    associate (lin => this%linear)
+      call h5%write_real_1d('/linear/time', [lin%time], err, units='s')
+      ! Transposed: HDF5 shows a Fortran array's dimensions reversed.
+      if (err%ok()) call h5%write_real_3d('/linear/A', reshape(transpose(lin%a), &
+        [size(lin%a, 2), size(lin%a, 1), 1]), err)
+      if (err%ok()) call h5%write_real_3d('/linear/B', reshape(transpose(lin%b), &
+        [size(lin%b, 2), size(lin%b, 1), 1]), err)
+      if (err%ok()) call h5%write_real_3d('/linear/C', reshape(transpose(lin%c), &
+        [size(lin%c, 2), size(lin%c, 1), 1]), err)
+      if (err%ok()) call h5%write_real_3d('/linear/D', reshape(transpose(lin%d), &
+        [size(lin%d, 2), size(lin%d, 1), 1]), err)
+      if (err%ok()) call h5%write_string_1d('/linear/inputs', padded(this%scene%linear%inputs), &
+        err)
+      if (err%ok()) call h5%write_string_1d('/linear/outputs', &
+        padded(this%scene%linear%outputs), err)
+    end associate
+  end subroutine write_linear
+
+  !> Labels as one blank-padded character array (the writer trims them again).
+  pure function padded(labels) result(names)
+    type(label_t), intent(in) :: labels(:)
+    character(len=:), allocatable :: names(:)
+    integer :: i, n
+    n = 1
+    do i = 1, size(labels)
+      n = max(n, len(labels(i)%s))
+    end do
+    allocate(character(len=n) :: names(size(labels)))
+    do i = 1, size(labels)
+      names(i) = labels(i)%s
+    end do
+  end function padded
+end submodule analysis_run_linear

@@ -1,0 +1,143 @@
+!> Linearised state-space model at a configuration (docs/theory.md 8.2): with the state
+!> z = (dq_dy, dq_dy'), inputs u (forces or moments on node components) and outputs y (the
+!> displacements or rotations of node components),
+!>   z' = A z + B u,   y = C z + D u,
+!>   A = [0, I; -M^-1 K, -M^-1 Cd],  B = [0; M^-1 W_u^T],  C = [W_y, 0],  D = 0,
+!> M the reduced mass matrix, K the tangent stiffness (joints locked, or along the motion:
+!> dynamics_static's tangent_stiffness or motion_tangent), Cd = -d(M a)/d(q_dy') the damping
+!> and gyroscopic part (central differences in the velocity), and W the rows of DF_dy of the
+!> chosen node components (dynamics_response's node_rows: a node's rotation in space is
+!> 2 E(lambda) d(lambda), and a moment the matching generalised force).
+module dynamics_linear
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_NUMERIC
+  use core_linalg, only: lu_factor, lu_solve
+  use dynamics_system, only: dynamics_t
+  use dynamics_static, only: tangent_stiffness, motion_tangent
+  use dynamics_response, only: node_rows
+  implicit none
+  private
+  public :: linear_model_t, linearise
+
+  !> One linearisation; n_z = 2 n_dy.
+  type :: linear_model_t
+    real(wp) :: time = 0.0_wp
+    real(wp), allocatable :: a(:, :), b(:, :), c(:, :), d(:, :)
+  end type linear_model_t
+
+contains
+
+  !> The state-space model at (t, q_dy) at rest relative to the prescribed motions. `inputs`
+  !> and `outputs` hold, per column, a node's coordinates (model%node_coord column) and in
+  !> row NODE_SLOTS + 1 the component (1..3 planar x, y, phi; 1..6 spatial x, y, z and the
+  !> rotations about x, y, z).
+  subroutine linearise(dyn, t, q_dy, inputs, outputs, along_motion, lin, err)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    integer, intent(in) :: inputs(:, :), outputs(:, :)
+    logical, intent(in) :: along_motion
+    type(linear_model_t), intent(out) :: lin
+    type(error_t), intent(out) :: err
+    real(wp), allocatable :: k(:, :), m(:, :), cd(:, :), wu(:, :), wy(:, :), rhs(:, :)
+    integer, allocatable :: ipiv(:)
+    integer :: n, info, i
+    n = dyn%model%n_dy
+    allocate(k(n, n))
+    if (along_motion) then
+      call motion_tangent(dyn, t, q_dy, k, err)
+    else
+      call tangent_stiffness(dyn, t, q_dy, k, err)
+    end if
+    if (.not. err%ok()) return
+    m = dyn%mbar
+    call velocity_derivative(dyn, t, q_dy, along_motion, cd, err)
+    if (.not. err%ok()) return
+    wu = component_rows(dyn, inputs)
+    wy = component_rows(dyn, outputs)
+    ! M^-1 [K, Cd, W_u^T] with one factorisation.
+    allocate(rhs(n, 2 * n + size(inputs, 2)), ipiv(n))
+    rhs(:, 1:n) = k
+    rhs(:, n + 1:2 * n) = cd
+    rhs(:, 2 * n + 1:) = transpose(wu)
+    call lu_factor(m, ipiv, info)
+    if (info /= 0) then
+      call err%set(ERR_NUMERIC, 'linearisation: the mass matrix is singular (a dynamic ' // &
+        'coordinate without inertia)')
+      return
+    end if
+    call lu_solve(m, ipiv, rhs)
+    lin%time = t
+    allocate(lin%a(2 * n, 2 * n), source=0.0_wp)
+    do i = 1, n
+      lin%a(i, n + i) = 1.0_wp
+    end do
+    lin%a(n + 1:, 1:n) = -rhs(:, 1:n)
+    lin%a(n + 1:, n + 1:) = -rhs(:, n + 1:2 * n)
+    allocate(lin%b(2 * n, size(inputs, 2)), source=0.0_wp)
+    lin%b(n + 1:, :) = rhs(:, 2 * n + 1:)
+    allocate(lin%c(size(outputs, 2), 2 * n), source=0.0_wp)
+    lin%c(:, 1:n) = wy
+    allocate(lin%d(size(outputs, 2), size(inputs, 2)), source=0.0_wp)
+  end subroutine linearise
+
+  !> Cd = -d(Mbar a)/d(q_dy') at q_dy' = 0 by central differences (Richardson-extrapolated):
+  !> stiffness-proportional damping and, along a motion, the gyroscopic terms.
+  subroutine velocity_derivative(dyn, t, q_dy, along_motion, cd, err)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    logical, intent(in) :: along_motion
+    real(wp), allocatable, intent(out) :: cd(:, :)
+    type(error_t), intent(out) :: err
+    real(wp) :: v(size(q_dy)), a(size(q_dy)), f1(size(q_dy)), f2(size(q_dy)), h
+    logical :: was_locked
+    integer :: j
+    allocate(cd(size(q_dy), size(q_dy)))
+    was_locked = dyn%locked
+    dyn%locked = .not. along_motion
+    ! A velocity step small against the model's motion: 1e-6 of its size per second.
+    h = 1.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+    v = 0.0_wp
+    do j = 1, size(q_dy)
+      call difference(h, f1)
+      if (err%ok()) call difference(2 * h, f2)
+      if (.not. err%ok()) exit
+      cd(:, j) = -(4 * f1 - f2) / 3
+    end do
+    if (err%ok()) call dyn%evaluate_dense(t, q_dy, 0.0_wp * v, a, err)
+    dyn%locked = was_locked
+
+  contains
+
+    subroutine difference(hs, d)
+      real(wp), intent(in) :: hs
+      real(wp), intent(out) :: d(:)
+      real(wp) :: fp(size(q_dy))
+      v = 0.0_wp
+      v(j) = hs
+      call dyn%evaluate_dense(t, q_dy, v, a, err)
+      if (.not. err%ok()) return
+      fp = matmul(dyn%mbar, a)
+      v(j) = -hs
+      call dyn%evaluate_dense(t, q_dy, v, a, err)
+      if (.not. err%ok()) return
+      d = (fp - matmul(dyn%mbar, a)) / (2 * hs)
+      v(j) = 0.0_wp
+    end subroutine difference
+  end subroutine velocity_derivative
+
+  !> Rows of DF_dy of the chosen components: column i of `which` is a node's coordinates and,
+  !> last, the component number.
+  function component_rows(dyn, which) result(w)
+    type(dynamics_t), intent(in) :: dyn
+    integer, intent(in) :: which(:, :)
+    real(wp) :: w(size(which, 2), dyn%model%n_dy)
+    real(wp), allocatable :: rows(:, :)
+    integer :: i, n_comp, nc
+    n_comp = merge(6, 3, dyn%model%dim == 3)
+    nc = size(which, 1)
+    do i = 1, size(which, 2)
+      rows = node_rows(dyn, which(1:nc - 1, i), n_comp)
+      w(i, :) = rows(which(nc, i), :)
+    end do
+  end function component_rows
+end module dynamics_linear
