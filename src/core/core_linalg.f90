@@ -173,14 +173,14 @@ contains
     real(wp), intent(out) :: wr(:), wi(:)
     integer, intent(out) :: info
     real(wp), allocatable :: a(:, :), b(:, :), work(:)
-    real(wp) :: beta(size(wr)), wq(1), dummy(1, 1)
+    real(wp) :: beta(size(wr)), wq(1), vl(1, 1), vr(1, 1)
     integer :: n, i
     n = size(k, 1)
     allocate(a, source=k)
     allocate(b, source=m)
-    call dggev('N', 'N', n, a, n, b, n, wr, wi, beta, dummy, 1, dummy, 1, wq, -1, info)
+    call dggev('N', 'N', n, a, n, b, n, wr, wi, beta, vl, 1, vr, 1, wq, -1, info)
     allocate(work(int(wq(1))))
-    call dggev('N', 'N', n, a, n, b, n, wr, wi, beta, dummy, 1, dummy, 1, work, size(work), &
+    call dggev('N', 'N', n, a, n, b, n, wr, wi, beta, vl, 1, vr, 1, work, size(work), &
       info)
     do i = 1, n
       if (abs(beta(i)) > tiny(1.0_wp) * max(abs(wr(i)), abs(wi(i)), 1.0_wp)) then

@@ -10,12 +10,6 @@ contains
     type(scene_t), intent(in) :: scene
     type(error_t), intent(inout) :: err
     integer :: i
-    character(len=*), parameter :: NOT_YET = ' is not in spatial scenes yet (dimension = 3 ' // &
-      'has nodes, links, hinges, trusses, sliders, masses, forces and moments; statics with ' // &
-      'reactions and compliances, modal analysis, buckling, dynamics)'
-    if (scene%dimension == 3) then
-      if (.not. err%ok()) return
-    end if
     do i = 1, size(scene%nodes)
       associate (n => scene%nodes(i))
         call mismatch('node', n%label, n%spatial_var, n%planar_var, scene%dimension, err)

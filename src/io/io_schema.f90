@@ -156,9 +156,9 @@ module io_schema
     var_spec_t('link', 'orientation', VK_REAL_LIST, '', 'z x chord', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'section y axis direction (spatial scenes)'), &
-    var_spec_t('link', 'rotary_inertia', VK_REAL_LIST, 'kg m', 'rho (Iy+I), rho Iy, rho I', &
+    var_spec_t('link', 'rotary_inertia', VK_REAL_LIST, 'kg m', 'rho(Iy+I, Iy, I)', &
       .false., 0.0_wp, .false., huge(1.0_wp), .false., &
-      '', 'section rotary inertia per length about x, y, z (spatial)')]
+      '', 'rotary inertia per length about x, y, z (spatial)')]
   type(var_spec_t), parameter :: HINGE_VARS(9) = [ &
     var_spec_t('hinge', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &

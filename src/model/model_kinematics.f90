@@ -222,8 +222,8 @@ contains
     real(wp), allocatable :: x_last(:), q_last(:)
     type(error_t) :: sub_err
     integer :: n, i, n_solves
-    x_last = this%x
-    q_last = this%q
+    allocate(x_last, source=this%x)
+    allocate(q_last, source=this%q)
     n_solves = this%n_solves
     call kin_newton(this, model, q, err)
     if (err%ok() .or. .not. this%continuation) return
