@@ -43,7 +43,7 @@ module analysis_run
     type(dynamics_t) :: dyn
     type(modal_result_t) :: modal
     type(buckling_result_t) :: buckling
-    type(linear_model_t) :: linear              !< the &linear state-space model
+    type(linear_model_t), allocatable :: linear(:) !< the &linear state-space models
     real(wp), allocatable :: q_static(:), x_static(:, :)
     logical, allocatable :: static_stable(:)  !< per load step (dynamics_static: stable_tangent)
     real(wp), allocatable :: static_load_factor(:)  !< per load step
@@ -259,17 +259,17 @@ contains
       if (.not. err%ok()) return
       flush(output_unit)
     end if
-    if (this%scene%linear%active) then
+    ! &linear at one configuration comes before the dynamic run, along it after.
+    if (this%scene%linear%active .and. .not. allocated(this%scene%linear%times)) then
       call run_linear(this, err)
       if (.not. err%ok()) return
-      if (this%verbose) write(*, '(a,i0,a,i0,a,i0,a)') 'linear: state-space model, ', &
-        size(this%linear%a, 1), ' states, ', size(this%linear%b, 2), ' inputs, ', &
-        size(this%linear%c, 1), ' outputs'
-      flush(output_unit)
     end if
     if (this%scene%dynamic%active) then
       call run_dynamic(this, err)
+      if (.not. err%ok()) return
     end if
+    if (this%scene%linear%active .and. allocated(this%scene%linear%times)) &
+      call run_linear(this, err)
   end subroutine run_analyses
 
   subroutine run_static(this, err)

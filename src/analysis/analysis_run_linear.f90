@@ -2,7 +2,7 @@
 !> its datasets in the result file (docs/output.md).
 submodule (analysis_run) analysis_run_linear
   use model_system, only: NODE_SLOTS
-  use dynamics_linear, only: linearise
+  use dynamics_linear, only: linearise, linear_model_t
   implicit none
 
   !> Component names of inputs (forces, moments) and outputs (displacements, rotations):
@@ -18,6 +18,7 @@ contains
     type(run_t), intent(inout) :: this
     type(error_t), intent(out) :: err
     integer, allocatable :: inputs(:, :), outputs(:, :)
+    integer :: i, k
     associate (lin => this%scene%linear, spatial => this%dyn%model%dim == 3)
       if (spatial) then
         call components(this, lin%inputs, 'inputs', SPATIAL_IN, inputs, err)
@@ -28,11 +29,51 @@ contains
       end if
       if (.not. err%ok()) return
       this%dyn%kin%continuation = .true.
-      call linearise(this%dyn, lin%time, this%q_static, inputs, outputs, lin%along_motion, &
-        this%linear, err)
+      if (.not. allocated(lin%times)) then
+        allocate(this%linear(1))
+        call linearise(this%dyn, lin%time, this%q_static, inputs, outputs, lin%along_motion, &
+          this%linear(1), err)
+      else
+        call along_run(k)
+        if (err%ok()) then
+          allocate(this%linear(size(lin%times)))
+          do i = 1, size(lin%times)
+            ! The stored output sample nearest to the time asked for (its time is written).
+            k = minloc(abs(this%time - lin%times(i)), 1)
+            call linearise(this%dyn, this%time(k), this%dyn%q_hist(:, k), inputs, outputs, &
+              .true., this%linear(i), err, this%dyn%v_hist(:, k))
+            if (.not. err%ok()) exit
+          end do
+        end if
+      end if
       this%dyn%kin%continuation = .false.
-      if (.not. err%ok()) call err%prefix('linearisation: ')
+      if (.not. err%ok()) then
+        call err%prefix('linearisation: ')
+        return
+      end if
+      if (this%verbose) write(*, '(a,i0,a,i0,a,i0,a,i0,a)') 'linear: ', size(this%linear), &
+        ' state-space model(s), ', size(this%linear(1)%a, 1), ' states, ', &
+        size(this%linear(1)%b, 2), ' inputs, ', size(this%linear(1)%c, 1), ' outputs'
     end associate
+
+  contains
+
+    !> `times` needs a dynamic run of the full model that covers them.
+    subroutine along_run(k)
+      integer, intent(out) :: k
+      k = 0
+      if (.not. this%scene%dynamic%active) then
+        call err%set(ERR_INPUT, 'group &linear: variable ''times'' linearises along the ' // &
+          'dynamic run, but the scene has no &dynamic')
+      else if (this%scene%reduction%active) then
+        call err%set(ERR_INPUT, 'group &linear: variable ''times'' along a reduced run is ' // &
+          'not built yet (linearise the full model)')
+      else if (any(this%scene%linear%times < this%time(1)) .or. &
+          any(this%scene%linear%times > this%time(size(this%time)))) then
+        call err%set(ERR_INPUT, 'group &linear: variable ''times'' must lie within the ' // &
+          'dynamic run (0 to t_end)')
+      end if
+    end subroutine along_run
   end subroutine run_linear
 
   !> 'node.component' names as node coordinates plus the component number (the last dot
@@ -87,29 +128,48 @@ contains
     end do
   end function join
 
-  !> /linear: time (1), A (1, n_z, n_z), B (1, n_z, n_u), C (1, n_y, n_z), D (1, n_y, n_u)
-  !> and the names of the inputs and outputs.
+  !> /linear: time (n_lin), A (n_lin, n_z, n_z), B (n_lin, n_z, n_u), C (n_lin, n_y, n_z),
+  !> D (n_lin, n_y, n_u) and the names of the inputs and outputs.
   module subroutine write_linear(this, h5, err)
     type(run_t), intent(in) :: this
     type(h5_writer_t), intent(inout) :: h5
     type(error_t), intent(inout) :: err
-    associate (lin => this%linear)
-      call h5%write_real_1d('/linear/time', [lin%time], err, units='s')
-      ! Transposed: HDF5 shows a Fortran array's dimensions reversed.
-      if (err%ok()) call h5%write_real_3d('/linear/A', reshape(transpose(lin%a), &
-        [size(lin%a, 2), size(lin%a, 1), 1]), err)
-      if (err%ok()) call h5%write_real_3d('/linear/B', reshape(transpose(lin%b), &
-        [size(lin%b, 2), size(lin%b, 1), 1]), err)
-      if (err%ok()) call h5%write_real_3d('/linear/C', reshape(transpose(lin%c), &
-        [size(lin%c, 2), size(lin%c, 1), 1]), err)
-      if (err%ok()) call h5%write_real_3d('/linear/D', reshape(transpose(lin%d), &
-        [size(lin%d, 2), size(lin%d, 1), 1]), err)
-      if (err%ok()) call h5%write_string_1d('/linear/inputs', padded(this%scene%linear%inputs), &
-        err)
-      if (err%ok()) call h5%write_string_1d('/linear/outputs', &
-        padded(this%scene%linear%outputs), err)
-    end associate
+    integer :: i
+    call h5%write_real_1d('/linear/time', [(this%linear(i)%time, i = 1, size(this%linear))], &
+      err, units='s')
+    do i = 1, 4
+      if (err%ok()) call h5%write_real_3d('/linear/' // 'ABCD'(i:i), &
+        stacked(this%linear, i), err)
+    end do
+    if (err%ok()) call h5%write_string_1d('/linear/inputs', padded(this%scene%linear%inputs), &
+      err)
+    if (err%ok()) call h5%write_string_1d('/linear/outputs', &
+      padded(this%scene%linear%outputs), err)
+
   end subroutine write_linear
+
+  !> Matrix `which` (1 A, 2 B, 3 C, 4 D) of every model, each transposed: HDF5 shows a Fortran
+  !> array's dimensions reversed, so (n_lin, rows, columns) reads as written.
+  function stacked(models, which) result(stack)
+    type(linear_model_t), intent(in) :: models(:)
+    integer, intent(in) :: which
+    real(wp), allocatable :: stack(:, :, :)
+    integer :: k
+    do k = 1, size(models)
+      select case (which)
+      case (1); call put(models(k)%a)
+      case (2); call put(models(k)%b)
+      case (3); call put(models(k)%c)
+      case default; call put(models(k)%d)
+      end select
+    end do
+  contains
+    subroutine put(m)
+      real(wp), intent(in) :: m(:, :)
+      if (.not. allocated(stack)) allocate(stack(size(m, 2), size(m, 1), size(models)))
+      stack(:, :, k) = transpose(m)
+    end subroutine put
+  end function stacked
 
   !> Labels as one blank-padded character array (the writer trims them again).
   pure function padded(labels) result(names)

@@ -1,4 +1,5 @@
-!> Linearised state-space model at a configuration (docs/theory.md 8.2): with the state
+!> Linearised state-space model at a configuration or at a state along a run (docs/theory.md
+!> 8.2): with the state
 !> z = (dq_dy, dq_dy'), inputs u (forces or moments on node components) and outputs y (the
 !> displacements or rotations of node components),
 !>   z' = A z + B u,   y = C z + D u,
@@ -31,26 +32,31 @@ contains
   !> and `outputs` hold, per column, a node's coordinates (model%node_coord column) and in
   !> row NODE_SLOTS + 1 the component (1..3 planar x, y, phi; 1..6 spatial x, y, z and the
   !> rotations about x, y, z).
-  subroutine linearise(dyn, t, q_dy, inputs, outputs, along_motion, lin, err)
+  !> `v_dy`: a state along a dynamic run (the motions moving, the structure with this
+  !> velocity): K and Cd are then the derivatives at (q_dy, v_dy), whatever `along_motion`.
+  subroutine linearise(dyn, t, q_dy, inputs, outputs, along_motion, lin, err, v_dy)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     integer, intent(in) :: inputs(:, :), outputs(:, :)
     logical, intent(in) :: along_motion
     type(linear_model_t), intent(out) :: lin
     type(error_t), intent(out) :: err
+    real(wp), intent(in), optional :: v_dy(:)
     real(wp), allocatable :: k(:, :), m(:, :), cd(:, :), wu(:, :), wy(:, :), rhs(:, :)
     integer, allocatable :: ipiv(:)
     integer :: n, info, i
     n = dyn%model%n_dy
     allocate(k(n, n))
-    if (along_motion) then
+    if (present(v_dy)) then
+      call motion_tangent(dyn, t, q_dy, k, err, v_dy)
+    else if (along_motion) then
       call motion_tangent(dyn, t, q_dy, k, err)
     else
       call tangent_stiffness(dyn, t, q_dy, k, err)
     end if
     if (.not. err%ok()) return
     m = dyn%mbar
-    call velocity_derivative(dyn, t, q_dy, along_motion, cd, err)
+    call velocity_derivative(dyn, t, q_dy, along_motion .or. present(v_dy), cd, err, v_dy)
     if (.not. err%ok()) return
     wu = component_rows(dyn, inputs)
     wy = component_rows(dyn, outputs)
@@ -82,13 +88,15 @@ contains
 
   !> Cd = -d(Mbar a)/d(q_dy') at q_dy' = 0 by central differences (Richardson-extrapolated):
   !> stiffness-proportional damping and, along a motion, the gyroscopic terms.
-  subroutine velocity_derivative(dyn, t, q_dy, along_motion, cd, err)
+  subroutine velocity_derivative(dyn, t, q_dy, along_motion, cd, err, v_dy)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     logical, intent(in) :: along_motion
     real(wp), allocatable, intent(out) :: cd(:, :)
     type(error_t), intent(out) :: err
-    real(wp) :: v(size(q_dy)), a(size(q_dy)), f1(size(q_dy)), f2(size(q_dy)), h
+    real(wp), intent(in), optional :: v_dy(:)
+    real(wp) :: v(size(q_dy)), v_base(size(q_dy)), a(size(q_dy)), f1(size(q_dy))
+    real(wp) :: f2(size(q_dy)), h
     logical :: was_locked
     integer :: j
     allocate(cd(size(q_dy), size(q_dy)))
@@ -96,14 +104,16 @@ contains
     dyn%locked = .not. along_motion
     ! A velocity step small against the model's motion: 1e-6 of its size per second.
     h = 1.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
-    v = 0.0_wp
+    v_base = 0.0_wp
+    if (present(v_dy)) v_base = v_dy
+    v = v_base
     do j = 1, size(q_dy)
       call difference(h, f1)
       if (err%ok()) call difference(2 * h, f2)
       if (.not. err%ok()) exit
       cd(:, j) = -(4 * f1 - f2) / 3
     end do
-    if (err%ok()) call dyn%evaluate_dense(t, q_dy, 0.0_wp * v, a, err)
+    if (err%ok()) call dyn%evaluate_dense(t, q_dy, v_base, a, err)
     dyn%locked = was_locked
 
   contains
@@ -112,16 +122,16 @@ contains
       real(wp), intent(in) :: hs
       real(wp), intent(out) :: d(:)
       real(wp) :: fp(size(q_dy))
-      v = 0.0_wp
-      v(j) = hs
+      v = v_base
+      v(j) = v_base(j) + hs
       call dyn%evaluate_dense(t, q_dy, v, a, err)
       if (.not. err%ok()) return
       fp = matmul(dyn%mbar, a)
-      v(j) = -hs
+      v(j) = v_base(j) - hs
       call dyn%evaluate_dense(t, q_dy, v, a, err)
       if (.not. err%ok()) return
       d = (fp - matmul(dyn%mbar, a)) / (2 * hs)
-      v(j) = 0.0_wp
+      v = v_base
     end subroutine difference
   end subroutine velocity_derivative
 

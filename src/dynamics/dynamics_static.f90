@@ -114,17 +114,29 @@ contains
   !> like tangent_stiffness' accurate form; symmetrised (at a relative equilibrium, a = 0,
   !> the centrifugal potential makes it symmetric; the rest is difference noise). Leaves
   !> dyn%mbar at q_dy.
-  subroutine motion_tangent(dyn, t, q_dy, k, err)
+  subroutine motion_tangent(dyn, t, q_dy, k, err, v_dy)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     real(wp), intent(out) :: k(:, :)
     type(error_t), intent(out) :: err
+    !> The state's velocity (a state along a dynamic run); default 0, at rest relative to the
+    !> prescribed motions. Not symmetrised then: the state need not be an equilibrium.
+    real(wp), intent(in), optional :: v_dy(:)
     real(wp) :: h, d1(size(q_dy)), d2(size(q_dy)), v0(size(q_dy)), a(size(q_dy))
+    real(wp) :: a0(size(q_dy))
     integer :: j
     logical :: was_locked
     was_locked = dyn%locked
     dyn%locked = .false.
     v0 = 0.0_wp
+    if (present(v_dy)) v0 = v_dy
+    ! Off an equilibrium the state accelerates (a0): linearising M(q) q'' = F brings in
+    ! -(dM/dq dq) a0, so the difference is of M(q) (a(q) - a0) (= F - M a0).
+    call dyn%evaluate_dense(t, q_dy, v0, a0, err)
+    if (.not. err%ok()) then
+      dyn%locked = was_locked
+      return
+    end if
     h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
     do j = 1, size(q_dy)
       call force_difference(h, d1)
@@ -133,7 +145,7 @@ contains
       k(:, j) = -(4 * d1 - d2) / 3
     end do
     if (err%ok()) then
-      k = 0.5_wp * (k + transpose(k))
+      if (.not. present(v_dy)) k = 0.5_wp * (k + transpose(k))
       call dyn%evaluate_dense(t, q_dy, v0, a, err)
     end if
     dyn%locked = was_locked
@@ -149,11 +161,11 @@ contains
       qp(j) = q_dy(j) + hs
       call dyn%evaluate_dense(t, qp, v0, a, err)
       if (.not. err%ok()) return
-      fp = matmul(dyn%mbar, a)
+      fp = matmul(dyn%mbar, a - a0)
       qp(j) = q_dy(j) - hs
       call dyn%evaluate_dense(t, qp, v0, a, err)
       if (.not. err%ok()) return
-      d = (fp - matmul(dyn%mbar, a)) / (2 * hs)
+      d = (fp - matmul(dyn%mbar, a - a0)) / (2 * hs)
     end subroutine force_difference
   end subroutine motion_tangent
 

@@ -524,11 +524,21 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(scene_t), intent(inout) :: scene
     type(error_t), intent(inout) :: err
+    type(error_t) :: e
     scene%linear%active = .true.
     call rd_real(g, 'time', scene%linear%time, err)
     call rd_logical(g, 'along_motion', scene%linear%along_motion, err)
     call rd_labels(g, 'inputs', scene%linear%inputs, err)
     call rd_labels(g, 'outputs', scene%linear%outputs, err)
+    if (g%has('times') .and. err%ok()) then
+      call g%get_real_array('times', scene%linear%times, e)
+      if (.not. e%ok()) then
+        err = e
+      else if (g%has('time') .or. g%has('along_motion')) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''times'' (states along the ' // &
+          'dynamic run) excludes ''time'' and ''along_motion'' (one configuration)')
+      end if
+    end if
   end subroutine read_linear
 
   !> A required list of strings as labels.

@@ -353,7 +353,7 @@ module io_schema
     var_spec_t('modal', 'along_motion', VK_LOGICAL, '', '.false.', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'dynamic stiffening of the motion at time')]
-  type(var_spec_t), parameter :: LINEAR_VARS(4) = [ &
+  type(var_spec_t), parameter :: LINEAR_VARS(5) = [ &
     var_spec_t('linear', 'inputs', VK_STRING_LIST, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'inputs node.component (forces, moments)'), &
@@ -365,7 +365,10 @@ module io_schema
       '', 'time of the prescribed motions'), &
     var_spec_t('linear', 'along_motion', VK_LOGICAL, '', '.false.', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'linearise along the motion (joints moving)')]
+      '', 'linearise along the motion (joints moving)'), &
+    var_spec_t('linear', 'times', VK_REAL_LIST, 's', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'times along the dynamic run')]
   type(var_spec_t), parameter :: BUCKLING_VARS(2) = [ &
     var_spec_t('buckling', 'n_modes', VK_INT, '', '6', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
@@ -446,7 +449,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(129) = [ &
+  type(var_spec_t), parameter :: SCHEMA(130) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

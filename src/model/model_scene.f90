@@ -150,6 +150,8 @@ module model_scene
     !> Inputs 'node.component' (fx, fy, moment | fx, fy, fz, mx, my, mz) and outputs
     !> 'node.component' (x, y, phi | x, y, z, rx, ry, rz).
     type(label_t), allocatable :: inputs(:), outputs(:)
+    !> Times along the dynamic run to linearise at (not allocated: the one configuration).
+    real(wp), allocatable :: times(:)
   end type linear_rec_t
 
   type :: dynamic_rec_t
