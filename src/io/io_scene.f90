@@ -6,6 +6,7 @@
 module io_scene
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
+  use core_strings, only: int_str
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, &
@@ -215,24 +216,12 @@ contains
     call rd_real(g, 'damping', r%damping, err)
     if (g%has('Iy')) call rd_real(g, 'Iy', r%inertia_y, err)
     if (g%has('J')) call rd_real(g, 'J', r%torsion, err)
-    if (g%has('orientation') .and. err%ok()) then
-      call g%get_real_array('orientation', r%orientation, e)
-      if (.not. e%ok()) then
-        err = e
-      else if (size(r%orientation) /= 3) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''orientation'' needs 3 values')
-      end if
-    end if
-    if (g%has('rotary_inertia') .and. err%ok()) then
-      call g%get_real_array('rotary_inertia', r%rotary_inertia, e)
-      if (.not. e%ok()) then
-        err = e
-      else if (size(r%rotary_inertia) /= 3) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''rotary_inertia'' needs 3 values ' &
-          // '(per length, about the beam axis, section y and section z)')
-      else if (any(r%rotary_inertia < 0)) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''rotary_inertia'' must not be negative')
-      end if
+    call rd_fixed_list(g, 'orientation', 3, '', r%orientation, err)
+    call rd_fixed_list(g, 'rotary_inertia', 3, ' (per length, about the beam axis, section y ' &
+      // 'and section z)', r%rotary_inertia, err)
+    if (err%ok() .and. allocated(r%rotary_inertia)) then
+      if (any(r%rotary_inertia < 0)) call err%set(ERR_INPUT, g%where() // ': variable ' // &
+        '''rotary_inertia'' must not be negative')
     end if
     r%spatial_var = first_given(g, [character(len=16) :: 'Iy', 'J', 'orientation', &
       'rotary_inertia'])
@@ -258,13 +247,9 @@ contains
     call rd_real(g, 'damping', r%damping, err)
     if (err%ok() .and. r%mode == 'prescribed' .and. len(r%motion) == 0) call err%set(ERR_INPUT, &
       g%where() // ': variable ''motion'' is required when mode = ''prescribed''')
-    if (g%has('axis') .and. err%ok()) then
-      call g%get_real_array('axis', axis, e)
-      if (.not. e%ok()) then
-        err = e
-      else if (size(axis) /= 3) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''axis'' needs 3 values')
-      else if (.not. norm2(axis) > 0) then
+    call rd_fixed_list(g, 'axis', 3, '', axis, err)
+    if (err%ok() .and. allocated(axis)) then
+      if (.not. norm2(axis) > 0) then
         call err%set(ERR_INPUT, g%where() // ': variable ''axis'' must not be zero')
       else
         r%axis = axis
@@ -329,23 +314,11 @@ contains
     call rd_string(g, 'node', r%node, err)
     call rd_real(g, 'm', r%m, err)
     call rd_real(g, 'J', r%j, err)
-    if (g%has('inertia') .and. err%ok()) then
-      call g%get_real_array('inertia', r%inertia, e)
-      if (.not. e%ok()) then
-        err = e
-      else if (size(r%inertia) /= 6) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''inertia'' needs 6 values (Jxx, ' // &
-          'Jyy, Jzz, Jxy, Jxz, Jyz)')
-      end if
-    end if
-    if (g%has('rotation') .and. err%ok()) then
-      call g%get_real_array('rotation', r%rotation, e)
-      if (.not. e%ok()) then
-        err = e
-      else if (size(r%rotation) /= 4) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'' needs 4 values (an ' // &
-          'axis ax, ay, az and an angle in rad)')
-      else if (.not. norm2(r%rotation(1:3)) > 0) then
+    call rd_fixed_list(g, 'inertia', 6, ' (Jxx, Jyy, Jzz, Jxy, Jxz, Jyz)', r%inertia, err)
+    call rd_fixed_list(g, 'rotation', 4, ' (an axis ax, ay, az and an angle in rad)', &
+      r%rotation, err)
+    if (err%ok() .and. allocated(r%rotation)) then
+      if (.not. norm2(r%rotation(1:3)) > 0) then
         call err%set(ERR_INPUT, g%where() // ': variable ''rotation'': the axis is zero')
       else if (.not. allocated(r%inertia)) then
         call err%set(ERR_INPUT, g%where() // ': variable ''rotation'' turns the axes of ' // &
@@ -540,6 +513,25 @@ contains
       end if
     end if
   end subroutine read_linear
+
+  !> An optional list of exactly n reals: left unallocated when the group does not give it;
+  !> `hint` (after 'needs n values') says what they are.
+  subroutine rd_fixed_list(g, name, n, hint, values, err)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: name, hint
+    integer, intent(in) :: n
+    real(wp), allocatable, intent(out) :: values(:)
+    type(error_t), intent(inout) :: err
+    type(error_t) :: e
+    if (.not. g%has(name) .or. .not. err%ok()) return
+    call g%get_real_array(name, values, e)
+    if (.not. e%ok()) then
+      err = e
+    else if (size(values) /= n) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''' // name // ''' needs ' // &
+        int_str(n) // ' values' // hint)
+    end if
+  end subroutine rd_fixed_list
 
   !> A required list of strings as labels.
   subroutine rd_labels(g, name, labels, err)
