@@ -198,7 +198,6 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(link_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
-    type(error_t) :: e
     call rd_label(g, r%label, err)
     call rd_string(g, 'from', r%from, err)
     call rd_string(g, 'to', r%to, err)
@@ -231,7 +230,6 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(hinge_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
-    type(error_t) :: e
     real(wp), allocatable :: axis(:)
     call rd_label(g, r%label, err)
     call rd_string(g, 'node', r%node, err)
@@ -310,7 +308,6 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(mass_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
-    type(error_t) :: e
     call rd_string(g, 'node', r%node, err)
     call rd_real(g, 'm', r%m, err)
     call rd_real(g, 'J', r%j, err)
