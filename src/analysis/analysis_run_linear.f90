@@ -3,6 +3,7 @@
 submodule (analysis_run) analysis_run_linear
   use model_system, only: NODE_SLOTS
   use dynamics_linear, only: linearise, linear_model_t
+  use elements_base, only: MODE_DYNAMIC
   implicit none
 
   !> Component names of inputs (forces, moments) and outputs (displacements, rotations):
@@ -95,6 +96,12 @@ contains
       comp = names(i)%s(dot + 1:)
       in = 0
       if (dot > 1) in = this%dyn%model%find_node(node)
+      if (in == 0 .and. dot > 1) then
+        ! A hinge: 'label.torque' (input) or 'label.angle' (output) of its dynamic angle.
+        call joint_coordinate(this, node, comp, var, which(:, i), err)
+        if (.not. err%ok()) return
+        if (which(1, i) > 0) cycle
+      end if
       if (in == 0) then
         call err%set(ERR_INPUT, where // '''' // names(i)%s // ''' is not node.component ' // &
           'with a node of the model')
@@ -117,6 +124,37 @@ contains
       end if
     end do
   end subroutine components
+
+  !> The dynamic coordinate of hinge `label`'s angle, for the component 'torque' (an input)
+  !> or 'angle' (an output): which = (index in q_dy, 0, ..., 0). which(1) = 0 when `label` is
+  !> no hinge; an error when it is one but the component or its mode class does not fit.
+  subroutine joint_coordinate(this, label, comp, var, which, err)
+    type(run_t), intent(in) :: this
+    character(len=*), intent(in) :: label, comp, var
+    integer, intent(out) :: which(:)
+    type(error_t), intent(inout) :: err
+    character(len=6) :: want
+    integer :: iel, h
+    which = 0
+    if (.not. any([(this%scene%hinges(h)%label == label, h = 1, size(this%scene%hinges))])) &
+      return
+    associate (m => this%dyn%model)
+      do iel = 1, m%n_elements
+        if (m%elements(iel)%e%label /= label) cycle
+        want = merge('torque', 'angle ', var == 'inputs')
+        if (comp /= trim(want)) then
+          call err%set(ERR_INPUT, 'group &linear: variable ''' // var // ''': ''' // label // &
+            '.' // comp // ''': a hinge''s ' // var // ' component is ''' // trim(want) // '''')
+        else if (m%modes(m%mode_first(iel))%class /= MODE_DYNAMIC) then
+          call err%set(ERR_INPUT, 'group &linear: variable ''' // var // ''': hinge ''' // &
+            label // ''' is not dynamic (its angle is no degree of freedom)')
+        else
+          which(1) = m%modes(m%mode_first(iel))%q - m%n_rh
+        end if
+        return
+      end do
+    end associate
+  end subroutine joint_coordinate
 
   pure function join(words) result(s)
     character(len=*), intent(in) :: words(:)

@@ -136,7 +136,8 @@ contains
   end subroutine velocity_derivative
 
   !> Rows of DF_dy of the chosen components: column i of `which` is a node's coordinates and,
-  !> last, the component number.
+  !> last, the component number; or, with component 0, a dynamic coordinate's index in q_dy
+  !> first (a joint's angle or torque).
   function component_rows(dyn, which) result(w)
     type(dynamics_t), intent(in) :: dyn
     integer, intent(in) :: which(:, :)
@@ -146,6 +147,12 @@ contains
     n_comp = merge(6, 3, dyn%model%dim == 3)
     nc = size(which, 1)
     do i = 1, size(which, 2)
+      if (which(nc, i) == 0) then
+        ! A dynamic coordinate itself (a joint angle, or the torque on it): q_dy(which(1, i)).
+        w(i, :) = 0.0_wp
+        w(i, which(1, i)) = 1.0_wp
+        cycle
+      end if
       rows = node_rows(dyn, which(1:nc - 1, i), n_comp)
       w(i, :) = rows(which(nc, i), :)
     end do

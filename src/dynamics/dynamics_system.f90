@@ -273,6 +273,9 @@ contains
       this%q_now = q
       this%qd_now = qd
       this%sigma_now = this%stresses(q, qd)
+      ! An actuator's torque works on its mode like a stress of the opposite sign.
+      if (size(m%actuator_element) > 0) this%sigma_now = this%sigma_now - &
+        this%load_factor * m%actuator_forces(t)
     end associate
   end subroutine dyn_prepare
 

@@ -239,6 +239,8 @@ contains
       call only_with(g, ['motion'], r%mode == 'prescribed', 'with mode = ''prescribed''', err)
       call only_with(g, ['stiffness', 'damping  '], r%mode == 'dynamic' .or. &
         r%mode == 'elastic', 'with mode = ''dynamic'' or ''elastic''', err)
+      call only_with(g, ['torque    ', 'torque_law'], r%mode == 'dynamic', &
+        'with mode = ''dynamic'' (the driven angle is a degree of freedom)', err)
     end if
     call rd_string(g, 'motion', r%motion, err)
     call rd_real(g, 'stiffness', r%stiffness, err)
@@ -253,6 +255,8 @@ contains
         r%axis = axis
       end if
     end if
+    call rd_real(g, 'torque', r%torque, err)
+    call rd_string(g, 'torque_law', r%torque_law, err)
     call rd_choice(g, 'type', r%joint_type, err)
     if (err%ok() .and. r%joint_type /= 'revolute' .and. r%mode == 'prescribed') &
       call err%set(ERR_INPUT, g%where() // ': variable ''type'': a ' // r%joint_type // &

@@ -160,6 +160,15 @@ module model_build
       integer, intent(in) :: node_x(:), node_rot(:)
       type(error_t), intent(inout) :: err
     end subroutine add_node_inputs
+    !> The hinge's actuator (`torque`, `torque_law`) on element `element`, if it has one.
+    module subroutine add_hinge_actuator(scene, model, r, where, element, err)
+      type(scene_t), intent(in) :: scene
+      type(model_t), intent(inout) :: model
+      type(hinge_rec_t), intent(in) :: r
+      character(len=*), intent(in) :: where
+      integer, intent(in) :: element
+      type(error_t), intent(inout) :: err
+    end subroutine add_hinge_actuator
     !> The node `label` names, or an input error naming `where` and `var`.
     module subroutine require_node(scene, label, where, var, idx, err)
       type(scene_t), intent(in) :: scene
@@ -251,6 +260,10 @@ contains
       do h = 1, size(scene%forces)
         if (allocated(scene%forces(h)%time_law)) used(i) = used(i) .or. &
           scene%forces(h)%time_law == scene%motions(i)%label
+      end do
+      do h = 1, size(scene%hinges)
+        if (allocated(scene%hinges(h)%torque_law)) used(i) = used(i) .or. &
+          scene%hinges(h)%torque_law == scene%motions(i)%label
       end do
     end do
     grew = .true.

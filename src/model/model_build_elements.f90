@@ -138,6 +138,8 @@ contains
         hinge%k = r%stiffness
         hinge%damping = r%damping
         idx = model%add_element(hinge, [im])
+        call add_hinge_actuator(scene, model, r, where, idx, err)
+        if (.not. err%ok()) return
       end associate
     end do
   end procedure add_hinges

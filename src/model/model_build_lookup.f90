@@ -131,6 +131,22 @@ contains
     end do
   end procedure add_node_inputs
 
+  module procedure add_hinge_actuator
+    integer :: im
+    im = 0
+    if (allocated(r%torque_law)) then
+      if (len(r%torque_law) > 0) then
+        im = motion_index(scene, r%torque_law)
+        if (im == 0) then
+          call err%set(ERR_INPUT, where // ': variable ''torque_law'': motion ''' // &
+            r%torque_law // ''' is not defined (no &motion with that label)')
+          return
+        end if
+      end if
+    end if
+    if (r%torque /= 0 .or. im > 0) call model%add_actuator(element, r%torque, im)
+  end procedure add_hinge_actuator
+
   module procedure require_node
     idx = node_index(scene, label)
     if (idx == 0) call err%set(ERR_INPUT, where // ': variable ''' // var // &

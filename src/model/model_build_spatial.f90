@@ -200,6 +200,8 @@ contains
           hinge%mode_class = [c, MODE_RIGID, MODE_RIGID]
         end select
         idx = model%add_element(hinge, [im, 0, 0])
+        call add_hinge_actuator(scene, model, r, where, idx, err)
+        if (.not. err%ok()) return
       end associate
     end do
   end subroutine add_spatial_hinges

@@ -70,6 +70,10 @@ module model_scene
     !> two rotations normal to `axis` take it, the one about it is rigid) or spherical (all
     !> three take it).
     character(len=:), allocatable :: joint_type
+    !> An actuator on a dynamic hinge: a torque [N m], constant or times the value of the
+    !> motion `torque_law` ('' none).
+    real(wp) :: torque = 0.0_wp
+    character(len=:), allocatable :: torque_law
     character(len=:), allocatable :: spatial_var
   end type hinge_rec_t
 

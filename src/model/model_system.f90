@@ -59,6 +59,11 @@ module model_system
     !> moment_motion(k): the motion whose value scales moment k in time (0: constant).
     real(wp), allocatable :: moment(:, :)
     integer, allocatable :: moment_lambda(:), moment_motion(:)
+    !> Actuators: a torque (force) actuator_value(k) [N m, N], constant or times the value of
+    !> motion actuator_motion(k), on the first mode of element actuator_element(k), a dynamic
+    !> mode (a driven joint whose angle is a degree of freedom).
+    integer, allocatable :: actuator_element(:), actuator_motion(:)
+    real(wp), allocatable :: actuator_value(:)
     integer, allocatable :: load_motion(:)
     !> 2 (planar) or 3 (spatial): the components of gravity the elements see.
     integer :: dim = 2
@@ -95,6 +100,8 @@ module model_system
     procedure :: add_timed_load => model_add_timed_load
     procedure :: add_moment => model_add_moment
     procedure :: moment_at => model_moment_at
+    procedure :: add_actuator => model_add_actuator
+    procedure :: actuator_forces => model_actuator_forces
     procedure :: loads_at => model_loads_at
     procedure :: add_node_label => model_add_node_label
     procedure :: find_node => model_find_node
@@ -119,6 +126,7 @@ contains
     allocate(this%node_label(0), this%node_coord(NODE_SLOTS, 0))
     allocate(this%load_shape(0, 0), this%load_motion(0))
     allocate(this%moment(3, 0), this%moment_lambda(0), this%moment_motion(0))
+    allocate(this%actuator_element(0), this%actuator_motion(0), this%actuator_value(0))
     this%finalized = .false.
   end subroutine model_init
 
@@ -192,6 +200,33 @@ contains
     this%moment_lambda = [this%moment_lambda, first_lambda]
     this%moment_motion = [this%moment_motion, law]
   end subroutine model_add_moment
+
+  !> An actuator: `value` (constant, or times motion `motion` > 0) on the first mode of
+  !> element `element`, which must be dynamic (finalize checks).
+  subroutine model_add_actuator(this, element, value, motion)
+    class(model_t), intent(inout) :: this
+    integer, intent(in) :: element, motion
+    real(wp), intent(in) :: value
+    this%actuator_element = [this%actuator_element, element]
+    this%actuator_value = [this%actuator_value, value]
+    this%actuator_motion = [this%actuator_motion, motion]
+  end subroutine model_add_actuator
+
+  !> The actuators' generalised forces on q_dy at time t (their work on the modes they drive).
+  pure function model_actuator_forces(this, t) result(f)
+    class(model_t), intent(in) :: this
+    real(wp), intent(in) :: t
+    real(wp) :: f(this%n_dy), p, pd, pdd
+    integer :: k, j
+    f = 0.0_wp
+    do k = 1, size(this%actuator_element)
+      p = 1.0_wp
+      if (this%actuator_motion(k) > 0) call this%motions(this%actuator_motion(k))%eval(t, p, pd, &
+        pdd)
+      j = this%modes(this%mode_first(this%actuator_element(k)))%q - this%n_rh
+      f(j) = f(j) + p * this%actuator_value(k)
+    end do
+  end function model_actuator_forces
 
   !> Moment k at time t [N m, global frame].
   pure function model_moment_at(this, k, t) result(m)
@@ -293,6 +328,20 @@ contains
       call err%set(ERR_MODEL, 'model: gravity has a z component in a planar model (dim = 2)')
       return
     end if
+    do k = 1, size(this%actuator_element)
+      i = this%actuator_element(k)
+      if (i < 1 .or. i > this%n_elements) then
+        call err%set(ERR_MODEL, 'model: an actuator on element ' // int_str(i) // &
+          ', which the model does not have')
+        return
+      end if
+      if (this%modes(this%mode_first(i))%class /= MODE_DYNAMIC) then
+        call err%set(ERR_MODEL, 'model: the actuator on ''' // this%elements(i)%e%label // &
+          ''' drives a mode that is not dynamic (a driven joint''s angle must be a degree ' // &
+          'of freedom)')
+        return
+      end if
+    end do
     do k = 1, size(this%moment_lambda)
       i = this%moment_lambda(k)
       if (i < 1 .or. i + 3 > this%n_x) then

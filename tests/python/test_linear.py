@@ -188,3 +188,67 @@ def test_bad_linear_times(tmp_path, extra, fragments):
             f"&linear inputs = 'tip.fy', outputs = 'tip.y', {extra}\n")
     proc, out = run_scene(tmp_path, text)
     assert_clean_error(proc, out, *fragments)
+
+
+ARM = ("&node label = 'base', x = 0, y = 0, fixed = .true. /\n"
+       "&node label = 'tip', x = 1, y = 0 /\n"
+       "&link label = 'arm', from = 'base', to = 'tip', n_elements = 2, E = 7.0e10,\n"
+       "      A = 1.0e-4, I = 1.0e-9, rho = 2700, elongation = 'rigid', bending = 'rigid' /\n")
+J_ARM = 2700 * 1.0e-4 / 3   # rho A L^3 / 3 of the rigid 1 m link about its hinge
+
+
+@pytest.mark.parametrize("law,scale", [("", 1.0),
+                                       (", torque_law = 'half'", 0.5)])
+def test_actuator_spins_a_rigid_link(tmp_path, law, scale):
+    """A hinge driven by a constant actuator torque (mode 'dynamic', no spring, no gravity)
+    turns the rigid link by tau t^2 / (2 J), J = rho A L^3/3; a torque_law scales it (a
+    'constant' law of 0.5). Observed 3e-12; bound 1e-8 (BDF at rtol 1e-9)."""
+    tau = 0.09
+    motion = "&motion label = 'half', law = 'constant', start = 0.5 /\n" if law else ""
+    text = (ARM + f"&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic', "
+            f"torque = {tau}{law} /\n" + motion +
+            "&dynamic t_end = 1.0, output_dt = 0.01, integrator = 'bdf', rtol = 1e-9,"
+            " atol = 1e-12 /\n&output nodes = 'tip' /\n")
+    proc, out = run_scene(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    assert "warning" not in proc.stderr
+    with h5py.File(out) as f:
+        t = f["time"][:]
+        tip = f["nodes/tip/position"][:]
+    angle = np.unwrap(np.arctan2(tip[:, 1], tip[:, 0]))
+    assert np.allclose(angle, scale * tau * t**2 / (2 * J_ARM), rtol=0, atol=1e-8)
+
+
+def test_linear_joint_inputs_and_outputs(tmp_path):
+    """A rigid link on a hinge spring k: from (torque, tip force) to (angle, tip y) the DC
+    gain is [[1, L], [L, L^2]] / k and A's eigenvalues are +-i sqrt(k/J) (bound 1e-9)."""
+    k = 5.0
+    text = (ARM + f"&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic', "
+            f"stiffness = {k} /\n"
+            "&linear inputs = 'j1.torque', 'tip.fy', outputs = 'j1.angle', 'tip.y' /\n")
+    proc, out = run_scene(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    lin = model(out)
+    gain = -lin["C"] @ np.linalg.solve(lin["A"], lin["B"])
+    assert np.allclose(gain, np.ones((2, 2)) / k, rtol=1e-9, atol=0)
+    ev = np.linalg.eigvals(lin["A"])
+    assert np.allclose(np.sort(ev.imag), [-math.sqrt(k / J_ARM), math.sqrt(k / J_ARM)],
+                       rtol=1e-9, atol=0)
+
+
+@pytest.mark.parametrize("hinge,linear,fragments", [
+    ("mode = 'rigid', torque = 1.0", "", ["&hinge", "'torque'", "dynamic"]),
+    ("mode = 'dynamic', torque = 1.0, torque_law = 'nope'", "",
+     ["&hinge 'j1'", "'torque_law'", "'nope'", "not defined"]),
+    ("mode = 'dynamic', stiffness = 5.0",
+     "&linear inputs = 'j1.angle', outputs = 'tip.y' /\n", ["&linear", "'j1.angle'", "'torque'"]),
+    ("mode = 'prescribed', motion = 'm'",
+     "&motion label = 'm', law = 'constant', start = 0 /\n"
+     "&linear inputs = 'tip.fy', outputs = 'j1.angle' /\n", ["&linear", "'j1'", "not dynamic"]),
+])
+def test_bad_actuator_and_joint_io(tmp_path, hinge, linear, fragments):
+    # A flexible link, so that a model with a prescribed hinge still has degrees of freedom.
+    text = (ARM.replace("bending = 'rigid'", "bending = 'dynamic'")
+            + f"&hinge label = 'j1', node = 'base', link = 'arm', {hinge} /\n" + linear)
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, *fragments)
