@@ -239,7 +239,8 @@ contains
       call only_with(g, ['motion'], r%mode == 'prescribed', 'with mode = ''prescribed''', err)
       call only_with(g, ['stiffness', 'damping  '], r%mode == 'dynamic' .or. &
         r%mode == 'elastic', 'with mode = ''dynamic'' or ''elastic''', err)
-      call only_with(g, ['torque    ', 'torque_law'], r%mode == 'dynamic', &
+      call only_with(g, ['torque    ', 'torque_law', 'kp        ', 'kd        ', &
+        'reference '], r%mode == 'dynamic', &
         'with mode = ''dynamic'' (the driven angle is a degree of freedom)', err)
     end if
     call rd_string(g, 'motion', r%motion, err)
@@ -257,6 +258,15 @@ contains
     end if
     call rd_real(g, 'torque', r%torque, err)
     call rd_string(g, 'torque_law', r%torque_law, err)
+    call rd_real(g, 'kp', r%kp, err)
+    call rd_real(g, 'kd', r%kd, err)
+    call rd_string(g, 'reference', r%reference, err)
+    if (err%ok() .and. (g%has('kd') .or. g%has('reference') .or. g%has('kp')) .and. &
+        .not. r%kp > 0) call err%set(ERR_INPUT, g%where() // ': a PD controller (''kp'', ' // &
+      '''kd'', ''reference'') needs ''kp'' > 0')
+    if (err%ok() .and. g%has('kp') .and. (g%has('stiffness') .or. g%has('damping'))) &
+      call err%set(ERR_INPUT, g%where() // ': ''kp'' and ''kd'' are the controlled hinge''s ' &
+      // 'stiffness and damping: give them, or ''stiffness'' and ''damping'', not both')
     call rd_choice(g, 'type', r%joint_type, err)
     if (err%ok() .and. r%joint_type /= 'revolute' .and. r%mode == 'prescribed') &
       call err%set(ERR_INPUT, g%where() // ': variable ''type'': a ' // r%joint_type // &

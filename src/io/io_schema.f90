@@ -159,7 +159,7 @@ module io_schema
     var_spec_t('link', 'rotary_inertia', VK_REAL_LIST, 'kg m', 'rho(Iy+I, Iy, I)', &
       .false., 0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'rotary inertia per length about x, y, z (spatial)')]
-  type(var_spec_t), parameter :: HINGE_VARS(11) = [ &
+  type(var_spec_t), parameter :: HINGE_VARS(14) = [ &
     var_spec_t('hinge', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'name'), &
@@ -192,7 +192,16 @@ module io_schema
       '', 'actuator torque on a dynamic hinge'), &
     var_spec_t('hinge', 'torque_law', VK_STRING, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'motion whose value scales torque')]
+      '', 'motion whose value scales torque'), &
+    var_spec_t('hinge', 'kp', VK_REAL, 'N m/rad', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'PD controller: proportional gain'), &
+    var_spec_t('hinge', 'kd', VK_REAL, 'N m s/rad', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'PD controller: derivative gain'), &
+    var_spec_t('hinge', 'reference', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'PD controller: motion of the reference angle')]
   type(var_spec_t), parameter :: TRUSS_VARS(9) = [ &
     var_spec_t('truss', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -455,7 +464,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(132) = [ &
+  type(var_spec_t), parameter :: SCHEMA(135) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

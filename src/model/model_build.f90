@@ -264,6 +264,8 @@ contains
       do h = 1, size(scene%hinges)
         if (allocated(scene%hinges(h)%torque_law)) used(i) = used(i) .or. &
           scene%hinges(h)%torque_law == scene%motions(i)%label
+        if (allocated(scene%hinges(h)%reference)) used(i) = used(i) .or. &
+          scene%hinges(h)%reference == scene%motions(i)%label
       end do
     end do
     grew = .true.

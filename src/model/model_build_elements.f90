@@ -137,6 +137,11 @@ contains
         hinge%mode_class = [c]
         hinge%k = r%stiffness
         hinge%damping = r%damping
+        if (r%kp > 0) then
+          ! A PD controller: its gains are the hinge's spring and damping (add_hinge_actuator).
+          hinge%k = r%kp
+          hinge%damping = r%kd / r%kp
+        end if
         idx = model%add_element(hinge, [im])
         call add_hinge_actuator(scene, model, r, where, idx, err)
         if (.not. err%ok()) return

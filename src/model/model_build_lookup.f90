@@ -145,6 +145,22 @@ contains
       end if
     end if
     if (r%torque /= 0 .or. im > 0) call model%add_actuator(element, r%torque, im)
+    if (r%kp > 0) then
+      im = 0
+      if (allocated(r%reference)) then
+        if (len(r%reference) > 0) then
+          im = motion_index(scene, r%reference)
+          if (im == 0) then
+            call err%set(ERR_INPUT, where // ': variable ''reference'': motion ''' // &
+              r%reference // ''' is not defined (no &motion with that label)')
+            return
+          end if
+        end if
+      end if
+      ! The PD law kp (r - e) + kd (r' - e'): the hinge's spring and damping take -kp e -
+      ! kd e', the actuator kp r + kd r' (with no reference, r = 0).
+      if (im > 0) call model%add_actuator(element, r%kp, im, r%kd)
+    end if
   end procedure add_hinge_actuator
 
   module procedure require_node

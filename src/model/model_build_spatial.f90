@@ -189,6 +189,11 @@ contains
         hinge%dofs = [(node_lam(in) + m, m = 0, 3), (hinge_lam(h) + m, m = 0, 3)]
         hinge%k = r%stiffness
         hinge%damping = r%damping
+        if (r%kp > 0) then
+          ! A PD controller: its gains are the hinge's spring and damping (add_hinge_actuator).
+          hinge%k = r%kp
+          hinge%damping = r%kd / r%kp
+        end if
         select case (r%joint_type)
         case ('universal')
           hinge%mode_class = [MODE_RIGID, c, c]

@@ -74,6 +74,11 @@ module model_scene
     !> motion `torque_law` ('' none).
     real(wp) :: torque = 0.0_wp
     character(len=:), allocatable :: torque_law
+    !> A PD controller on a dynamic hinge: torque kp (r - e) + kd (r' - e') tracking the
+    !> motion `reference` ('' none): a spring kp with damping kd/kp and the actuator
+    !> kp r + kd r'.
+    real(wp) :: kp = 0.0_wp, kd = 0.0_wp
+    character(len=:), allocatable :: reference
     character(len=:), allocatable :: spatial_var
   end type hinge_rec_t
 

@@ -59,11 +59,12 @@ module model_system
     !> moment_motion(k): the motion whose value scales moment k in time (0: constant).
     real(wp), allocatable :: moment(:, :)
     integer, allocatable :: moment_lambda(:), moment_motion(:)
-    !> Actuators: a torque (force) actuator_value(k) [N m, N], constant or times the value of
-    !> motion actuator_motion(k), on the first mode of element actuator_element(k), a dynamic
-    !> mode (a driven joint whose angle is a degree of freedom).
+    !> Actuators on the first mode of element actuator_element(k), a dynamic mode (a driven
+    !> joint whose angle is a degree of freedom): the torque (force) actuator_value(k) [N m, N],
+    !> constant or times the value p of motion actuator_motion(k), plus actuator_rate(k) times
+    !> its rate p' (a PD controller's feed of its reference).
     integer, allocatable :: actuator_element(:), actuator_motion(:)
-    real(wp), allocatable :: actuator_value(:)
+    real(wp), allocatable :: actuator_value(:), actuator_rate(:)
     integer, allocatable :: load_motion(:)
     !> 2 (planar) or 3 (spatial): the components of gravity the elements see.
     integer :: dim = 2
@@ -126,7 +127,8 @@ contains
     allocate(this%node_label(0), this%node_coord(NODE_SLOTS, 0))
     allocate(this%load_shape(0, 0), this%load_motion(0))
     allocate(this%moment(3, 0), this%moment_lambda(0), this%moment_motion(0))
-    allocate(this%actuator_element(0), this%actuator_motion(0), this%actuator_value(0))
+    allocate(this%actuator_element(0), this%actuator_motion(0), this%actuator_value(0), &
+      this%actuator_rate(0))
     this%finalized = .false.
   end subroutine model_init
 
@@ -203,12 +205,17 @@ contains
 
   !> An actuator: `value` (constant, or times motion `motion` > 0) on the first mode of
   !> element `element`, which must be dynamic (finalize checks).
-  subroutine model_add_actuator(this, element, value, motion)
+  subroutine model_add_actuator(this, element, value, motion, rate)
     class(model_t), intent(inout) :: this
     integer, intent(in) :: element, motion
     real(wp), intent(in) :: value
+    real(wp), intent(in), optional :: rate
+    real(wp) :: d
+    d = 0.0_wp
+    if (present(rate)) d = rate
     this%actuator_element = [this%actuator_element, element]
     this%actuator_value = [this%actuator_value, value]
+    this%actuator_rate = [this%actuator_rate, d]
     this%actuator_motion = [this%actuator_motion, motion]
   end subroutine model_add_actuator
 
@@ -221,10 +228,11 @@ contains
     f = 0.0_wp
     do k = 1, size(this%actuator_element)
       p = 1.0_wp
+      pd = 0.0_wp
       if (this%actuator_motion(k) > 0) call this%motions(this%actuator_motion(k))%eval(t, p, pd, &
         pdd)
       j = this%modes(this%mode_first(this%actuator_element(k)))%q - this%n_rh
-      f(j) = f(j) + p * this%actuator_value(k)
+      f(j) = f(j) + p * this%actuator_value(k) + pd * this%actuator_rate(k)
     end do
   end function model_actuator_forces
 

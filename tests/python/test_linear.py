@@ -252,3 +252,42 @@ def test_bad_actuator_and_joint_io(tmp_path, hinge, linear, fragments):
             + f"&hinge label = 'j1', node = 'base', link = 'arm', {hinge} /\n" + linear)
     proc, out = run_scene(tmp_path, text)
     assert_clean_error(proc, out, *fragments)
+
+
+def test_pd_controlled_joint_step_response(tmp_path):
+    """A PD controller on the hinge of a rigid link (kp, kd, tracking a reference step of
+    0.2 rad held from t = 0) gives the closed-form second-order response
+    J e'' + kd e' + kp e = kp r: r (1 - exp(-zeta wn t)(cos wd t + zeta/sqrt(1 - zeta^2)
+    sin wd t)), wn = sqrt(kp/J), zeta = kd/(2 sqrt(kp J)); observed 5e-9 rad, bound 1e-7."""
+    kp, kd, ref = 2.0, 0.1, 0.2
+    text = (ARM + f"&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic', "
+            f"kp = {kp}, kd = {kd}, reference = 'r' /\n"
+            f"&motion label = 'r', law = 'constant', start = {ref} /\n"
+            "&dynamic t_end = 2.0, output_dt = 0.01, integrator = 'bdf', rtol = 1e-9,"
+            " atol = 1e-12 /\n&output nodes = 'tip' /\n")
+    proc, out = run_scene(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    assert "warning" not in proc.stderr
+    with h5py.File(out) as f:
+        t = f["time"][:]
+        tip = f["nodes/tip/position"][:]
+    angle = np.unwrap(np.arctan2(tip[:, 1], tip[:, 0]))
+    wn, zeta = math.sqrt(kp / J_ARM), kd / (2 * math.sqrt(kp * J_ARM))
+    wd = wn * math.sqrt(1 - zeta**2)
+    closed = ref * (1 - np.exp(-zeta * wn * t) * (np.cos(wd * t)
+                                                   + zeta / math.sqrt(1 - zeta**2) * np.sin(wd * t)))
+    assert np.max(np.abs(angle - closed)) < 1e-7
+
+
+@pytest.mark.parametrize("hinge,fragments", [
+    ("mode = 'dynamic', kd = 0.1, reference = 'r'", ["&hinge", "'kp'"]),
+    ("mode = 'dynamic', kp = 2.0, stiffness = 1.0, reference = 'r'", ["&hinge", "not both"]),
+    ("mode = 'dynamic', kp = -2.0, reference = 'r'", ["&hinge", "'kp'"]),
+    ("mode = 'dynamic', kp = 2.0, reference = 'nope'", ["&hinge 'j1'", "'reference'", "'nope'"]),
+    ("mode = 'rigid', kp = 2.0, reference = 'r'", ["&hinge", "'kp'", "dynamic"]),
+])
+def test_bad_pd_controller(tmp_path, hinge, fragments):
+    text = (ARM + f"&hinge label = 'j1', node = 'base', link = 'arm', {hinge} /\n"
+            "&motion label = 'r', law = 'constant', start = 0.2 /\n")
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, *fragments)
