@@ -160,6 +160,15 @@ module model_build
       integer, intent(in) :: node_x(:), node_rot(:)
       type(error_t), intent(inout) :: err
     end subroutine add_node_inputs
+    !> The motion a variable `var` of a group names (`label`; not allocated or '': none, 0);
+    !> an input error naming `where` and `var` if no &motion has that label.
+    module subroutine motion_named(scene, label, where, var, im, err)
+      type(scene_t), intent(in) :: scene
+      character(len=:), allocatable, intent(in) :: label
+      character(len=*), intent(in) :: where, var
+      integer, intent(out) :: im
+      type(error_t), intent(inout) :: err
+    end subroutine motion_named
     !> The hinge's actuator (`torque`, `torque_law`) on element `element`, if it has one.
     module subroutine add_hinge_actuator(scene, model, r, where, element, err)
       type(scene_t), intent(in) :: scene

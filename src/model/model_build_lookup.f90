@@ -26,12 +26,7 @@ contains
   end procedure motion_index
 
   module procedure time_law_of
-    im = 0
-    if (.not. allocated(r%time_law)) return
-    if (len(r%time_law) == 0) return
-    im = motion_index(scene, r%time_law)
-    if (im == 0) call err%set(ERR_INPUT, where // ': variable ''time_law'': motion ''' // &
-      r%time_law // ''' is not defined (no &motion with that label)')
+    call motion_named(scene, r%time_law, where, 'time_law', im, err)
   end procedure time_law_of
 
   module procedure check_hinge_ends
@@ -131,32 +126,23 @@ contains
     end do
   end procedure add_node_inputs
 
+  module procedure motion_named
+    im = 0
+    if (.not. allocated(label)) return
+    if (len(label) == 0) return
+    im = motion_index(scene, label)
+    if (im == 0) call err%set(ERR_INPUT, where // ': variable ''' // var // ''': motion ''' // &
+      label // ''' is not defined (no &motion with that label)')
+  end procedure motion_named
+
   module procedure add_hinge_actuator
     integer :: im
-    im = 0
-    if (allocated(r%torque_law)) then
-      if (len(r%torque_law) > 0) then
-        im = motion_index(scene, r%torque_law)
-        if (im == 0) then
-          call err%set(ERR_INPUT, where // ': variable ''torque_law'': motion ''' // &
-            r%torque_law // ''' is not defined (no &motion with that label)')
-          return
-        end if
-      end if
-    end if
+    call motion_named(scene, r%torque_law, where, 'torque_law', im, err)
+    if (.not. err%ok()) return
     if (r%torque /= 0 .or. im > 0) call model%add_actuator(element, r%torque, im)
     if (r%kp > 0) then
-      im = 0
-      if (allocated(r%reference)) then
-        if (len(r%reference) > 0) then
-          im = motion_index(scene, r%reference)
-          if (im == 0) then
-            call err%set(ERR_INPUT, where // ': variable ''reference'': motion ''' // &
-              r%reference // ''' is not defined (no &motion with that label)')
-            return
-          end if
-        end if
-      end if
+      call motion_named(scene, r%reference, where, 'reference', im, err)
+      if (.not. err%ok()) return
       ! The PD law kp (r - e) + kd (r' - e'): the hinge's spring and damping take -kp e -
       ! kd e', the actuator kp r + kd r' (with no reference, r = 0).
       if (im > 0) call model%add_actuator(element, r%kp, im, r%kd)

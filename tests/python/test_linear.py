@@ -197,6 +197,21 @@ ARM = ("&node label = 'base', x = 0, y = 0, fixed = .true. /\n"
 J_ARM = 2700 * 1.0e-4 / 3   # rho A L^3 / 3 of the rigid 1 m link about its hinge
 
 
+RUN = ("&dynamic t_end = {t_end}, output_dt = 0.01, integrator = 'bdf', rtol = 1e-9,"
+       " atol = 1e-12 /\n&output nodes = 'tip' /\n")
+
+
+def arm_angle(tmp_path, text):
+    """Run a scene of the rigid arm; times and the arm's angle (from its tip)."""
+    proc, out = run_scene(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    assert "warning" not in proc.stderr
+    with h5py.File(out) as f:
+        t = f["time"][:]
+        tip = f["nodes/tip/position"][:]
+    return t, np.unwrap(np.arctan2(tip[:, 1], tip[:, 0]))
+
+
 @pytest.mark.parametrize("law,scale", [("", 1.0),
                                        (", torque_law = 'half'", 0.5)])
 def test_actuator_spins_a_rigid_link(tmp_path, law, scale):
@@ -205,17 +220,9 @@ def test_actuator_spins_a_rigid_link(tmp_path, law, scale):
     'constant' law of 0.5). Observed 3e-12; bound 1e-8 (BDF at rtol 1e-9)."""
     tau = 0.09
     motion = "&motion label = 'half', law = 'constant', start = 0.5 /\n" if law else ""
-    text = (ARM + f"&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic', "
-            f"torque = {tau}{law} /\n" + motion +
-            "&dynamic t_end = 1.0, output_dt = 0.01, integrator = 'bdf', rtol = 1e-9,"
-            " atol = 1e-12 /\n&output nodes = 'tip' /\n")
-    proc, out = run_scene(tmp_path, text)
-    assert proc.returncode == 0, proc.stderr
-    assert "warning" not in proc.stderr
-    with h5py.File(out) as f:
-        t = f["time"][:]
-        tip = f["nodes/tip/position"][:]
-    angle = np.unwrap(np.arctan2(tip[:, 1], tip[:, 0]))
+    t, angle = arm_angle(tmp_path, ARM + "&hinge label = 'j1', node = 'base', link = 'arm', "
+                         f"mode = 'dynamic', torque = {tau}{law} /\n" + motion
+                         + RUN.format(t_end=1.0))
     assert np.allclose(angle, scale * tau * t**2 / (2 * J_ARM), rtol=0, atol=1e-8)
 
 
@@ -260,18 +267,10 @@ def test_pd_controlled_joint_step_response(tmp_path):
     J e'' + kd e' + kp e = kp r: r (1 - exp(-zeta wn t)(cos wd t + zeta/sqrt(1 - zeta^2)
     sin wd t)), wn = sqrt(kp/J), zeta = kd/(2 sqrt(kp J)); observed 5e-9 rad, bound 1e-7."""
     kp, kd, ref = 2.0, 0.1, 0.2
-    text = (ARM + f"&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic', "
-            f"kp = {kp}, kd = {kd}, reference = 'r' /\n"
-            f"&motion label = 'r', law = 'constant', start = {ref} /\n"
-            "&dynamic t_end = 2.0, output_dt = 0.01, integrator = 'bdf', rtol = 1e-9,"
-            " atol = 1e-12 /\n&output nodes = 'tip' /\n")
-    proc, out = run_scene(tmp_path, text)
-    assert proc.returncode == 0, proc.stderr
-    assert "warning" not in proc.stderr
-    with h5py.File(out) as f:
-        t = f["time"][:]
-        tip = f["nodes/tip/position"][:]
-    angle = np.unwrap(np.arctan2(tip[:, 1], tip[:, 0]))
+    t, angle = arm_angle(tmp_path, ARM + "&hinge label = 'j1', node = 'base', link = 'arm', "
+                         f"mode = 'dynamic', kp = {kp}, kd = {kd}, reference = 'r' /\n"
+                         f"&motion label = 'r', law = 'constant', start = {ref} /\n"
+                         + RUN.format(t_end=2.0))
     wn, zeta = math.sqrt(kp / J_ARM), kd / (2 * math.sqrt(kp * J_ARM))
     wd = wn * math.sqrt(1 - zeta**2)
     closed = ref * (1 - np.exp(-zeta * wn * t) * (np.cos(wd * t)
