@@ -189,26 +189,31 @@ contains
     end associate
   end subroutine write_static
 
+  !> Output node i's x, y, z (0 in the plane) rows of nodal shapes (n_x, n_shapes).
+  function node_shape(this, i, node_shapes) result(shape)
+    type(run_t), intent(in) :: this
+    integer, intent(in) :: i
+    real(wp), intent(in) :: node_shapes(:, :)
+    real(wp) :: shape(3, size(node_shapes, 2))
+    integer :: ic(NODE_SLOTS)
+    ic = this%dyn%model%node_coord(:, this%dyn%model%find_node(this%scene%output_nodes(i)%s))
+    shape(1, :) = node_shapes(ic(1), :)
+    shape(2, :) = node_shapes(ic(2), :)
+    shape(3, :) = 0.0_wp
+    if (ic(4) > 0) shape(3, :) = node_shapes(ic(4), :)
+  end function node_shape
+
   subroutine write_modal(this, h5, err)
     type(run_t), intent(in) :: this
     type(h5_writer_t), intent(inout) :: h5
     type(error_t), intent(inout) :: err
-    real(wp), allocatable :: shape(:, :)
-    integer :: i, in, ic(NODE_SLOTS)
+    integer :: i
     call h5%write_real_1d('/modal/frequency_hz', this%modal%frequency_hz, err, units='Hz')
     if (err%ok()) call h5%write_real_2d('/modal/shapes', this%modal%shapes, err)
     if (err%ok()) call h5%write_real_attr('/modal', 'time', this%scene%modal%time, err)
     do i = 1, size(this%scene%output_nodes)
-      in = this%dyn%model%find_node(this%scene%output_nodes(i)%s)
-      ic = this%dyn%model%node_coord(:, in)
-      allocate(shape(3, size(this%modal%frequency_hz)))
-      shape(1, :) = this%modal%node_shapes(ic(1), :, 1)
-      shape(2, :) = this%modal%node_shapes(ic(2), :, 1)
-      shape(3, :) = 0.0_wp
-      if (ic(4) > 0) shape(3, :) = this%modal%node_shapes(ic(4), :, 1)
       if (err%ok()) call h5%write_real_2d('/modal/nodes/' // this%scene%output_nodes(i)%s // &
-        '/shape', shape, err, units='m')
-      deallocate(shape)
+        '/shape', node_shape(this, i, this%modal%node_shapes(:, :, 1)), err, units='m')
     end do
   end subroutine write_modal
 
@@ -217,24 +222,16 @@ contains
     type(run_t), intent(in) :: this
     type(h5_writer_t), intent(inout) :: h5
     type(error_t), intent(inout) :: err
-    real(wp), allocatable :: shape(:, :)
-    integer :: i, in, ic(NODE_SLOTS)
+    integer :: i
     associate (b => this%buckling)
       call h5%write_real_1d('/buckling/load_factor', b%load_factor, err)
       if (err%ok()) call h5%write_real_2d('/buckling/shapes', b%shapes, err)
       if (err%ok()) call h5%write_real_attr('/buckling', 'reference_load_factor', &
         this%scene%buckling%load_factor, err)
       if (err%ok()) call h5%write_int_attr('/buckling', 'n_negative', b%n_negative, err)
-      allocate(shape(3, size(b%load_factor)))
       do i = 1, size(this%scene%output_nodes)
-        in = this%dyn%model%find_node(this%scene%output_nodes(i)%s)
-        ic = this%dyn%model%node_coord(:, in)
-        shape(1, :) = b%node_shapes(ic(1), :)
-        shape(2, :) = b%node_shapes(ic(2), :)
-        shape(3, :) = 0.0_wp
-        if (ic(4) > 0) shape(3, :) = b%node_shapes(ic(4), :)
         if (err%ok()) call h5%write_real_2d('/buckling/nodes/' // &
-          this%scene%output_nodes(i)%s // '/shape', shape, err)
+          this%scene%output_nodes(i)%s // '/shape', node_shape(this, i, b%node_shapes), err)
       end do
     end associate
   end subroutine write_buckling

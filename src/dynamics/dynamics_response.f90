@@ -136,14 +136,9 @@ contains
     integer, intent(in) :: ic(:), n_comp
     real(wp) :: g(n_comp)
     integer :: a, il
-    integer, parameter :: PLANAR(3) = [1, 2, 3], SPATIAL(3) = [1, 2, 4]
     g = 0.0_wp
     do a = 1, 3
-      if (n_comp == 3) then
-        if (ic(PLANAR(a)) > 0) g(a) = r(ic(PLANAR(a)))
-      else
-        if (ic(SPATIAL(a)) > 0) g(a) = r(ic(SPATIAL(a)))
-      end if
+      if (first_three(ic, a, n_comp) > 0) g(a) = r(first_three(ic, a, n_comp))
     end do
     if (n_comp == 6) then
       il = ic(5)
@@ -158,15 +153,11 @@ contains
     integer, intent(in) :: ic(:), n_comp
     real(wp) :: d(n_comp, dyn%model%n_dy)
     integer :: a, nr, il
-    integer, parameter :: PLANAR(3) = [1, 2, 3], SPATIAL(3) = [1, 2, 4]
     nr = dyn%model%n_rh
     d = 0.0_wp
     do a = 1, 3
-      if (n_comp == 3) then
-        if (ic(PLANAR(a)) > 0) d(a, :) = dyn%kin%df(ic(PLANAR(a)), nr + 1:)
-      else
-        if (ic(SPATIAL(a)) > 0) d(a, :) = dyn%kin%df(ic(SPATIAL(a)), nr + 1:)
-      end if
+      if (first_three(ic, a, n_comp) > 0) d(a, :) = dyn%kin%df(first_three(ic, a, n_comp), &
+        nr + 1:)
     end do
     if (n_comp == 6) then
       il = ic(5)
@@ -174,6 +165,14 @@ contains
         dyn%kin%df(il:il + 3, nr + 1:))
     end if
   end function node_rows
+
+  !> Coordinate of a node's component a = 1..3: x, y, phi in the plane (n_comp = 3), x, y, z
+  !> in space (node_coord rows 1, 2, 4); 0 if the node has none.
+  pure integer function first_three(ic, a, n_comp) result(idx)
+    integer, intent(in) :: ic(:), a, n_comp
+    integer, parameter :: PLANAR(3) = [1, 2, 3], SPATIAL(3) = [1, 2, 4]
+    idx = merge(ic(PLANAR(a)), ic(SPATIAL(a)), n_comp == 3)
+  end function first_three
 
   subroutine compliance(dyn, k, coords, n_comp, c, err)
     type(dynamics_t), intent(in) :: dyn

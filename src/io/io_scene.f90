@@ -544,17 +544,21 @@ contains
     end if
   end subroutine rd_fixed_list
 
-  !> A required list of strings as labels.
-  subroutine rd_labels(g, name, labels, err)
+  !> A list of strings as labels; `optional_list`: missing is the empty list (else an error).
+  subroutine rd_labels(g, name, labels, err, optional_list)
     type(nml_group_t), intent(inout) :: g
     character(len=*), intent(in) :: name
     type(label_t), allocatable, intent(out) :: labels(:)
     type(error_t), intent(inout) :: err
+    logical, intent(in), optional :: optional_list
     type(string_t), allocatable :: values(:)
     type(error_t) :: e
     integer :: i
     allocate(labels(0))
     if (.not. err%ok()) return
+    if (present(optional_list)) then
+      if (optional_list .and. .not. g%has(name)) return
+    end if
     call g%get_string_array(name, values, e)
     if (.not. e%ok()) then
       err = e
@@ -663,30 +667,9 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(scene_t), intent(inout) :: scene
     type(error_t), intent(inout) :: err
-    type(string_t), allocatable :: labels(:), none(:)
-    type(error_t) :: e
-    integer :: i
     if (.not. err%ok()) return
-    if (g%has('nodes')) then
-      call g%get_string_array('nodes', labels, e)
-      if (.not. e%ok()) then
-        err = e
-        return
-      end if
-      allocate(scene%output_nodes(size(labels)))
-      do i = 1, size(labels)
-        scene%output_nodes(i)%s = labels(i)%s
-      end do
-    end if
-    allocate(none(0))
-    call g%get_string_array('compliance_nodes', labels, e, default=none)
-    if (.not. e%ok()) then
-      err = e
-      return
-    end if
-    allocate(scene%compliance_nodes(size(labels)))
-    do i = 1, size(labels)
-      scene%compliance_nodes(i)%s = labels(i)%s
-    end do
+    ! Without 'nodes' output_nodes stays unallocated: every node.
+    if (g%has('nodes')) call rd_labels(g, 'nodes', scene%output_nodes, err)
+    call rd_labels(g, 'compliance_nodes', scene%compliance_nodes, err, optional_list=.true.)
   end subroutine read_output
 end module io_scene

@@ -169,6 +169,12 @@ module model_build
       integer, intent(out) :: im
       type(error_t), intent(inout) :: err
     end subroutine motion_named
+    !> A hinge's spring [N m/rad] and damping time constant [s]: `stiffness` and `damping`,
+    !> or those of its PD controller, kp and kd/kp (add_hinge_actuator adds the rest).
+    pure module function hinge_spring(r) result(spring)
+      type(hinge_rec_t), intent(in) :: r
+      real(wp) :: spring(2)
+    end function hinge_spring
     !> The hinge's actuator (`torque`, `torque_law`) on element `element`, if it has one.
     module subroutine add_hinge_actuator(scene, model, r, where, element, err)
       type(scene_t), intent(in) :: scene

@@ -125,6 +125,7 @@ contains
 
   module procedure add_hinges
     type(hinge_t) :: hinge
+    real(wp) :: spring(2)
     integer :: h, in, im, idx, c
     do h = 1, size(scene%hinges)
       associate (r => scene%hinges(h), where => 'group &hinge ''' // scene%hinges(h)%label // '''')
@@ -135,13 +136,9 @@ contains
         hinge%dofs = [node_rotation(scene, model, b, in), b%hinge_rot(h)]
         hinge%phi0 = model%x0(hinge%dofs)
         hinge%mode_class = [c]
-        hinge%k = r%stiffness
-        hinge%damping = r%damping
-        if (r%kp > 0) then
-          ! A PD controller: its gains are the hinge's spring and damping (add_hinge_actuator).
-          hinge%k = r%kp
-          hinge%damping = r%kd / r%kp
-        end if
+        spring = hinge_spring(r)
+        hinge%k = spring(1)
+        hinge%damping = spring(2)
         idx = model%add_element(hinge, [im])
         call add_hinge_actuator(scene, model, r, where, idx, err)
         if (.not. err%ok()) return

@@ -135,6 +135,11 @@ contains
       label // ''' is not defined (no &motion with that label)')
   end procedure motion_named
 
+  module procedure hinge_spring
+    spring = [r%stiffness, r%damping]
+    if (r%kp > 0) spring = [r%kp, r%kd / r%kp]
+  end procedure hinge_spring
+
   module procedure add_hinge_actuator
     integer :: im
     call motion_named(scene, r%torque_law, where, 'torque_law', im, err)

@@ -176,6 +176,7 @@ contains
     integer, intent(in) :: hinge_lam(:)
     type(error_t), intent(inout) :: err
     type(hinge3d_t) :: hinge
+    real(wp) :: spring(2)
     integer :: h, in, c, im, idx, m
     do h = 1, size(scene%hinges)
       associate (r => scene%hinges(h), where => 'group &hinge ''' // scene%hinges(h)%label // '''')
@@ -187,20 +188,16 @@ contains
           scene%nodes(in)%fix_rotation)
         hinge%label = r%label
         hinge%dofs = [(node_lam(in) + m, m = 0, 3), (hinge_lam(h) + m, m = 0, 3)]
-        hinge%k = r%stiffness
-        hinge%damping = r%damping
-        if (r%kp > 0) then
-          ! A PD controller: its gains are the hinge's spring and damping (add_hinge_actuator).
-          hinge%k = r%kp
-          hinge%damping = r%kd / r%kp
-        end if
+        spring = hinge_spring(r)
+        hinge%k = spring(1)
+        hinge%damping = spring(2)
         select case (r%joint_type)
         case ('universal')
           hinge%mode_class = [MODE_RIGID, c, c]
-          hinge%k_b = r%stiffness
+          hinge%k_b = spring(1)
         case ('spherical')
           hinge%mode_class = [c, c, c]
-          hinge%k_b = r%stiffness
+          hinge%k_b = spring(1)
         case default
           hinge%mode_class = [c, MODE_RIGID, MODE_RIGID]
         end select

@@ -222,11 +222,16 @@ contains
     real(wp), allocatable :: x_last(:), q_last(:)
     type(error_t) :: sub_err
     integer :: n, i, n_solves
+    ! The usual path (every evaluation of a run) copies nothing.
+    if (.not. this%continuation) then
+      call kin_newton(this, model, q, err)
+      return
+    end if
     allocate(x_last, source=this%x)
     allocate(q_last, source=this%q)
     n_solves = this%n_solves
     call kin_newton(this, model, q, err)
-    if (err%ok() .or. .not. this%continuation) return
+    if (err%ok()) return
     n = 1
     do while (n < 64)
       n = 2 * n

@@ -322,9 +322,10 @@ contains
     idx = 0
   end function model_find_node
 
-  !> What a spatial model built through the API must get right: dim 2 or 3, no z gravity in
-  !> the plane, and every moment on the four Euler parameters of one node.
-  subroutine check_spatial(this, err)
+  !> What a model built through the API must get right: dim 2 or 3, no z gravity in the
+  !> plane, every moment on the four Euler parameters of one node, every actuator on a
+  !> dynamic mode.
+  subroutine check_consistency(this, err)
     type(model_t), intent(in) :: this
     type(error_t), intent(inout) :: err
     integer :: k, i
@@ -367,7 +368,7 @@ contains
         return
       end if
     end do
-  end subroutine check_spatial
+  end subroutine check_consistency
 
   !> Number the calculable coordinates, kinematic rows and generalised coordinates, and check
   !> that there are as many kinematic equations as calculable coordinates.
@@ -377,7 +378,7 @@ contains
     integer :: i, m, n_rows, iq_rh, iq_dy
     logical :: calculable(this%n_x)
     if (.not. allocated(this%modes)) allocate(this%modes(0), this%mode_first(0))
-    call check_spatial(this, err)
+    call check_consistency(this, err)
     if (.not. err%ok()) return
     calculable = .not. this%fixed .and. this%coord_input == 0
     allocate(this%calc_index(this%n_x))
