@@ -26,6 +26,7 @@ module analysis_run
   use core_strings, only: int_str, real_str, approx_str
   use reduction_basis, only: basis_spec_t, basis_t, compute_basis
   use reduction_system, only: reduced_t
+  use dynamics_control, only: controlled_t
   use reduction_adaptive, only: update_spec_t, update_log_t, integrate_reduced
   implicit none
   private
@@ -52,6 +53,8 @@ module analysis_run
     real(wp), allocatable :: time(:)
     type(integrator_stats_t) :: stats
     type(reduced_t), allocatable :: red       !< a reduced dynamic analysis
+    !> The plant with its controllers (&controller) during a dynamic run, and their history.
+    type(controlled_t) :: control
     type(basis_t) :: initial_basis            !< its basis at the start
     type(update_log_t) :: updates             !< its basis checks and updates
     !> Why integrator = 'auto' took the integrator it did, when the run chose ('' otherwise)
@@ -191,8 +194,8 @@ contains
     type(run_t), intent(inout) :: this
     character(len=:), allocatable :: labels
     labels = unused_motions(this%scene)
-    if (len(labels) > 0) call add_warning(this, this%file%path // ': no &hinge uses the ' // &
-      '&motion ' // labels // ' (prescribe it with motion = ''...'')')
+    if (len(labels) > 0) call add_warning(this, this%file%path // ': no &hinge or ' // &
+      '&controller uses the &motion ' // labels // ' (prescribe it with motion = ''...'')')
   end subroutine warn_unused_motions
 
   !> Refuse, before the run, histories that would not fit in memory or steps that would not end
@@ -384,7 +387,7 @@ contains
     type(run_t), intent(inout), target :: this
     type(error_t), intent(out) :: err
     type(integrator_options_t) :: opts
-    real(wp), allocatable :: breaks(:), v0(:)
+    real(wp), allocatable :: breaks(:), v0(:), q_aug(:), v_aug(:)
     integer :: i
     this%time = output_times(this%scene%dynamic)
     opts = integrator_options(this%scene%dynamic)
@@ -396,6 +399,8 @@ contains
     do i = 1, this%dyn%model%n_motions
       breaks = [breaks, this%dyn%model%motions(i)%breakpoints()]
     end do
+    breaks = [breaks, sample_times(this%dyn%model, this%time(1), this%time(size(this%time)))]
+    this%dyn%controls_on = size(this%dyn%model%controllers) > 0
     if (this%scene%reduction%active) then
       call run_reduced(this, opts, breaks, err)
     else
@@ -403,8 +408,16 @@ contains
       call this%dyn%allocate_history(size(this%time))
       allocate(v0(this%dyn%model%n_dy))
       v0 = 0.0_wp
-      call integrate(this%dyn, opts, this%time, this%q_static, v0, breaks, this%stats, err)
+      if (this%dyn%controls_on) then
+        call this%control%init(this%dyn, this%dyn, this%dyn%model%n_dy, this%time(1))
+        call this%control%allocate_history(size(this%time))
+        call this%control%state(this%q_static, v0, q_aug, v_aug)
+        call integrate(this%control, opts, this%time, q_aug, v_aug, breaks, this%stats, err)
+      else
+        call integrate(this%dyn, opts, this%time, this%q_static, v0, breaks, this%stats, err)
+      end if
     end if
+    this%dyn%controls_on = .false.
     if (.not. err%ok() .and. allocated(this%dyn%last_error%message)) &
       err%message = err%message // ' (' // this%dyn%last_error%message // ')'
     if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a,i0,a)') 'dynamic: ', &
@@ -541,6 +554,23 @@ contains
       'reduction: ', this%updates%n_updates, ' basis updates in ', size(this%updates%time), &
       ' checks'
   end subroutine run_reduced
+
+  !> The sampling times of the sampled controllers within (t0, t_end], t0 + i T: breakpoints
+  !> where the integrator restarts with the new held outputs.
+  function sample_times(model, t0, t_end) result(times)
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: t0, t_end
+    real(wp), allocatable :: times(:)
+    integer :: k, i, n
+    allocate(times(0))
+    do k = 1, size(model%controllers)
+      associate (c => model%controllers(k))
+        if (.not. c%sampled()) cycle
+        n = floor((t_end - t0) / c%period)
+        times = [times, [(t0 + i * c%period, i = 1, n)]]
+      end associate
+    end do
+  end function sample_times
 
   function prescribed_names(model) result(names)
     type(model_t), intent(in) :: model

@@ -249,7 +249,25 @@ contains
       units='J')
     if (err%ok()) call h5%write_real_1d('/energy/potential', this%dyn%energy_hist(2, :), err, &
       units='J')
+    if (err%ok()) call write_controllers(this, h5, err)
   end subroutine write_dynamic
+
+  !> /controllers/<label>/error (e = r - y) and /input (the applied u) at the output times.
+  subroutine write_controllers(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    integer :: k
+    associate (c => this%dyn%model%controllers)
+      if (.not. allocated(this%control%error_hist)) return
+      do k = 1, size(c)
+        if (err%ok()) call h5%write_real_1d('/controllers/' // c(k)%label // '/error', &
+          this%control%error_hist(k, :), err)
+        if (err%ok()) call h5%write_real_1d('/controllers/' // c(k)%label // '/input', &
+          this%control%u_hist(k, :), err)
+      end do
+    end associate
+  end subroutine write_controllers
 
   !> The reduced analysis: basis, reduced coordinates, error indicator and basis updates.
   subroutine write_reduction(this, h5, err)

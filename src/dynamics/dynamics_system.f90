@@ -56,6 +56,15 @@ module dynamics_system
     ! History at the output times (filled by record):
     real(wp), allocatable :: x_hist(:, :), q_hist(:, :), v_hist(:, :), energy_hist(:, :)
     type(error_t) :: last_error               !< why the last callback returned non-zero
+    !> Feedback controllers (model%controllers) act only where a run switches them on (dynamic
+    !> runs); statics, modal analysis and &linear see the open-loop plant.
+    logical :: controls_on = .false.
+    !> Controller states, set by the run (dynamics_control) before each evaluation: the
+    !> integral of each controller's error and the held output of sampled ones.
+    real(wp), allocatable :: ctrl_integral(:), ctrl_held(:)
+    !> Of the last evaluation, per controller: the error r - y, its rate, the unlimited
+    !> output of the law and the applied one (limited, or held).
+    real(wp), allocatable :: ctrl_error(:), ctrl_error_rate(:), ctrl_law(:), ctrl_u(:)
   contains
     procedure :: init => dyn_init
     procedure :: prescribed => dyn_prescribed
@@ -83,7 +92,18 @@ module dynamics_system
     procedure :: structural_action => dyn_structural_action
     procedure :: elastic_forces => dyn_elastic_forces
     procedure :: allocate_history => dyn_allocate_history
+    procedure :: apply_controllers => dyn_apply_controllers
   end type dynamics_t
+
+  interface
+    !> The controllers' outputs at time t from the state of the evaluation under way (q_now,
+    !> qd_now, xd_now, kin%x): applied as nodal forces (nodal_force) or on their dynamic
+    !> modes (sigma_now), with their errors kept in ctrl_*. dynamics_system_control.
+    module subroutine dyn_apply_controllers(this, t)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: t
+    end subroutine dyn_apply_controllers
+  end interface
 
 contains
 
@@ -98,6 +118,7 @@ contains
     type(error_t), intent(out) :: err
     character(len=*), intent(in), optional :: linear_solver
     real(wp) :: a(model%n_dy)
+    integer :: i
     this%model = model
     this%load = model%force
     where (model%coord_kind == COORD_X) this%load = this%load + model%lumped * model%gravity(1)
@@ -115,6 +136,14 @@ contains
     if (allocated(this%mbar)) deallocate(this%mbar)
     this%n_evals = 0
     allocate(this%gen_force(model%n_dy))
+    associate (nc => size(model%controllers))
+      this%ctrl_integral = [(0.0_wp, i = 1, nc)]
+      this%ctrl_held = this%ctrl_integral
+      this%ctrl_error = this%ctrl_integral
+      this%ctrl_error_rate = this%ctrl_integral
+      this%ctrl_law = this%ctrl_integral
+      this%ctrl_u = this%ctrl_integral
+    end associate
     call this%evaluate(t0, q_dy0, 0.0_wp * q_dy0, a, err)
     if (.not. err%ok()) call err%prefix('initial configuration: ')
   end subroutine dyn_init
@@ -276,6 +305,7 @@ contains
       ! An actuator's torque works on its mode like a stress of the opposite sign.
       if (size(m%actuator_element) > 0) this%sigma_now = this%sigma_now - &
         this%load_factor * m%actuator_forces(t)
+      if (this%controls_on) call this%apply_controllers(t)
     end associate
   end subroutine dyn_prepare
 

@@ -35,6 +35,8 @@ contains
     if (.not. err%ok()) return
     q = q0
     v = v0
+    call breakpoint_reached(sys, t_out(1), q, v, err)
+    if (.not. err%ok()) return
     call record_output(sys, 1, t_out(1), q, v, err)
     if (.not. err%ok() .or. size(t_out) == 1) return
 
@@ -88,6 +90,8 @@ contains
         end if
         t = bps(ib)
         ib = ib + 1
+        call breakpoint_reached(sys, t, q, v, err)
+        if (.not. err%ok()) return
         call stepper%restart(sys, t, q, v, segment_end(bps, ib, t_end), &
           nearest(t, 1.0_wp), eval_limit(bps, ib), err)
         if (.not. err%ok()) return
@@ -124,24 +128,61 @@ contains
     if (ib <= size(bps)) eval_limit = nearest(bps(ib), -1.0_wp)
   end function eval_limit
 
-  !> The breakpoints strictly inside (t_first, t_last), sorted, without repeats.
+  !> The breakpoints strictly inside (t_first, t_last), sorted, without repeats. A sampled
+  !> controller brings one per sample: sorted by merging runs, O(n log n).
   pure function breakpoints_inside(breakpoints, t_first, t_last) result(bps)
     real(wp), intent(in) :: breakpoints(:), t_first, t_last
     real(wp), allocatable :: bps(:)
-    real(wp) :: rest(size(breakpoints)), lowest
-    integer :: n, m
-
-    n = count(breakpoints > t_first .and. breakpoints < t_last)
-    rest(1:n) = pack(breakpoints, breakpoints > t_first .and. breakpoints < t_last)
-    allocate(bps(0))
-    do while (n > 0)
-      lowest = minval(rest(1:n))
-      bps = [bps, lowest]
-      m = count(rest(1:n) > lowest)
-      rest(1:m) = pack(rest(1:n), rest(1:n) > lowest)
-      n = m
+    real(wp), allocatable :: a(:), b(:)
+    integer :: n, width, lo, mid, hi, i, j, k
+    a = pack(breakpoints, breakpoints > t_first .and. breakpoints < t_last)
+    n = size(a)
+    allocate(b(n))
+    width = 1
+    do while (width < n)
+      do lo = 1, n, 2 * width
+        mid = min(lo + width, n + 1)
+        hi = min(lo + 2 * width, n + 1)
+        i = lo
+        j = mid
+        do k = lo, hi - 1
+          if (j >= hi) then
+            b(k) = a(i); i = i + 1
+          else if (i < mid) then
+            if (a(i) <= a(j)) then
+              b(k) = a(i); i = i + 1
+            else
+              b(k) = a(j); j = j + 1
+            end if
+          else
+            b(k) = a(j); j = j + 1
+          end if
+        end do
+      end do
+      a = b
+      width = 2 * width
     end do
+    allocate(bps(n))
+    k = 0
+    do i = 1, n
+      if (k > 0) then
+        if (a(i) == bps(k)) cycle
+      end if
+      k = k + 1
+      bps(k) = a(i)
+    end do
+    bps = bps(1:k)
   end function breakpoints_inside
+
+  subroutine breakpoint_reached(sys, t, q, v, err)
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: t, q(:), v(:)
+    type(error_t), intent(inout) :: err
+    integer :: status
+    call sys%at_breakpoint(t, q, v, status)
+    if (status /= 0) call err%set(ERR_NUMERIC, 'integrate: the system failed at the ' // &
+      'breakpoint t = ' // real_str(t) // ' (status ' // int_str(status) // ')')
+  end subroutine breakpoint_reached
 
   subroutine record_output(sys, k, t, q, v, err)
     class(ode2_system_t), intent(inout) :: sys

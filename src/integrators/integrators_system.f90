@@ -35,6 +35,10 @@ module integrators_system
     !> the weighted RMS over q, weights atol + rtol max(|q_old|, |q_new|); a model may measure
     !> the error where its user looks instead (flexmor's models: on the nodal coordinates).
     procedure :: error_norm => system_error_norm
+    !> Called by the driver at the first time and at every breakpoint, before the method
+    !> (re)starts there: a system whose equations change at given times (a sampled
+    !> controller's hold) updates itself. Status as for accel. The default does nothing.
+    procedure :: at_breakpoint => system_at_breakpoint
   end type ode2_system_t
 
   abstract interface
@@ -121,6 +125,13 @@ contains
     dx = 0.0_wp
     status = -1
   end subroutine system_newton_correction
+
+  subroutine system_at_breakpoint(this, t, q, v, status)
+    class(ode2_system_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    integer, intent(out) :: status
+    status = 0
+  end subroutine system_at_breakpoint
 
   subroutine system_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
     class(ode2_system_t), intent(inout) :: this

@@ -12,7 +12,7 @@ module io_scene
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, &
     rd_classes, rd_label, only_with
   use model_scene, only: auto_integrator, scene_t, node_rec_t, link_rec_t, hinge_rec_t, &
-    truss_rec_t, mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t, label_t
+    truss_rec_t, mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t, controller_rec_t, label_t
   use motion_law, only: table_problem
   use io_table, only: read_table_csv, relative_to
   implicit none
@@ -63,6 +63,7 @@ contains
     allocate(scene%hinges(file%count('hinge')), scene%trusses(file%count('truss')))
     allocate(scene%masses(file%count('mass')), scene%forces(file%count('force')))
     allocate(scene%motions(file%count('motion')), scene%sliders(file%count('slider')))
+    allocate(scene%controllers(file%count('controller')))
     do i = 1, size(file%groups)
       associate (g => file%groups(i))
         select case (g%name)
@@ -75,6 +76,7 @@ contains
         case ('mass'); call read_mass(g, scene%masses(g%occurrence), err)
         case ('force'); call read_force(g, scene%forces(g%occurrence), err)
         case ('motion'); call read_motion(g, scene%motions(g%occurrence), err)
+        case ('controller'); call read_controller(g, scene%controllers(g%occurrence), err)
         case ('static'); call read_static(g, scene, err)
         case ('modal'); call read_modal(g, scene, err)
         case ('buckling'); call read_buckling(g, scene, err)
@@ -503,6 +505,27 @@ contains
     call rd_int(g, 'n_modes', scene%buckling%n_modes, err)
     call rd_real(g, 'load_factor', scene%buckling%load_factor, err)
   end subroutine read_buckling
+
+  subroutine read_controller(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(controller_rec_t), intent(out) :: r
+    type(error_t), intent(inout) :: err
+    call rd_label(g, r%label, err)
+    call rd_string(g, 'actuator', r%actuator, err)
+    call rd_string(g, 'measure', r%measure, err)
+    call rd_string(g, 'reference', r%reference, err)
+    call rd_real(g, 'kp', r%kp, err)
+    call rd_real(g, 'ki', r%ki, err)
+    call rd_real(g, 'kd', r%kd, err)
+    call rd_real(g, 'period', r%period, err)
+    call rd_real(g, 'u_min', r%u_min, err, -huge(1.0_wp))
+    call rd_real(g, 'u_max', r%u_max, err, huge(1.0_wp))
+    if (.not. err%ok()) return
+    if (.not. (r%kp > 0 .or. r%ki > 0 .or. r%kd > 0)) call err%set(ERR_INPUT, g%where() // &
+      ': a controller needs a gain: ''kp'', ''ki'' or ''kd'' > 0')
+    if (err%ok() .and. .not. r%u_min < r%u_max) call err%set(ERR_INPUT, g%where() // &
+      ': ''u_min'' must be below ''u_max''')
+  end subroutine read_controller
 
   subroutine read_linear(g, scene, err)
     type(nml_group_t), intent(inout) :: g

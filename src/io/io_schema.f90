@@ -17,10 +17,10 @@ module io_schema
     VK_REAL_LIST = 6, VK_STRING_LIST = 7, VK_CHOICE_LIST = 8
 
   !> Groups of a scene file, and those that may appear at most once.
-  character(len=9), parameter :: SCENE_GROUPS(16) = [character(len=9) :: 'scene', 'node', &
-    'link', 'hinge', 'truss', 'slider', 'mass', 'force', 'motion', 'static', 'modal', &
-    'buckling', 'linear', 'dynamic', 'reduction', 'output']
-  character(len=9), parameter :: SINGLE_GROUPS(8) = [character(len=9) :: 'scene', 'static', &
+  character(len=10), parameter :: SCENE_GROUPS(17) = [character(len=10) :: 'scene', 'node', &
+    'link', 'hinge', 'truss', 'slider', 'mass', 'force', 'motion', 'controller', 'static', &
+    'modal', 'buckling', 'linear', 'dynamic', 'reduction', 'output']
+  character(len=10), parameter :: SINGLE_GROUPS(8) = [character(len=10) :: 'scene', 'static', &
     'modal', 'buckling', 'linear', 'dynamic', 'reduction', 'output']
 
   !> One variable. `default` is the text shown in docs ('' with `required`; a word such as
@@ -336,6 +336,37 @@ module io_schema
     var_spec_t('motion', 'file', VK_STRING, '', 'law', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'table CSV file')]
+  type(var_spec_t), parameter :: CONTROLLER_VARS(10) = [ &
+    var_spec_t('controller', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'name (output /controllers/<label>)'), &
+    var_spec_t('controller', 'actuator', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hinge.torque, truss.force or node.fx (...)'), &
+    var_spec_t('controller', 'measure', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hinge.angle, truss.elongation or node.x (...)'), &
+    var_spec_t('controller', 'reference', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion of the reference (none: 0)'), &
+    var_spec_t('controller', 'kp', VK_REAL, 'u/y', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'proportional gain'), &
+    var_spec_t('controller', 'ki', VK_REAL, 'u/(y s)', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'integral gain'), &
+    var_spec_t('controller', 'kd', VK_REAL, 'u s/y', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'derivative gain'), &
+    var_spec_t('controller', 'period', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'sampling period with zero-order hold (0: none)'), &
+    var_spec_t('controller', 'u_min', VK_REAL, 'N (N m)', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'lower limit of the actuator'), &
+    var_spec_t('controller', 'u_max', VK_REAL, 'N (N m)', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'upper limit of the actuator')]
   type(var_spec_t), parameter :: STATIC_VARS(7) = [ &
     var_spec_t('static', 'n_steps', VK_INT, '', '10', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
@@ -464,9 +495,9 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(135) = [ &
+  type(var_spec_t), parameter :: SCHEMA(145) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
-    MASS_VARS, FORCE_VARS, MOTION_VARS, &
+    MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &
     OUTPUT_VARS]
 

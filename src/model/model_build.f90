@@ -205,6 +205,12 @@ module model_build
       character(len=*), intent(in) :: where, var
       type(error_t), intent(inout) :: err
     end subroutine require_positive
+    !> The &controller groups of a built model: what each measures and drives (checked).
+    module subroutine add_controllers(scene, model, err)
+      type(scene_t), intent(in) :: scene
+      type(model_t), intent(inout) :: model
+      type(error_t), intent(inout) :: err
+    end subroutine add_controllers
     module subroutine add_motions(scene, model, err)
       type(scene_t), intent(in) :: scene
       type(model_t), intent(inout) :: model
@@ -238,6 +244,7 @@ contains
     if (scene%dimension == 3) then
       call add_motions(scene, model, err); if (.not. err%ok()) return
       call build_spatial(scene, model, err)
+      if (err%ok()) call add_controllers(scene, model, err)
       return
     end if
     call add_nodes(scene, model, b, err); if (.not. err%ok()) return
@@ -256,6 +263,7 @@ contains
         b%node_rot(i)])
     end do
     call model%finalize(err)
+    if (err%ok()) call add_controllers(scene, model, err)
   end subroutine build_model
 
   !> Labels of the motions no hinge refers to, directly or as a term of a sum it uses: a
@@ -281,6 +289,10 @@ contains
           scene%hinges(h)%torque_law == scene%motions(i)%label
         if (allocated(scene%hinges(h)%reference)) used(i) = used(i) .or. &
           scene%hinges(h)%reference == scene%motions(i)%label
+      end do
+      do h = 1, size(scene%controllers)
+        if (allocated(scene%controllers(h)%reference)) used(i) = used(i) .or. &
+          scene%controllers(h)%reference == scene%motions(i)%label
       end do
     end do
     grew = .true.

@@ -7,7 +7,7 @@ module model_scene
   private
   public :: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
     force_rec_t, motion_rec_t, static_rec_t, modal_rec_t, dynamic_rec_t, reduction_rec_t, label_t, &
-    buckling_rec_t, slider_rec_t, linear_rec_t, auto_integrator, auto_by_stiffness
+    buckling_rec_t, slider_rec_t, linear_rec_t, controller_rec_t, auto_integrator, auto_by_stiffness
 
   !> integrator = 'auto' takes generalized-alpha with error control from this rtol up; below,
   !> BDF when the model is not stiff (auto_by_stiffness).
@@ -151,6 +151,13 @@ module model_scene
     real(wp) :: load_factor = 1.0_wp   !< load factor at which K_G is differenced
   end type buckling_rec_t
 
+  !> A feedback controller (docs/input.md, &controller).
+  type :: controller_rec_t
+    character(len=:), allocatable :: label, actuator, measure, reference
+    real(wp) :: kp = 0.0_wp, ki = 0.0_wp, kd = 0.0_wp, period = 0.0_wp
+    real(wp) :: u_min = -huge(1.0_wp), u_max = huge(1.0_wp)
+  end type controller_rec_t
+
   !> A linearised state-space model (docs/input.md, &linear).
   type :: linear_rec_t
     logical :: active = .false.
@@ -201,6 +208,7 @@ module model_scene
     type(mass_rec_t), allocatable :: masses(:)
     type(force_rec_t), allocatable :: forces(:)
     type(motion_rec_t), allocatable :: motions(:)
+    type(controller_rec_t), allocatable :: controllers(:)
     type(static_rec_t) :: static
     type(modal_rec_t) :: modal
     type(buckling_rec_t) :: buckling

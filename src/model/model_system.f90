@@ -14,6 +14,7 @@ module model_system
   use elements_base, only: element_t, element_slot_t, MODE_RIGID, MODE_RELEASED, &
     MODE_PRESCRIBED, MODE_DYNAMIC, MODE_ELASTIC
   use motion_law, only: motion_t
+  use model_control, only: controller_t
   implicit none
   private
   public :: model_t, mode_ref_t, COORD_X, COORD_Y, COORD_PHI, COORD_Z, COORD_EULER
@@ -65,6 +66,8 @@ module model_system
     !> its rate p' (a PD controller's feed of its reference).
     integer, allocatable :: actuator_element(:), actuator_motion(:)
     real(wp), allocatable :: actuator_value(:), actuator_rate(:)
+    !> Feedback controllers (model_control); their states belong to the run.
+    type(controller_t), allocatable :: controllers(:)
     integer, allocatable :: load_motion(:)
     !> 2 (planar) or 3 (spatial): the components of gravity the elements see.
     integer :: dim = 2
@@ -129,6 +132,7 @@ contains
     allocate(this%moment(3, 0), this%moment_lambda(0), this%moment_motion(0))
     allocate(this%actuator_element(0), this%actuator_motion(0), this%actuator_value(0), &
       this%actuator_rate(0))
+    allocate(this%controllers(0))
     this%finalized = .false.
   end subroutine model_init
 

@@ -1,0 +1,177 @@
+!> A plant (the full or a reduced model) with its feedback controllers, as one second-order
+!> system for the integrators: the controllers' states are integrated with the model, so
+!> implicit integrators see them (docs/theory.md, closed-loop simulation).
+!>
+!> A continuous controller's integral I of its error e = r - y is carried as the velocity of
+!> an extra coordinate s with s'' = e, so the state stays (q, q'): q = (q_plant, s),
+!> q' = (q_plant', I). s itself (the double integral) is never used. Its error is not
+!> controlled by the integrators' error norm (the plant's), as I enters the equations only
+!> through ki I, whose error follows that of y.
+!> A sampled controller (period T > 0) holds its output between samples (zero-order hold):
+!> at each sample time, a breakpoint of the run where the integrator restarts, it measures,
+!> computes u = kp e + ki I + kd e' and adds T e to its discrete integral I.
+!> Either kind stops integrating while its actuator is at a limit and e pushes further into it
+!> (model_control's winds_up).
+module dynamics_control
+  use core_kinds, only: wp
+  use integrators_system, only: ode2_system_t
+  use dynamics_system, only: dynamics_t
+  implicit none
+  private
+  public :: controlled_t
+
+  type, extends(ode2_system_t) :: controlled_t
+    private
+    class(ode2_system_t), pointer :: plant => null()
+    !> The full model the plant evaluates (the plant itself, or the reduced model's): it
+    !> holds the controllers and their last errors and outputs.
+    type(dynamics_t), pointer :: dyn => null()
+    integer :: n = 0, nc = 0
+    real(wp) :: t0 = 0.0_wp
+    !> Sampled controllers: their discrete integrals and the number of samples taken.
+    real(wp), allocatable :: integral(:)
+    integer, allocatable :: n_samples(:)
+    !> Last state recorded, for a run that continues in segments (reduced with updates).
+    real(wp), allocatable :: last_s(:), last_i(:)
+    !> At the output times, per controller: the error e = r - y and the applied output u.
+    real(wp), allocatable, public :: error_hist(:, :), u_hist(:, :)
+  contains
+    procedure :: init => control_init
+    procedure :: accel => control_accel
+    procedure :: record => control_record
+    procedure :: error_norm => control_error_norm
+    procedure :: at_breakpoint => control_at_breakpoint
+    procedure :: state => control_state
+    procedure :: allocate_history => control_allocate_history
+  end type controlled_t
+
+contains
+
+  !> Wrap `plant` (n coordinates), whose evaluations go through `dyn`, from time t0. The
+  !> controllers start with zero integrals.
+  subroutine control_init(this, plant, dyn, n, t0)
+    class(controlled_t), intent(inout) :: this
+    class(ode2_system_t), intent(in), target :: plant
+    type(dynamics_t), intent(in), target :: dyn
+    integer, intent(in) :: n
+    real(wp), intent(in) :: t0
+    this%plant => plant
+    this%dyn => dyn
+    this%n = n
+    this%nc = size(dyn%model%controllers)
+    this%t0 = t0
+    allocate(this%integral(this%nc), this%n_samples(this%nc))
+    this%integral = 0.0_wp
+    this%n_samples = 0
+    this%last_s = this%integral
+    this%last_i = this%integral
+  end subroutine control_init
+
+  !> The augmented initial state: the plant's (q, v), then s = 0 and the integrals recorded
+  !> last (zero at the start).
+  subroutine control_state(this, q_plant, v_plant, q, v)
+    class(controlled_t), intent(in) :: this
+    real(wp), intent(in) :: q_plant(:), v_plant(:)
+    real(wp), allocatable, intent(out) :: q(:), v(:)
+    q = [q_plant, this%last_s]
+    v = [v_plant, this%last_i]
+  end subroutine control_state
+
+  subroutine control_allocate_history(this, nt)
+    class(controlled_t), intent(inout) :: this
+    integer, intent(in) :: nt
+    if (allocated(this%error_hist)) deallocate(this%error_hist, this%u_hist)
+    allocate(this%error_hist(this%nc, nt), this%u_hist(this%nc, nt))
+    this%error_hist = 0.0_wp
+    this%u_hist = 0.0_wp
+  end subroutine control_allocate_history
+
+  !> Continuous controllers take their integral from the state, sampled ones their own.
+  subroutine set_integrals(this, v)
+    type(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: v(:)
+    integer :: k
+    do k = 1, this%nc
+      if (this%dyn%model%controllers(k)%sampled()) then
+        this%dyn%ctrl_integral(k) = this%integral(k)
+      else
+        this%dyn%ctrl_integral(k) = v(this%n + k)
+      end if
+    end do
+  end subroutine set_integrals
+
+  subroutine control_accel(this, t, q, v, a, status)
+    class(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: a(:)
+    integer, intent(out) :: status
+    integer :: k, n
+    n = this%n
+    call set_integrals(this, v)
+    call this%plant%accel(t, q(1:n), v(1:n), a(1:n), status)
+    a(n + 1:) = 0.0_wp
+    if (status /= 0) return
+    do k = 1, this%nc
+      associate (c => this%dyn%model%controllers(k), e => this%dyn%ctrl_error(k))
+        if (.not. c%sampled() .and. .not. c%winds_up(this%dyn%ctrl_law(k), e)) a(n + k) = e
+      end associate
+    end do
+  end subroutine control_accel
+
+  !> The plant records its output; the controllers' errors and outputs at (t, q, v) come from
+  !> one evaluation (a record solves only the kinematics).
+  subroutine control_record(this, k, t, q, v, status)
+    class(controlled_t), intent(inout) :: this
+    integer, intent(in) :: k
+    real(wp), intent(in) :: t, q(:), v(:)
+    integer, intent(out) :: status
+    real(wp) :: a(size(q))
+    call this%accel(t, q, v, a, status)
+    if (status /= 0) return
+    if (k > 0) then
+      this%error_hist(:, k) = this%dyn%ctrl_error
+      this%u_hist(:, k) = this%dyn%ctrl_u
+    end if
+    this%last_s = q(this%n + 1:)
+    this%last_i = v(this%n + 1:)
+    call this%plant%record(k, t, q(1:this%n), v(1:this%n), status)
+  end subroutine control_record
+
+  subroutine control_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
+    class(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: dq(:), q_old(:), q_new(:), rtol, atol
+    real(wp), intent(out) :: norm
+    associate (n => this%n)
+      call this%plant%error_norm(dq(1:n), q_old(1:n), q_new(1:n), rtol, atol, norm)
+    end associate
+  end subroutine control_error_norm
+
+  !> Samples due at t (t0 + i T, the times the run made breakpoints of): measure, hold the
+  !> limited output, and integrate the error over the coming period.
+  subroutine control_at_breakpoint(this, t, q, v, status)
+    class(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    integer, intent(out) :: status
+    real(wp) :: a(size(q))
+    logical :: measured
+    integer :: k
+    status = 0
+    measured = .false.
+    do k = 1, this%nc
+      associate (c => this%dyn%model%controllers(k))
+        if (.not. c%sampled()) cycle
+        ! Compared as the run computes its breakpoints, t0 + i T, with a margin for round-off.
+        if (t < this%t0 + this%n_samples(k) * c%period - 1.0e-6_wp * c%period) cycle
+        if (.not. measured) then
+          call this%accel(t, q, v, a, status)
+          if (status /= 0) return
+          measured = .true.
+        end if
+        this%dyn%ctrl_held(k) = c%limited(this%dyn%ctrl_law(k))
+        if (.not. c%winds_up(this%dyn%ctrl_law(k), this%dyn%ctrl_error(k))) &
+          this%integral(k) = this%integral(k) + c%period * this%dyn%ctrl_error(k)
+        this%n_samples(k) = this%n_samples(k) + 1
+      end associate
+    end do
+  end subroutine control_at_breakpoint
+end module dynamics_control

@@ -1,0 +1,204 @@
+"""Feedback controllers (docs/input.md, &controller): PID laws on a joint, a truss actuator and
+a nodal force, continuous and sampled, with limits, against the closed forms of the linear
+closed loops they make; the result datasets; every input error."""
+import math
+
+import numpy as np
+import pytest
+
+from helpers import assert_clean_error, run_scene
+
+h5py = pytest.importorskip("h5py")
+
+#: A rigid 1 m link hinged at a fixed base (as in test_linear.py): J = rho A L^3 / 3.
+ARM = ("&node label = 'base', x = 0, y = 0, fixed = .true. /\n"
+       "&node label = 'tip', x = 1, y = 0 /\n"
+       "&link label = 'arm', from = 'base', to = 'tip', n_elements = 2, E = 7.0e10,\n"
+       "      A = 1.0e-4, I = 1.0e-9, rho = 2700, elongation = 'rigid', bending = 'rigid' /\n")
+J_ARM = 2700 * 1.0e-4 / 3
+RUN = ("&dynamic t_end = {t_end}, output_dt = 0.01, integrator = 'bdf', rtol = 1e-9,"
+       " atol = 1e-12 /\n&output nodes = 'tip' /\n")
+
+#: A block of mass M on a guide inclined at ALPHA, held by a truss spring along it (as in
+#: test_slider.py), no gravity: a linear oscillator in the elongation s of the truss.
+ALPHA = math.radians(30.0)
+M, EA, L0 = 2.0, 1.0e4, 0.5
+C, S = math.cos(ALPHA), math.sin(ALPHA)
+BLOCK = f"""&node label = 'anchor', x = 0.0, y = 0.0, fixed = .true. /
+&node label = 'block', x = {L0 * C!r}, y = {L0 * S!r} /
+&truss label = 'spring', from = 'anchor', to = 'block', E = {EA}, A = 1.0, mode = 'dynamic' /
+&slider label = 'guide', node = 'block', direction = {C!r}, {S!r} /
+&mass node = 'block', m = {M} /
+&motion label = 'step', law = 'constant', start = 1.0e-3 /
+&dynamic t_end = 2.0, output_dt = 0.01, integrator = 'bdf', rtol = 1e-9, atol = 1e-13 /
+&output nodes = 'block' /
+"""
+
+
+def linear_response(a, b, x0, t):
+    """x(t) of x' = A x + b (A invertible, b constant) from x0: exp(A t)(x0 - xs) + xs with
+    the equilibrium xs = -A^-1 b, by the eigenvectors of A (distinct eigenvalues)."""
+    w, v = np.linalg.eig(a)
+    xs = -np.linalg.solve(a, b)
+    c = np.linalg.solve(v, x0 - xs)
+    return np.real((v * c) @ np.exp(np.outer(w, t))) + xs[:, None]
+
+
+def pid_loop(mass, stiffness, gain, kp, ki, kd, force=0.0, ref=0.0):
+    """The closed loop m y'' = -k y + g u + f, u = kp (r - y) + ki I + kd (r' - y'),
+    I' = r - y, for a constant r (r' = 0 after t = 0), in the state (I, y, y')."""
+    a = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0],
+                  [gain * ki / mass, -(stiffness + gain * kp) / mass, -gain * kd / mass]])
+    b = np.array([ref, 0.0, (gain * kp * ref + force) / mass])
+    return a, b
+
+
+def arm_angle(out):
+    with h5py.File(out) as f:
+        tip = f["nodes/tip/position"][:]
+        return f["time"][:], np.unwrap(np.arctan2(tip[:, 1], tip[:, 0]))
+
+
+def run_ok(tmp_path, text, name="scene"):
+    proc, out = run_scene(tmp_path, text, name=name)
+    assert proc.returncode == 0, proc.stderr
+    assert "warning" not in proc.stderr
+    return out
+
+
+def test_pid_rejects_a_constant_torque(tmp_path):
+    """A constant torque on the rigid link's hinge, a PID holding the angle at 0: the closed
+    loop J y''' + kd y'' + kp y' + ki y = 0 from rest with y'' = tau/J at the start, and the
+    integral drives the angle back to 0 (a PD would leave tau/kp). Observed 1.3e-10 rad at
+    BDF rtol 1e-9; bound 1e-8. The written error is -y, the input settles at -tau."""
+    kp, ki, kd, tau = 2.0, 1.0, 0.5, 0.05
+    out = run_ok(tmp_path, ARM + f"&hinge label = 'j1', node = 'base', link = 'arm', "
+                 f"mode = 'dynamic', torque = {tau} /\n&controller label = 'c1', "
+                 f"actuator = 'j1.torque', measure = 'j1.angle', kp = {kp}, ki = {ki}, "
+                 f"kd = {kd} /\n" + RUN.format(t_end=10.0))
+    t, angle = arm_angle(out)
+    a, b = pid_loop(J_ARM, 0.0, 1.0, kp, ki, kd, force=tau)
+    closed = linear_response(a, b, np.zeros(3), t)[1]
+    assert np.max(np.abs(angle - closed)) < 1e-8
+    with h5py.File(out) as f:
+        error = f["controllers/c1/error"][:]
+        u = f["controllers/c1/input"][:]
+    assert np.max(np.abs(error + angle)) < 1e-8
+    assert abs(u[-1] + tau) < 1e-3 * tau      # observed 3e-6 tau at t = 10 s (decay)
+
+
+@pytest.mark.parametrize("actuator,measure,gain", [
+    ("spring.force", "spring.elongation", 1.0),
+    ("block.fx", "block.x", C),
+])
+def test_pid_positions_a_block(tmp_path, actuator, measure, gain):
+    """The block on its guide, positioned by a PID on a step of 1 mm: by the truss as a linear
+    actuator measuring its elongation s (gain 1), or by a horizontal force on the node
+    measuring its x = cos(alpha) s (both the force and the measurement see cos(alpha): the
+    loop gain is cos^2 alpha, in y = cos(alpha) s). Closed form of the linear loop; the truss is
+    exact along its line. Observed 4e-12 and 1e-11 m; bound 1e-10 m."""
+    kp, ki, kd = 4.0e4, 2.0e5, 400.0
+    out = run_ok(tmp_path, BLOCK + f"&controller label = 'pos', actuator = '{actuator}', "
+                 f"measure = '{measure}', reference = 'step', kp = {kp}, ki = {ki}, "
+                 f"kd = {kd} /\n")
+    with h5py.File(out) as f:
+        t = f["time"][:]
+        pos = f["nodes/block/position"][:, :2]
+    s = (pos - [L0 * C, L0 * S]) @ np.array([C, S])
+    # In the measured y = gain s: m y'' = -k y + gain^2 u.
+    a, b = pid_loop(M, EA / L0, gain**2, kp, ki, kd, ref=1.0e-3)
+    closed = linear_response(a, b, np.zeros(3), t)[1] / gain
+    assert np.max(np.abs(s - closed)) < 1e-10
+
+
+def test_limited_output_accelerates_uniformly(tmp_path):
+    """A PD with a large step on the rigid link and the torque limited to u_max: while the law
+    asks for more, the link accelerates as u_max t^2 / (2 J) exactly; it then settles on the
+    reference (observed 3.6e-10 rad left at t = 8 s; bound 1e-6). Observed 6e-12 rad in the
+    saturated phase; bound 1e-8."""
+    u_max, ref = 0.1, 1.0
+    out = run_ok(tmp_path, ARM + "&hinge label = 'j1', node = 'base', link = 'arm', "
+                 "mode = 'dynamic' /\n&motion label = 'r', law = 'constant', "
+                 f"start = {ref} /\n&controller label = 'c1', actuator = 'j1.torque', "
+                 f"measure = 'j1.angle', reference = 'r', kp = 1.0, kd = 0.6, "
+                 f"u_min = {-u_max}, u_max = {u_max} /\n" + RUN.format(t_end=8.0))
+    t, angle = arm_angle(out)
+    with h5py.File(out) as f:
+        u = f["controllers/c1/input"][:]
+    saturated = np.cumprod(np.isclose(u, u_max, rtol=0, atol=1e-14)).astype(bool)
+    assert 5 < saturated.sum() < len(t) - 5          # the limit binds, then is left
+    assert np.max(np.abs(angle[saturated] - u_max * t[saturated]**2 / (2 * J_ARM))) < 1e-8
+    assert np.max(np.abs(u)) <= u_max * (1 + 1e-12)
+    assert abs(angle[-1] - ref) < 1e-6
+
+
+def test_sampled_converges_to_continuous(tmp_path):
+    """The disturbance-rejection loop of the first test sampled with zero-order hold: the hold
+    delays the control by about T/2, so the difference from the continuous loop is first
+    order in T. Observed differences 3.4e-4, 1.7e-4, 8.4e-5 rad for T = 10, 5, 2.5 ms: ratio
+    2.0 per halving (bounds 1.7 to 2.3), and 8.4e-5 rad at 2.5 ms (bound 1e-3)."""
+    base = ARM + ("&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic', "
+                  "torque = 0.05 /\n&controller label = 'c1', actuator = 'j1.torque', "
+                  "measure = 'j1.angle', kp = 2.0, ki = 1.0, kd = 0.5{period} /\n"
+                  + RUN.format(t_end=4.0))
+    _, cont = arm_angle(run_ok(tmp_path, base.format(period=""), "cont"))
+    diffs = []
+    for i, period in enumerate([0.01, 0.005, 0.0025]):
+        _, samp = arm_angle(run_ok(tmp_path, base.format(period=f", period = {period}"),
+                                   f"s{i}"))
+        diffs.append(np.max(np.abs(samp - cont)))
+    ratios = np.array(diffs[:-1]) / np.array(diffs[1:])
+    assert np.all((ratios > 1.7) & (ratios < 2.3)), diffs
+    assert diffs[-1] < 1e-3
+
+
+@pytest.mark.parametrize("ctrl,fragments", [
+    ("actuator = 'j9.torque', measure = 'j1.angle', kp = 1.0",
+     ["&controller 'c1'", "'actuator'", "'j9'"]),
+    ("actuator = 'j1', measure = 'j1.angle', kp = 1.0",
+     ["&controller 'c1'", "'actuator'", "name.component"]),
+    ("actuator = 'j1.force', measure = 'j1.angle', kp = 1.0",
+     ["&controller 'c1'", "'actuator'", "'torque'"]),
+    ("actuator = 'j1.torque', measure = 'j1.torque', kp = 1.0",
+     ["&controller 'c1'", "'measure'", "'angle'"]),
+    ("actuator = 'tip.fz', measure = 'j1.angle', kp = 1.0",
+     ["&controller 'c1'", "'actuator'", "fx, fy, moment"]),
+    ("actuator = 'base.fx', measure = 'j1.angle', kp = 1.0",
+     ["&controller 'c1'", "'actuator'", "fixed"]),
+    ("actuator = 'j1.torque', measure = 'tip.q', kp = 1.0",
+     ["&controller 'c1'", "'measure'", "x, y, phi"]),
+    ("actuator = 'j1.torque', measure = 'j1.angle'", ["&controller 'c1'", "gain"]),
+    ("actuator = 'j1.torque', measure = 'j1.angle', kp = -1.0", ["&controller 'c1'", "'kp'"]),
+    ("actuator = 'j1.torque', measure = 'j1.angle', kp = 1.0, period = -0.1",
+     ["&controller 'c1'", "'period'"]),
+    ("actuator = 'j1.torque', measure = 'j1.angle', kp = 1.0, u_min = 1.0, u_max = -1.0",
+     ["&controller 'c1'", "'u_min'", "'u_max'"]),
+    ("actuator = 'j1.torque', measure = 'j1.angle', kp = 1.0, reference = 'nope'",
+     ["&controller 'c1'", "'reference'", "'nope'"]),
+    ("measure = 'j1.angle', kp = 1.0", ["&controller 'c1'", "'actuator'"]),
+])
+def test_bad_controller(tmp_path, ctrl, fragments):
+    text = (ARM + "&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic' /\n"
+            f"&controller label = 'c1', {ctrl} /\n" + RUN.format(t_end=0.1))
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, "&controller", *fragments[1:])
+
+
+def test_controller_on_a_prescribed_joint(tmp_path):
+    """A controller drives a degree of freedom: a prescribed hinge is refused."""
+    text = (ARM.replace("bending = 'rigid'", "bending = 'dynamic'")
+            + "&hinge label = 'j1', node = 'base', link = 'arm', mode = 'prescribed', "
+            "motion = 'm' /\n&motion label = 'm', law = 'constant', start = 0.0 /\n"
+            "&controller label = 'c1', actuator = 'j1.torque', measure = 'j1.angle', "
+            "kp = 1.0 /\n" + RUN.format(t_end=0.1))
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, "&controller 'c1'", "'actuator'", "not dynamic")
+
+
+def test_two_controllers_with_one_label(tmp_path):
+    ctrl = ("&controller label = 'c1', actuator = 'j1.torque', measure = 'j1.angle', "
+            "kp = 1.0 /\n")
+    text = (ARM + "&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic' /\n"
+            + ctrl + ctrl + RUN.format(t_end=0.1))
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, "&controller 'c1'", "twice")
