@@ -515,6 +515,8 @@ contains
       if (allocated(this%red)) deallocate(this%red)
       allocate(this%red)
       this%red%dyn = this%dyn
+      ! The basis is the open-loop plant's; the controllers act in the integration.
+      this%red%dyn%controls_on = .false.
       this%red%static_correction = r%static_correction
       if (allocated(r%basis_prescribed)) then
         if (size(r%basis_prescribed) /= this%dyn%model%n_rh) then
@@ -547,8 +549,16 @@ contains
       this%red%basis%frequency_hz
     flush(output_unit)
     call this%red%allocate_history(size(this%time))
-    call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
-      this%updates, err)
+    this%red%dyn%controls_on = this%dyn%controls_on
+    if (this%red%dyn%controls_on) then
+      call this%control%init(this%red, this%red%dyn, this%red%basis%k(), this%time(1))
+      call this%control%allocate_history(size(this%time))
+      call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
+        this%updates, err, this%control)
+    else
+      call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
+        this%updates, err)
+    end if
     this%dyn = this%red%dyn
     if (this%verbose .and. err%ok() .and. update%mode /= 'none') write(*, '(a,i0,a,i0,a)') &
       'reduction: ', this%updates%n_updates, ' basis updates in ', size(this%updates%time), &

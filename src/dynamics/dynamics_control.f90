@@ -35,6 +35,9 @@ module dynamics_control
     real(wp), allocatable :: last_s(:), last_i(:)
     !> At the output times, per controller: the error e = r - y and the applied output u.
     real(wp), allocatable, public :: error_hist(:, :), u_hist(:, :)
+    !> A run in segments (reduced with basis updates) maps the output index k of a record to
+    !> the run's (0: not an output); not allocated: the same.
+    integer, allocatable, public :: out_index(:)
   contains
     procedure :: init => control_init
     procedure :: accel => control_accel
@@ -126,11 +129,14 @@ contains
     real(wp), intent(in) :: t, q(:), v(:)
     integer, intent(out) :: status
     real(wp) :: a(size(q))
+    integer :: kg
     call this%accel(t, q, v, a, status)
     if (status /= 0) return
-    if (k > 0) then
-      this%error_hist(:, k) = this%dyn%ctrl_error
-      this%u_hist(:, k) = this%dyn%ctrl_u
+    kg = k
+    if (allocated(this%out_index)) kg = this%out_index(k)
+    if (kg > 0) then
+      this%error_hist(:, kg) = this%dyn%ctrl_error
+      this%u_hist(:, kg) = this%dyn%ctrl_u
     end if
     this%last_s = q(this%n + 1:)
     this%last_i = v(this%n + 1:)

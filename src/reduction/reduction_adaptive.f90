@@ -17,6 +17,7 @@ module reduction_adaptive
   use reduction_modal, only: modal_result_t, modal_analysis
   use reduction_basis, only: track_modes
   use reduction_system, only: reduced_t
+  use dynamics_control, only: controlled_t
   implicit none
   private
   public :: update_spec_t, update_log_t, integrate_reduced
@@ -39,7 +40,8 @@ module reduction_adaptive
 contains
 
   !> Integrate the reduced model over t_out from eta = 0, eta_dot = 0 and record every output.
-  subroutine integrate_reduced(red, spec, opts, t_out, breakpoints, stats, log, err)
+  !> `control`: the reduced model with its controllers (initialised on red), integrated instead.
+  subroutine integrate_reduced(red, spec, opts, t_out, breakpoints, stats, log, err, control)
     type(reduced_t), intent(inout), target :: red
     type(update_spec_t), intent(in) :: spec
     type(integrator_options_t), intent(in) :: opts
@@ -47,6 +49,7 @@ contains
     type(integrator_stats_t), intent(out) :: stats
     type(update_log_t), intent(out) :: log
     type(error_t), intent(out) :: err
+    type(controlled_t), intent(inout), optional :: control
     real(wp), allocatable :: checks(:), t_seg(:), eta(:), eta_dot(:)
     type(integrator_stats_t) :: seg
     real(wp) :: seg_start, seg_end
@@ -73,9 +76,15 @@ contains
         t_seg = [t_seg, seg_end]
         red%out_index = [red%out_index, 0]
       end if
-      eta = red%last_eta
-      eta_dot = red%last_eta_dot
-      call integrate(red, opts, t_seg, eta, eta_dot, breakpoints, seg, err)
+      if (present(control)) then
+        call control%state(red%last_eta, red%last_eta_dot, eta, eta_dot)
+        control%out_index = red%out_index
+        call integrate(control, opts, t_seg, eta, eta_dot, breakpoints, seg, err)
+      else
+        eta = red%last_eta
+        eta_dot = red%last_eta_dot
+        call integrate(red, opts, t_seg, eta, eta_dot, breakpoints, seg, err)
+      end if
       call add_stats(stats, seg)
       if (.not. err%ok()) return
       if (iseg <= size(checks)) call check_basis(red, spec, seg_end, log, err)
@@ -132,15 +141,19 @@ contains
     real(wp), allocatable :: q_dy(:), v_dy(:), tracked(:, :), mac(:)
     integer, allocatable :: pick(:)
     integer :: k, n_dy, info
-    logical :: replace
+    logical :: replace, controls_on
 
     k = red%basis%k()
     n_dy = red%dyn%model%n_dy
     allocate(q_dy(n_dy), v_dy(n_dy), tracked(n_dy, k), mac(k), pick(k))
     call red%full_state(red%last_eta, red%last_eta_dot, q_dy, v_dy)
     ! Two spare candidates let tracking follow modes that swap order with their neighbours.
+    ! The basis is the open-loop plant's, as at the start.
+    controls_on = red%dyn%controls_on
+    red%dyn%controls_on = .false.
     call modal_analysis(red%dyn, t, q_dy, min(n_dy, k + 2), modes, err, &
       solver=spec%eigensolver)
+    red%dyn%controls_on = controls_on
     if (err%ok()) call track_modes(red%basis%v, modes%shapes, modes%m0, tracked, mac, pick, err)
     if (.not. err%ok()) then
       call err%prefix('basis update at t = ' // real_str(t) // ': ')
