@@ -191,10 +191,14 @@ class Linear:
         return frequency_response(a, b[:, [i]], c[[j], :], d[[j]][:, [i]], w)[:, 0, 0]
 
     def dc_gain(self, k: int = 0) -> np.ndarray:
-        """-C A^-1 B + D (n_y, n_u); A is singular (an error) when the model has rigid-body
-        modes."""
+        """-C A^-1 B + D (n_y, n_u). ``ValueError`` when A is singular: a model with
+        rigid-body modes (poles at 0) has no finite static gain."""
         a, b, c, d = self.matrices(k)
-        return d - c @ np.linalg.solve(a, b)
+        try:
+            return d - c @ np.linalg.solve(a, b)
+        except np.linalg.LinAlgError:
+            raise ValueError(f"{self.path}: A of linearisation {k} is singular (rigid-body "
+                             f"modes, poles at 0): no finite DC gain") from None
 
     def poles(self, k: int = 0) -> np.ndarray:
         """Eigenvalues of A [1/s], sorted by magnitude."""

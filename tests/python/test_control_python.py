@@ -66,8 +66,8 @@ def test_reads_the_linear_group(damped):
     with h5py.File(damped) as f:
         np.testing.assert_array_equal(lin.A, f["linear/A"][...])
         np.testing.assert_array_equal(lin.time, f["linear/time"][...])
-    a, b, c, d = lin.matrices(0)
-    assert a is lin.A[0] or np.array_equal(a, lin.A[0])
+    for mine, stored in zip(lin.matrices(0), (lin.A, lin.B, lin.C, lin.D)):
+        np.testing.assert_array_equal(mine, stored[0])
 
 
 def test_two_link_poles_are_the_modal_frequencies(tmp_path):
@@ -327,3 +327,23 @@ def test_bode_command_errors(tmp_path, damped, args, fragment):
     assert len(lines) == 1 and lines[0].startswith("flexmor-bode: error: "), proc.stderr
     assert fragment in lines[0]
     assert "Traceback" not in proc.stderr and not list(tmp_path.glob("*.png"))
+
+
+def test_rigid_body_mode_has_no_dc_gain(tmp_path):
+    """A rigid link on a free dynamic hinge (no spring): a double pole at 0, so the DC gain
+    is refused; the frequency response away from 0 is the rigid body's -1/(J w^2) from torque
+    to angle (J = rho A L^3/3; observed 3e-16 relative, bound 1e-9)."""
+    text = ("&node label = 'base', x = 0, y = 0, fixed = .true. /\n"
+            "&node label = 'tip', x = 1, y = 0 /\n"
+            "&link label = 'arm', from = 'base', to = 'tip', n_elements = 2, E = 7.0e10,\n"
+            "      A = 1.0e-4, I = 1.0e-9, rho = 2700, elongation = 'rigid', bending = 'rigid' /\n"
+            "&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic' /\n"
+            "&linear inputs = 'j1.torque', outputs = 'j1.angle' /\n")
+    lin = flexmor.read_linear(run_ok(tmp_path, text))
+    assert np.max(np.abs(lin.poles())) < 1e-12
+    with pytest.raises(ValueError, match="singular"):
+        lin.dc_gain()
+    w = np.array([0.5, 3.0, 40.0])
+    j_arm = RHO * AREA * LENGTH**3 / 3
+    g = lin.frequency_response(w, input="j1.torque", output="j1.angle")
+    np.testing.assert_allclose(g, -1 / (j_arm * w**2), rtol=1e-9, atol=0)
