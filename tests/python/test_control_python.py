@@ -163,8 +163,9 @@ def test_dc_gain_and_frequency_response(damped):
     worst = 0.0
     for i, u in enumerate(lin.inputs):
         for j, y in enumerate(lin.outputs):
-            channel = signal.StateSpace(lin.A[0], lin.B[0][:, [i]], lin.C[0][[j]],
-                                        lin.D[0][[j]][:, [i]])
+            # scipy's freqresp takes one input and one output: that channel of to_scipy().
+            channel = signal.StateSpace(sys_sp.A, sys_sp.B[:, [i]], sys_sp.C[[j]],
+                                        sys_sp.D[[j]][:, [i]])
             with warnings.catch_warnings():
                 # The polynomial route warns about its own conditioning: the digits it
                 # loses are what the bound allows.
