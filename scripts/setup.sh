@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Install what flexmor needs on Debian 12 (see docs of the toolchain): the Debian packages that
-# are missing, numpy/h5py/matplotlib/meshio/pytest/wheel for the python3 on PATH if it cannot
-# import them, and the flexmor Python package (python/flexmor, `pip install .` of the repository)
-# when it is not installed or its version differs from the repository's VERSION.
+# are missing, numpy/h5py/matplotlib/meshio/scipy/control/pytest/wheel for the python3 on PATH
+# if it cannot import them, and the flexmor Python package (python/flexmor, `pip install .` of
+# the repository) when it is not installed or its version differs from the repository's VERSION.
 # Safe to run again: it checks first and only installs what is missing (no apt-get update when
 # nothing is missing). Runs as root, or through sudo when not root.
 #
@@ -19,8 +19,9 @@ DEBIAN_PACKAGES=(
   liblapack-dev libopenblas-dev pkg-config cmake make
 )
 # wheel: lets tests/python/test_package.py build the package without network (setuptools < 70.1).
-PYTHON_PACKAGES=(numpy h5py matplotlib meshio pytest wheel)
-PYTHON_IMPORTS="import numpy, h5py, matplotlib, meshio, pytest, wheel"
+# scipy, control (python-control): flexmor.control's state-space systems and zeros.
+PYTHON_PACKAGES=(numpy h5py matplotlib meshio scipy control pytest wheel)
+PYTHON_IMPORTS="import numpy, h5py, matplotlib, meshio, scipy, control, pytest, wheel"
 
 check_only=0
 case "${1:-}" in

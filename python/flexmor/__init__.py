@@ -4,6 +4,7 @@
     result = flexmor.read_result("two_link.h5")
     t, xyz = result.node_path("tip")
     sweep = flexmor.read_sweep("sweep.h5")
+    linear = flexmor.read_linear("cantilever.h5")     # &linear: flexmor.control
 
 See docs/python.md for the API and the console commands.
 """
@@ -31,7 +32,9 @@ from flexmor.model import Mesh, Model  # noqa: E402
 from flexmor.results import (Buckling, Modal, NodePath, Result, ResultFileError, Static,  # noqa: E402
                              load_node_path, node_labels, read_result, run_attributes)
 from flexmor.sweep import Sweep, SweepFileError, read_sweep  # noqa: E402
+from flexmor.control import Linear, LinearModelError, read_linear  # noqa: E402
 
-__all__ = ["Buckling", "Mesh", "Modal", "Model", "NodePath", "Result", "ResultFileError", "Static", "Sweep",
-           "SweepFileError", "__version__", "load_node_path", "node_labels", "read_result",
-           "read_sweep", "run_attributes"]
+__all__ = ["Buckling", "Linear", "LinearModelError", "Mesh", "Modal", "Model", "NodePath",
+           "Result", "ResultFileError", "Static", "Sweep", "SweepFileError", "__version__",
+           "load_node_path", "node_labels", "read_linear", "read_result", "read_sweep",
+           "run_attributes"]

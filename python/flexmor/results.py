@@ -12,12 +12,15 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import h5py
 import numpy as np
 
 from flexmor.model import Model, read_model
+
+if TYPE_CHECKING:
+    from flexmor.control import Linear
 
 __all__ = ["Modal", "NodePath", "Result", "ResultFileError", "Static", "load_node_path",
            "node_labels", "read_result", "run_attributes", "to_python"]
@@ -170,8 +173,8 @@ class Result:
     """The contents of one flexmor result file (docs/output.md). Absent parts are None (or
     empty dicts): ``time``, ``nodes``, ``q``, ``qd``, ``energy`` and ``x`` come from
     ``&dynamic``, ``static`` from ``&static``, ``modal`` from ``&modal``, ``buckling`` from
-    ``&buckling``, ``reduction`` from
-    ``&reduction``, ``model`` from files that store the ``/model`` group."""
+    ``&buckling``, ``linear`` (:class:`flexmor.control.Linear`) from ``&linear``, ``reduction``
+    from ``&reduction``, ``model`` from files that store the ``/model`` group."""
 
     path: str
     attrs: dict[str, Any]
@@ -186,6 +189,7 @@ class Result:
     buckling: Buckling | None = None
     reduction: dict[str, Any] | None = None
     model: Model | None = None
+    linear: Linear | None = None
 
     @property
     def node_labels(self) -> list[str]:
@@ -379,6 +383,9 @@ def read_result(path: str | os.PathLike) -> Result:
         result.static = _read_static(path, f, model)
         result.modal = _read_modal(path, f)
         result.buckling = _read_buckling(path, f)
+        # Imported here: flexmor.control builds on this module (open_h5, ResultFileError).
+        from flexmor.control import _read_linear
+        result.linear = _read_linear(path, f)
         if isinstance(f.get("reduction"), h5py.Group):
             result.reduction = _read_group(f["reduction"])
     return result
