@@ -12,7 +12,7 @@ module analysis_run
   use io_hdf5, only: h5_writer_t
   use model_system, only: model_t, NODE_SLOTS
   use elements_base, only: MODE_DYNAMIC
-  use model_build, only: build_model, unused_motions
+  use model_build, only: build_model, unused_motions, build_rigid_model
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: static_solve
   use dynamics_continuation, only: arc_length_solve
@@ -411,6 +411,8 @@ contains
       if (this%dyn%controls_on) then
         call this%control%init(this%dyn, this%dyn, this%dyn%model%n_dy, this%time(1))
         call this%control%allocate_history(size(this%time))
+        call add_feedforward(this, err)
+        if (.not. err%ok()) return
         call this%control%state(this%q_static, v0, q_aug, v_aug)
         call integrate(this%control, opts, this%time, q_aug, v_aug, breaks, this%stats, err)
       else
@@ -553,6 +555,8 @@ contains
     if (this%red%dyn%controls_on) then
       call this%control%init(this%red, this%red%dyn, this%red%basis%k(), this%time(1))
       call this%control%allocate_history(size(this%time))
+      call add_feedforward(this, err)
+      if (.not. err%ok()) return
       call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
         this%updates, err, this%control)
     else
@@ -564,6 +568,18 @@ contains
       'reduction: ', this%updates%n_updates, ' basis updates in ', size(this%updates%time), &
       ' checks'
   end subroutine run_reduced
+
+  !> The rigid-body model for the controllers' feedforward, when one asks for it.
+  subroutine add_feedforward(this, err)
+    type(run_t), intent(inout) :: this
+    type(error_t), intent(inout) :: err
+    type(model_t) :: rigid
+    integer, allocatable :: ff_q(:)
+    if (.not. any(this%dyn%model%controllers%feedforward)) return
+    call build_rigid_model(this%scene, this%dyn%model, rigid, ff_q, err)
+    if (err%ok()) call this%control%set_feedforward(rigid, ff_q, err)
+    if (.not. err%ok()) call err%prefix('group &controller: ')
+  end subroutine add_feedforward
 
   !> The sampling times of the sampled controllers within (t0, t_end], t0 + i T: breakpoints
   !> where the integrator restarts with the new held outputs.

@@ -14,6 +14,8 @@
 !> (model_control's winds_up).
 module dynamics_control
   use core_kinds, only: wp
+  use core_error, only: error_t
+  use model_system, only: model_t
   use integrators_system, only: ode2_system_t
   use dynamics_system, only: dynamics_t
   implicit none
@@ -31,6 +33,10 @@ module dynamics_control
     !> Sampled controllers: their discrete integrals and the number of samples taken.
     real(wp), allocatable :: integral(:)
     integer, allocatable :: n_samples(:)
+    !> Feedforward: the rigid-body model, whose dynamic coordinate ff_q(k) is the joint that
+    !> controller k drives (0: no feedforward).
+    type(dynamics_t), allocatable :: rigid
+    integer, allocatable :: ff_q(:)
     !> Last state recorded, for a run that continues in segments (reduced with updates).
     real(wp), allocatable :: last_s(:), last_i(:)
     !> At the output times, per controller: the error e = r - y and the applied output u.
@@ -40,6 +46,7 @@ module dynamics_control
     integer, allocatable, public :: out_index(:)
   contains
     procedure :: init => control_init
+    procedure :: set_feedforward => control_set_feedforward
     procedure :: accel => control_accel
     procedure :: record => control_record
     procedure :: error_norm => control_error_norm
@@ -69,6 +76,58 @@ contains
     this%last_s = this%integral
     this%last_i = this%integral
   end subroutine control_init
+
+  !> Feedforward from the rigid-body model `rigid` (model_build's build_rigid_model), whose
+  !> dynamic coordinate ff_q(k) controller k drives: at every evaluation its inverse dynamics at
+  !> the references r, r', r'' gives the torques tau = Mbar r'' - g(t, r, r') the joints need.
+  subroutine control_set_feedforward(this, rigid, ff_q, err)
+    class(controlled_t), intent(inout) :: this
+    type(model_t), intent(in) :: rigid
+    integer, intent(in) :: ff_q(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: q(rigid%n_dy), v(rigid%n_dy), a(rigid%n_dy)
+    allocate(this%rigid)
+    this%ff_q = ff_q
+    call references(this, this%t0, q, v, a)
+    call this%rigid%init(rigid, this%t0, q, err, linear_solver='dense')
+    if (.not. err%ok()) call err%prefix('feedforward (rigid-body inverse dynamics): ')
+  end subroutine control_set_feedforward
+
+  !> The rigid model's state on the references at t: positions, rates and accelerations.
+  subroutine references(this, t, q, v, a)
+    type(controlled_t), intent(in) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(out) :: q(:), v(:), a(:)
+    integer :: k
+    q = 0.0_wp
+    v = 0.0_wp
+    a = 0.0_wp
+    do k = 1, size(this%ff_q)
+      if (this%ff_q(k) == 0) cycle
+      associate (m => this%dyn%model)
+        call m%motions(m%controllers(k)%reference)%eval(t, q(this%ff_q(k)), &
+          v(this%ff_q(k)), a(this%ff_q(k)))
+      end associate
+    end do
+  end subroutine references
+
+  !> The feedforward torques at t into dyn%ctrl_ff.
+  subroutine feedforward(this, t, status)
+    type(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    integer, intent(out) :: status
+    real(wp) :: q(this%rigid%model%n_dy), v(size(q)), a(size(q)), tau(size(q))
+    type(error_t) :: err
+    integer :: k
+    call references(this, t, q, v, a)
+    call this%rigid%assemble(t, q, v, err)
+    call this%rigid%report(err, status)
+    if (status /= 0) return
+    tau = matmul(this%rigid%mbar, a) - this%rigid%gen_force
+    do k = 1, size(this%ff_q)
+      if (this%ff_q(k) > 0) this%dyn%ctrl_ff(k) = tau(this%ff_q(k))
+    end do
+  end subroutine feedforward
 
   !> The augmented initial state: the plant's (q, v), then s = 0 and the integrals recorded
   !> last (zero at the start).
@@ -110,9 +169,18 @@ contains
     integer, intent(out) :: status
     integer :: k, n
     n = this%n
+    a = 0.0_wp
     call set_integrals(this, v)
+    if (allocated(this%rigid)) then
+      call feedforward(this, t, status)
+      if (status /= 0) then
+        call this%dyn%last_error%clear()
+        call this%dyn%last_error%set(this%rigid%last_error%code, &
+          'feedforward: ' // this%rigid%last_error%message)
+        return
+      end if
+    end if
     call this%plant%accel(t, q(1:n), v(1:n), a(1:n), status)
-    a(n + 1:) = 0.0_wp
     if (status /= 0) return
     do k = 1, this%nc
       associate (c => this%dyn%model%controllers(k), e => this%dyn%ctrl_error(k))

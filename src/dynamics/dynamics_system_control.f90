@@ -30,7 +30,7 @@ contains
           this%ctrl_error(k) = r - y
           this%ctrl_error_rate(k) = r_dot - y_dot
           this%ctrl_law(k) = c%law(this%ctrl_error(k), this%ctrl_error_rate(k), &
-            this%ctrl_integral(k))
+            this%ctrl_integral(k)) + this%ctrl_ff(k)
           if (c%sampled()) then
             u = this%ctrl_held(k)
           else

@@ -520,6 +520,7 @@ contains
     call rd_real(g, 'period', r%period, err)
     call rd_real(g, 'u_min', r%u_min, err, -huge(1.0_wp))
     call rd_real(g, 'u_max', r%u_max, err, huge(1.0_wp))
+    call rd_logical(g, 'feedforward', r%feedforward, err)
     if (.not. err%ok()) return
     if (.not. (r%kp > 0 .or. r%ki > 0 .or. r%kd > 0)) call err%set(ERR_INPUT, g%where() // &
       ': a controller needs a gain: ''kp'', ''ki'' or ''kd'' > 0')

@@ -336,7 +336,7 @@ module io_schema
     var_spec_t('motion', 'file', VK_STRING, '', 'law', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'table CSV file')]
-  type(var_spec_t), parameter :: CONTROLLER_VARS(10) = [ &
+  type(var_spec_t), parameter :: CONTROLLER_VARS(11) = [ &
     var_spec_t('controller', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'name (output /controllers/<label>)'), &
@@ -366,7 +366,10 @@ module io_schema
       '', 'lower limit of the actuator'), &
     var_spec_t('controller', 'u_max', VK_REAL, 'N (N m)', 'none', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'upper limit of the actuator')]
+      '', 'upper limit of the actuator'), &
+    var_spec_t('controller', 'feedforward', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'add the rigid-body inverse dynamics of reference')]
   type(var_spec_t), parameter :: STATIC_VARS(7) = [ &
     var_spec_t('static', 'n_steps', VK_INT, '', '10', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
@@ -495,7 +498,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(145) = [ &
+  type(var_spec_t), parameter :: SCHEMA(146) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

@@ -13,7 +13,7 @@ module model_build
   use elements_beam, only: beam_t
   implicit none
   private
-  public :: build_model, mode_class_from_name, unused_motions, MAX_COORDINATES
+  public :: build_model, mode_class_from_name, unused_motions, MAX_COORDINATES, build_rigid_model
 
   !> Largest model built: every analysis works on dense matrices of the coordinates, so memory
   !> grows as n^2 (about DENSE_BYTES_PER_N2 n^2 bytes: 13 GB at the limit) and a step's cost as
@@ -211,6 +211,13 @@ module model_build
       type(model_t), intent(inout) :: model
       type(error_t), intent(inout) :: err
     end subroutine add_controllers
+    module subroutine build_rigid_model(scene, model, rigid, ff_q, err)
+      type(scene_t), intent(in) :: scene
+      type(model_t), intent(in) :: model
+      type(model_t), intent(out) :: rigid
+      integer, allocatable, intent(out) :: ff_q(:)
+      type(error_t), intent(inout) :: err
+    end subroutine build_rigid_model
     module subroutine add_motions(scene, model, err)
       type(scene_t), intent(in) :: scene
       type(model_t), intent(inout) :: model

@@ -1,7 +1,8 @@
 !> &controller groups: where each controller measures and acts, resolved on the built model.
 submodule (model_build) model_build_control
   use model_control, only: controller_t, ACT_MODE, ACT_COORD, MEAS_MODE, MEAS_COORD
-  use model_scene, only: controller_rec_t
+  use model_scene, only: controller_rec_t, label_t
+  use core_strings, only: int_str
   implicit none
 
   !> Node components by name, as rows of model%node_coord (x, y, phi, z).
@@ -28,6 +29,94 @@ contains
     end do
   end procedure add_controllers
 
+  !> The rigid-body model of the scene for the controllers' feedforward: links, trusses,
+  !> sliders and spring joints rigid, the joints of the feedforward controllers the only degrees
+  !> of freedom, no controllers. ff_q(k): the rigid model's dynamic coordinate (index in q_dy)
+  !> that controller k drives, 0 for a controller without feedforward.
+  module procedure build_rigid_model
+    type(scene_t) :: s
+    integer :: i, k, iel
+    logical :: driven
+    character(len=*), parameter :: ctx = 'feedforward (rigid-body inverse dynamics): '
+    s = scene
+    do i = 1, size(s%links)
+      s%links(i)%elongation = [label_t('rigid')]
+      s%links(i)%bending = [label_t('rigid')]
+      s%links(i)%damping = 0.0_wp
+    end do
+    do i = 1, size(s%trusses)
+      driven = feedforward_drives(scene, s%trusses(i)%label)
+      if (.not. driven .and. s%trusses(i)%mode /= 'prescribed') s%trusses(i)%mode = 'rigid'
+      if (.not. driven) s%trusses(i)%damping = 0.0_wp
+    end do
+    do i = 1, size(s%sliders)
+      if (s%sliders(i)%mode /= 'prescribed') s%sliders(i)%mode = 'rigid'
+      s%sliders(i)%stiffness = 0.0_wp
+      s%sliders(i)%damping = 0.0_wp
+    end do
+    do i = 1, size(s%hinges)
+      associate (h => s%hinges(i))
+        driven = feedforward_drives(scene, h%label)
+        h%kp = 0.0_wp
+        h%kd = 0.0_wp
+        if (driven .or. h%mode == 'prescribed' .or. h%mode == 'rigid' .or. &
+            h%mode == 'released') cycle
+        if (h%mode == 'dynamic' .and. h%stiffness == 0 .and. scene%hinges(i)%kp == 0) then
+          call err%set(ERR_INPUT, ctx // 'hinge ''' // h%label // ''' turns freely and ' // &
+            'no feedforward controller drives it: the references alone do not determine the motion')
+          return
+        end if
+        h%mode = 'rigid'
+        h%stiffness = 0.0_wp
+        h%damping = 0.0_wp
+      end associate
+    end do
+    do i = 1, size(s%nodes)
+      if (any(s%nodes(i)%dynamic)) then
+        call err%set(ERR_INPUT, ctx // 'node ''' // s%nodes(i)%label // ''' has coordinates ' // &
+          'that are degrees of freedom: the references alone do not determine the motion')
+        return
+      end if
+    end do
+    deallocate(s%controllers)
+    allocate(s%controllers(0))
+    call build_model(s, rigid, err)
+    if (.not. err%ok()) then
+      call err%prefix(ctx // 'the rigid model: ')
+      return
+    end if
+    allocate(ff_q(size(model%controllers)))
+    ff_q = 0
+    do k = 1, size(model%controllers)
+      associate (c => model%controllers(k))
+        if (.not. c%feedforward) cycle
+        iel = model%modes(c%act_index)%element
+        do i = 1, rigid%n_elements
+          if (rigid%elements(i)%e%label == model%elements(iel)%e%label) &
+            ff_q(k) = rigid%modes(rigid%mode_first(i))%q - rigid%n_rh
+        end do
+      end associate
+    end do
+    if (rigid%n_dy /= count(ff_q > 0)) call err%set(ERR_INPUT, ctx // 'the rigid model ' // &
+      'has ' // int_str(rigid%n_dy) // ' degrees of freedom but ' // int_str(count(ff_q > 0)) // &
+      ' feedforward controllers drive joints: every free joint needs one')
+  end procedure build_rigid_model
+
+  !> Whether a controller with feedforward acts on element `label`.
+  pure logical function feedforward_drives(scene, label)
+    type(scene_t), intent(in) :: scene
+    character(len=*), intent(in) :: label
+    integer :: k, dot
+    feedforward_drives = .false.
+    do k = 1, size(scene%controllers)
+      associate (r => scene%controllers(k))
+        if (.not. r%feedforward) cycle
+        dot = index(r%actuator, '.', back=.true.)
+        if (dot > 1) feedforward_drives = feedforward_drives .or. r%actuator(1:dot - 1) == label
+      end associate
+    end do
+  end function feedforward_drives
+
   subroutine controller_of(scene, model, r, c, err)
     type(scene_t), intent(in) :: scene
     type(model_t), intent(in) :: model
@@ -48,6 +137,17 @@ contains
     call point_of(model, r%actuator, where, 'actuator', c%act_kind, c%act_index, err)
     if (.not. err%ok()) return
     call point_of(model, r%measure, where, 'measure', c%meas_kind, c%meas_index, err)
+    if (.not. err%ok() .or. .not. r%feedforward) return
+    ! The rigid model's inverse dynamics gives the torque (force) of a joint that follows its
+    ! reference: the controller must drive the joint it measures.
+    c%feedforward = .true.
+    if (c%act_kind /= ACT_MODE .or. c%meas_kind /= MEAS_MODE .or. &
+        c%act_index /= c%meas_index) then
+      call err%set(ERR_INPUT, where // ': variable ''feedforward'' needs the controller to ' // &
+        'measure the hinge (truss) it drives')
+    else if (c%reference == 0) then
+      call err%set(ERR_INPUT, where // ': variable ''feedforward'' needs a ''reference''')
+    end if
   end subroutine controller_of
 
   !> 'name.component' of an actuator (var = 'actuator') or a measured output: a joint's mode

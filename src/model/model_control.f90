@@ -25,6 +25,9 @@ module model_control
     !> Sampling period [s]; 0: continuous.
     real(wp) :: period = 0.0_wp
     real(wp) :: u_min = -huge(1.0_wp), u_max = huge(1.0_wp)
+    !> Adds the torque (force) the rigid-body model needs to follow the reference (the run
+    !> computes it: dynamics_control).
+    logical :: feedforward = .false.
   contains
     procedure :: law => controller_law
     procedure :: limited => controller_limited

@@ -156,6 +156,7 @@ module model_scene
     character(len=:), allocatable :: label, actuator, measure, reference
     real(wp) :: kp = 0.0_wp, ki = 0.0_wp, kd = 0.0_wp, period = 0.0_wp
     real(wp) :: u_min = -huge(1.0_wp), u_max = huge(1.0_wp)
+    logical :: feedforward = .false.
   end type controller_rec_t
 
   !> A linearised state-space model (docs/input.md, &linear).

@@ -234,3 +234,44 @@ def test_stage_example_settles(tmp_path):
     with h5py.File(out) as f:
         x_red = f["nodes/shuttle/position"][:, 0] - 0.025
     assert np.max(np.abs(x_red - x)) < 2e-5
+
+
+def test_feedforward_tracks_a_rigid_link_exactly(tmp_path):
+    """With feedforward the controller adds the torque the rigid-body model needs to follow
+    its reference, J r'' here (the cubic law: r'' = (6 - 12 t/T)/T^2 until T): the rigid link
+    then follows the reference exactly and the PD has nothing to correct. Observed error
+    3.7e-11 rad and torque J r'' to 5.7e-11 N m (BDF rtol 1e-9); bounds 1e-8."""
+    out = run_ok(tmp_path, ARM + "&hinge label = 'j1', node = 'base', link = 'arm', "
+                 "mode = 'dynamic' /\n&motion label = 'r', law = 'cubic', start = 0.0, "
+                 "end = 1.0, duration = 0.5 /\n&controller label = 'c1', actuator = 'j1.torque', "
+                 "measure = 'j1.angle', reference = 'r', kp = 1.0, kd = 0.3, "
+                 "feedforward = .true. /\n" + RUN.format(t_end=1.0))
+    with h5py.File(out) as f:
+        t = f["time"][:]
+        error = f["controllers/c1/error"][:]
+        u = f["controllers/c1/input"][:]
+    s = np.clip(t / 0.5, 0.0, 1.0)
+    r_ddot = np.where(t < 0.5, (6 - 12 * s) / 0.5**2, 0.0)
+    assert np.max(np.abs(error)) < 1e-8
+    assert np.max(np.abs(u - J_ARM * r_ddot)) < 1e-8
+
+
+@pytest.mark.parametrize("extra,ctrl,fragments", [
+    ("", "actuator = 'j1.torque', measure = 'tip.y', reference = 'r', kp = 1.0",
+     ["&controller 'c1'", "'feedforward'", "measure the hinge"]),
+    ("", "actuator = 'j1.torque', measure = 'j1.angle', kp = 1.0",
+     ["&controller 'c1'", "'feedforward'", "'reference'"]),
+    ("&hinge label = 'j2', node = 'tip', link = 'arm', mode = 'dynamic' /\n"
+     "&mass node = 'tip', m = 1.0, J = 0.01 /\n",
+     "actuator = 'j1.torque', measure = 'j1.angle', reference = 'r', kp = 1.0",
+     ["feedforward", "'j2'", "freely"]),
+])
+def test_bad_feedforward(tmp_path, extra, ctrl, fragments):
+    """Feedforward needs a controller that measures the joint it drives, a reference, and a
+    rigid model that the references determine (no free joint without a feedforward)."""
+    text = (ARM + "&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic' /\n"
+            + extra + "&motion label = 'r', law = 'cubic', start = 0.0, end = 1.0, "
+            f"duration = 0.5 /\n&controller label = 'c1', {ctrl}, feedforward = .true. /\n"
+            + RUN.format(t_end=0.1))
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, *fragments)
