@@ -50,6 +50,7 @@ module dynamics_control
     procedure :: accel => control_accel
     procedure :: record => control_record
     procedure :: error_norm => control_error_norm
+    procedure :: jacobian => control_jacobian
     procedure :: at_breakpoint => control_at_breakpoint
     procedure :: state => control_state
     procedure :: allocate_history => control_allocate_history
@@ -210,6 +211,69 @@ contains
     this%last_i = v(this%n + 1:)
     call this%plant%record(k, t, q(1:this%n), v(1:this%n), status)
   end subroutine control_record
+
+  !> da/dq and da/dv of the closed loop: the plant's own Jacobian (its linearised structural
+  !> part, as without controllers) plus what the controllers add through their outputs,
+  !>   du_k = kp de_k + kd de_k' + ki dI_k,   de_k = (de_k/dq) dq,   de_k' = (de_k/dq) dv,
+  !> with the actuator's column da/du_k from one evaluation with u_k raised by 1 (exact: u
+  !> enters linearly) and the measurement's gradient de_k/dq by differences of the kinematics
+  !> with steps far above its tolerance. (Differences of the whole system with the usual
+  !> sqrt(eps) steps drown in the kinematic solver's 1e-11 tolerance.) A saturated or sampled
+  !> output does not depend on the state.
+  subroutine control_jacobian(this, t, q, v, dadq, dadv, status)
+    class(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
+    integer, intent(out) :: status
+    real(wp) :: a0(size(q)), a1(size(q)), e0(this%nc), dedq(this%nc, this%n)
+    real(wp) :: g(this%n, this%nc), qp(size(q)), h
+    logical :: live(this%nc), integrating(this%nc)
+    integer :: n, j, k
+    n = this%n
+    dadq = 0.0_wp
+    dadv = 0.0_wp
+    call set_integrals(this, v)
+    call this%plant%jacobian(t, q(1:n), v(1:n), dadq(1:n, 1:n), dadv(1:n, 1:n), status)
+    if (status /= 0) return
+    call this%accel(t, q, v, a0, status)
+    if (status /= 0) return
+    e0 = this%dyn%ctrl_error
+    do k = 1, this%nc
+      associate (c => this%dyn%model%controllers(k), law => this%dyn%ctrl_law(k))
+        live(k) = .not. c%sampled() .and. law >= c%u_min .and. law <= c%u_max
+        integrating(k) = .not. c%sampled() .and. .not. c%winds_up(law, e0(k))
+      end associate
+    end do
+    do k = 1, this%nc
+      this%dyn%ctrl_probe(k) = 1.0_wp
+      call this%accel(t, q, v, a1, status)
+      this%dyn%ctrl_probe(k) = 0.0_wp
+      if (status /= 0) return
+      g(:, k) = a1(1:n) - a0(1:n)
+    end do
+    do j = 1, n
+      qp = q
+      h = 1.0e-6_wp * max(abs(q(j)), 1.0e-2_wp)
+      qp(j) = q(j) + h
+      call this%accel(t, qp, v, a1, status)
+      if (status /= 0) return
+      dedq(:, j) = (this%dyn%ctrl_error - e0) / h
+    end do
+    do k = 1, this%nc
+      associate (c => this%dyn%model%controllers(k))
+        if (live(k)) then
+          do j = 1, n
+            dadq(1:n, j) = dadq(1:n, j) + c%kp * dedq(k, j) * g(:, k)
+            dadv(1:n, j) = dadv(1:n, j) + c%kd * dedq(k, j) * g(:, k)
+          end do
+          dadv(1:n, n + k) = c%ki * g(:, k)
+        end if
+        if (integrating(k)) dadq(n + k, 1:n) = dedq(k, :)
+      end associate
+    end do
+    ! Leave the model at the state asked for (the integrators use the last evaluation).
+    call this%accel(t, q, v, a0, status)
+  end subroutine control_jacobian
 
   subroutine control_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
     class(controlled_t), intent(inout) :: this

@@ -62,8 +62,9 @@ module dynamics_system
     !> Controller states, set by the run (dynamics_control) before each evaluation: the
     !> integral of each controller's error and the held output of sampled ones.
     real(wp), allocatable :: ctrl_integral(:), ctrl_held(:)
-    !> and the feedforward of each controller at the time of the evaluation (0: none).
-    real(wp), allocatable :: ctrl_ff(:)
+    !> and the feedforward of each controller at the time of the evaluation (0: none), and
+    !> an extra output that probes how the accelerations depend on each actuator (Jacobians).
+    real(wp), allocatable :: ctrl_ff(:), ctrl_probe(:)
     !> Of the last evaluation, per controller: the error r - y, its rate, the unlimited
     !> output of the law and the applied one (limited, or held).
     real(wp), allocatable :: ctrl_error(:), ctrl_error_rate(:), ctrl_law(:), ctrl_u(:)
@@ -142,6 +143,7 @@ contains
       this%ctrl_integral = [(0.0_wp, i = 1, nc)]
       this%ctrl_held = this%ctrl_integral
       this%ctrl_ff = this%ctrl_integral
+      this%ctrl_probe = this%ctrl_integral
       this%ctrl_error = this%ctrl_integral
       this%ctrl_error_rate = this%ctrl_integral
       this%ctrl_law = this%ctrl_integral

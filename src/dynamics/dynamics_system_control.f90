@@ -37,6 +37,7 @@ contains
             u = c%limited(this%ctrl_law(k))
           end if
           this%ctrl_u(k) = u
+          u = u + this%ctrl_probe(k)
           if (c%act_kind == ACT_MODE) then
             j = m%modes(c%act_index)%q - m%n_rh
             this%sigma_now(j) = this%sigma_now(j) - u

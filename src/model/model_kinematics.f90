@@ -279,6 +279,10 @@ contains
     ! close to it they contract nearly as well as fresh ones, and the solution then needs one
     ! factorisation (at the final x, for the transfer functions) instead of two.
     stale = this%has_factors
+    ! A failed solve leaves the last solution in place (not the predictor's guess for this q,
+    ! which may lie far off when an integrator tried a wild step): the next, shorter step
+    ! starts from where the model was.
+    x_start = this%x
     if (this%has_factors) then
       call this%apply_df(model, q - this%q, dxp)
       this%x = this%x + dxp
@@ -286,7 +290,6 @@ contains
     do it = 1, model%n_q
       if (model%q_coord(it) > 0) this%x(model%q_coord(it)) = model%x0(model%q_coord(it)) + q(it)
     end do
-    x_start = this%x
     this%has_df = .false.
     this%has_factors = .false.
     rprev = huge(1.0_wp)
