@@ -157,6 +157,12 @@ contains
       dot = index(names(i)%s, '.', back=.true.)
       node = names(i)%s(1:max(dot - 1, 0))
       comp = names(i)%s(dot + 1:)
+      if (dot > 1 .and. is_mode_name(comp)) then
+        ! A deformation mode of an element, or its stress: 'arm#1.e2', 'arm#1.sigma2'.
+        call element_mode(this, node, comp, var, which(:, i), err)
+        if (.not. err%ok()) return
+        cycle
+      end if
       in = 0
       if (dot > 1) in = this%dyn%model%find_node(node)
       if (in == 0 .and. dot > 1) then
@@ -218,6 +224,61 @@ contains
       end do
     end associate
   end subroutine joint_coordinate
+
+  !> 'e' or 'sigma' followed by digits only: a mode component (no node component looks so).
+  pure logical function is_mode_name(comp)
+    character(len=*), intent(in) :: comp
+    integer :: start
+    start = 0
+    if (index(comp, 'e') == 1) start = 2
+    if (index(comp, 'sigma') == 1) start = 6
+    if (start > len(comp)) start = 0
+    is_mode_name = start > 0
+    if (is_mode_name) is_mode_name = verify(comp(start:), '0123456789') == 0
+  end function is_mode_name
+
+  !> Element `label`'s mode 'e<j>' (its deformation e_j) or 'sigma<j>' (its stress resultant
+  !> (S e)_j) as an output: which = (element, j, 1 for the stress else 0, 0, 0, -1), the -1
+  !> in the component slot telling dynamics_linear's component_rows so.
+  subroutine element_mode(this, label, comp, var, which, err)
+    type(run_t), intent(in) :: this
+    character(len=*), intent(in) :: label, comp, var
+    integer, intent(out) :: which(:)
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: where
+    integer :: iel, j, digits, ios
+    logical :: stress
+    which = 0
+    where = 'group &linear: variable ''' // var // ''': ''' // label // '.' // comp // ''': '
+    if (var == 'inputs') then
+      call err%set(ERR_INPUT, where // 'a deformation mode or stress is an output only ' // &
+        '(inputs are node forces and moments or hinge torques)')
+      return
+    end if
+    stress = comp(1:1) == 's'
+    digits = merge(6, 2, stress)
+    iel = 0
+    do j = 1, this%dyn%model%n_elements
+      if (this%dyn%model%elements(j)%e%label == label) iel = j
+    end do
+    if (iel == 0) then
+      call err%set(ERR_INPUT, where // 'no element is labelled ''' // label // ''' (beams ' // &
+        'are ''link#k'', k = 1 .. n_elements, hinges, trusses and sliders their label; ' // &
+        'see /model/elements/label)')
+      return
+    end if
+    associate (el => this%dyn%model%elements(iel)%e)
+      ! Too many digits for an integer is out of range as well.
+      read(comp(digits:), *, iostat=ios) j
+      if (ios /= 0 .or. j < 1 .or. j > el%n_modes()) then
+        call err%set(ERR_INPUT, where // 'element ''' // label // ''' (' // el%type_name() // &
+          ') has modes 1 to ' // int_str(el%n_modes()))
+        return
+      end if
+    end associate
+    which(1:3) = [iel, j, merge(1, 0, stress)]
+    which(size(which)) = -1
+  end subroutine element_mode
 
   pure function join(words) result(s)
     character(len=*), intent(in) :: words(:)

@@ -193,7 +193,8 @@ contains
 
   !> Rows of DF_dy of the chosen components: column i of `which` is a node's coordinates and,
   !> last, the component number; or, with component 0, a dynamic coordinate's index in q_dy
-  !> first (a joint's angle or torque).
+  !> first (a joint's angle or torque); or, with component -1, an element, its mode and 1 for
+  !> the mode's stress (mode_row).
   function component_rows(dyn, which) result(w)
     type(dynamics_t), intent(in) :: dyn
     integer, intent(in) :: which(:, :)
@@ -203,6 +204,10 @@ contains
     n_comp = merge(6, 3, dyn%model%dim == 3)
     nc = size(which, 1)
     do i = 1, size(which, 2)
+      if (which(nc, i) == -1) then
+        w(i, :) = mode_row(dyn, which(1, i), which(2, i), which(3, i) == 1)
+        cycle
+      end if
       if (which(nc, i) == 0) then
         ! A dynamic coordinate itself (a joint angle, or the torque on it): q_dy(which(1, i)).
         w(i, :) = 0.0_wp
@@ -213,4 +218,27 @@ contains
       w(i, :) = rows(which(nc, i), :)
     end do
   end function component_rows
+
+  !> d e_j / d q_dy = De_j DF_dy of element iel's mode j at the current configuration, or with
+  !> `stress` d sigma_j / d q_dy = (S De)_j DF_dy (sigma = S e; the unit row for a dynamic mode
+  !> and S's row of the element's dynamic modes when all its modes are).
+  function mode_row(dyn, iel, j, stress) result(w)
+    type(dynamics_t), intent(in) :: dyn
+    integer, intent(in) :: iel, j
+    logical, intent(in) :: stress
+    real(wp) :: w(dyn%model%n_dy)
+    real(wp), allocatable :: e(:), de(:, :), s(:, :), r(:)
+    associate (el => dyn%model%elements(iel)%e, nr => dyn%model%n_rh)
+      allocate(e(el%n_modes()), de(el%n_modes(), size(el%dofs)))
+      call el%evaluate(dyn%kin%x(el%dofs), e, de)
+      if (stress) then
+        allocate(s(el%n_modes(), el%n_modes()))
+        call el%stiffness(s)
+        r = matmul(s(j, :), de)
+      else
+        r = de(j, :)
+      end if
+      w = matmul(r, dyn%kin%df(el%dofs, nr + 1:))
+    end associate
+  end function mode_row
 end module dynamics_linear
