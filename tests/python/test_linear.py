@@ -457,3 +457,21 @@ def test_mode_output_rows_by_differences(tmp_path):
     ea_l0 = 7.0e10 * 1.0e-4 / math.sqrt(2)
     assert np.allclose(runs[0]["C"][2], ea_l0 * runs[0]["C"][1], rtol=0,
                        atol=1e-12 * np.max(np.abs(runs[0]["C"][2])))
+
+
+def test_reduced_run_times_in_the_result_file(tmp_path):
+    """&linear times along a reduced run: one 2k-state model per sample, marked reduced; at
+    t = 0 the cantilever is at rest in the basis configuration, so its eigenvalues are the
+    k lowest modes (observed 4e-13 relative; bound 1e-10). tests/test_linear_reduced.f90 checks the models along a moving run."""
+    text = (CANTILEVER + "&reduction n_modes = 3 /\n&modal n_modes = 3 /\n"
+            "&linear inputs = 'tip.fy', outputs = 'tip.y', 'arm#1.sigma2', times = 0, 1e-3 /\n")
+    proc, out = run_scene(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        a = f["linear/A"][:]
+        assert a.shape == (2, 6, 6) and f["linear/C"].shape == (2, 2, 6)
+        assert f["linear"].attrs["reduced"] == "yes" and f["linear"].attrs["n_modes"] == 3
+        modal = f["modal/frequency_hz"][:]
+    ev = np.linalg.eigvals(a[0])
+    fr = np.sort(np.abs(ev.imag))[::2] / (2 * math.pi)
+    assert np.allclose(fr, modal, rtol=1e-10, atol=0)
