@@ -24,7 +24,7 @@ module analysis_run
   use core_progress, only: progress_t
   use integrators_driver, only: integrate
   use core_strings, only: int_str, real_str, approx_str
-  use reduction_basis, only: basis_spec_t, basis_t, compute_basis
+  use reduction_basis, only: basis_t
   use reduction_system, only: reduced_t
   use dynamics_control, only: controlled_t
   use reduction_adaptive, only: update_spec_t, update_log_t, integrate_reduced
@@ -88,6 +88,14 @@ module analysis_run
       type(run_t), intent(inout) :: this
       type(error_t), intent(out) :: err
     end subroutine run_linear
+    !> The basis of &reduction at the configuration it names, for the reduced run and for
+    !> &linear (analysis_run_linear).
+    module subroutine reduction_basis(this, dyn, basis, err)
+      type(run_t), intent(in) :: this
+      type(dynamics_t), intent(inout) :: dyn
+      type(basis_t), intent(out) :: basis
+      type(error_t), intent(out) :: err
+    end subroutine reduction_basis
     module subroutine write_linear(this, h5, err)
       type(run_t), intent(in) :: this
       type(h5_writer_t), intent(inout) :: h5
@@ -501,15 +509,9 @@ contains
     type(integrator_options_t), intent(in) :: opts
     real(wp), intent(in) :: breaks(:)
     type(error_t), intent(out) :: err
-    type(basis_spec_t) :: spec
     type(update_spec_t) :: update
     type(integrator_options_t) :: run_opts
     associate (r => this%scene%reduction)
-      spec%selection = r%selection
-      spec%n_modes = r%n_modes
-      spec%cutoff_hz = r%cutoff_hz
-      spec%auto_factor = r%auto_factor
-      spec%eigensolver = r%eigensolver
       update%mode = r%update
       update%interval = r%update_interval
       update%mac_threshold = r%mac_threshold
@@ -520,22 +522,10 @@ contains
       ! The basis is the open-loop plant's; the controllers act in the integration.
       this%red%dyn%controls_on = .false.
       this%red%static_correction = r%static_correction
-      if (allocated(r%basis_prescribed)) then
-        if (size(r%basis_prescribed) /= this%dyn%model%n_rh) then
-          call err%set(ERR_INPUT, 'group &reduction: variable ''basis_prescribed'' needs ' // &
-            int_str(this%dyn%model%n_rh) // ' values, one per prescribed coordinate (' // &
-            prescribed_names(this%dyn%model) // '), got ' // int_str(size(r%basis_prescribed)))
-          return
-        end if
-      end if
-      ! An unallocated basis_prescribed counts as absent: the motions at basis_time apply.
-      call compute_basis(this%red%dyn, spec, r%basis_time, this%q_static, r%basis_prescribed, &
-        this%red%basis, err)
-      if (.not. err%ok()) then
-        call err%prefix('group &reduction: basis configuration (basis_time = ' // &
-          real_str(r%basis_time) // '): ')
-        return
-      end if
+      ! &linear times linearises at the basis each sample was computed in.
+      this%red%keep_bases = this%scene%linear%active .and. allocated(this%scene%linear%times)
+      call reduction_basis(this, this%red%dyn, this%red%basis, err)
+      if (.not. err%ok()) return
       if (r%static_correction .and. .not. allocated(this%red%basis%k_chol)) then
         call err%set(ERR_INPUT, 'group &reduction: static_correction needs a positive ' // &
           'definite stiffness at the basis configuration (a dynamic mode has no stiffness)')
@@ -563,6 +553,8 @@ contains
       call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
         this%updates, err)
     end if
+    ! What follows (&linear along the run) analyses the open loop.
+    this%red%dyn%controls_on = .false.
     this%dyn = this%red%dyn
     if (this%verbose .and. err%ok() .and. update%mode /= 'none') write(*, '(a,i0,a,i0,a)') &
       'reduction: ', this%updates%n_updates, ' basis updates in ', size(this%updates%time), &
@@ -597,16 +589,5 @@ contains
       end associate
     end do
   end function sample_times
-
-  function prescribed_names(model) result(names)
-    type(model_t), intent(in) :: model
-    character(len=:), allocatable :: names
-    integer :: i
-    names = ''
-    do i = 1, model%n_rh
-      if (i > 1) names = names // ', '
-      names = names // model%q_name(i)
-    end do
-  end function prescribed_names
 
 end module analysis_run

@@ -4,6 +4,7 @@ submodule (analysis_run) analysis_run_linear
   use model_system, only: NODE_SLOTS
   use dynamics_linear, only: linearise, linear_model_t
   use elements_base, only: MODE_DYNAMIC
+  use reduction_basis, only: basis_spec_t, compute_basis
   implicit none
 
   !> Component names of inputs (forces, moments) and outputs (displacements, rotations):
@@ -19,6 +20,7 @@ contains
     type(run_t), intent(inout) :: this
     type(error_t), intent(out) :: err
     integer, allocatable :: inputs(:, :), outputs(:, :)
+    type(basis_t) :: basis
     integer :: i, k
     associate (lin => this%scene%linear, spatial => this%dyn%model%dim == 3)
       if (spatial) then
@@ -32,17 +34,23 @@ contains
       this%dyn%kin%continuation = .true.
       if (.not. allocated(lin%times)) then
         allocate(this%linear(1))
-        call linearise(this%dyn, lin%time, this%q_static, inputs, outputs, lin%along_motion, &
-          this%linear(1), err)
+        if (this%scene%reduction%active) then
+          ! The reduced model the run will integrate, at its reference q_ref = q_static.
+          call reduction_basis(this, this%dyn, basis, err)
+          if (err%ok()) call linearise(this%dyn, lin%time, this%q_static, inputs, outputs, &
+            lin%along_motion, this%linear(1), err, basis=basis%v)
+        else
+          call linearise(this%dyn, lin%time, this%q_static, inputs, outputs, &
+            lin%along_motion, this%linear(1), err)
+        end if
       else
-        call along_run(k)
+        call along_run()
         if (err%ok()) then
           allocate(this%linear(size(lin%times)))
           do i = 1, size(lin%times)
             ! The stored output sample nearest to the time asked for (its time is written).
             k = minloc(abs(this%time - lin%times(i)), 1)
-            call linearise(this%dyn, this%time(k), this%dyn%q_hist(:, k), inputs, outputs, &
-              .true., this%linear(i), err, this%dyn%v_hist(:, k))
+            call linearise_sample(this, k, inputs, outputs, this%linear(i), err)
             if (.not. err%ok()) exit
           end do
         end if
@@ -59,16 +67,11 @@ contains
 
   contains
 
-    !> `times` needs a dynamic run of the full model that covers them.
-    subroutine along_run(k)
-      integer, intent(out) :: k
-      k = 0
+    !> `times` needs a dynamic run that covers them.
+    subroutine along_run()
       if (.not. this%scene%dynamic%active) then
         call err%set(ERR_INPUT, 'group &linear: variable ''times'' linearises along the ' // &
           'dynamic run, but the scene has no &dynamic')
-      else if (this%scene%reduction%active) then
-        call err%set(ERR_INPUT, 'group &linear: variable ''times'' along a reduced run is ' // &
-          'not built yet (linearise the full model)')
       else if (any(this%scene%linear%times < this%time(1)) .or. &
           any(this%scene%linear%times > this%time(size(this%time)))) then
         call err%set(ERR_INPUT, 'group &linear: variable ''times'' must lie within the ' // &
@@ -76,6 +79,66 @@ contains
       end if
     end subroutine along_run
   end subroutine run_linear
+
+  !> The model at output sample k of the dynamic run: the full model at its stored state, or
+  !> the reduced one at q_ref + V eta, V eta' with the basis that sample is relative to (not
+  !> the statically corrected output: the correction is no state of the reduced equations).
+  subroutine linearise_sample(this, k, inputs, outputs, lin, err)
+    type(run_t), intent(inout) :: this
+    integer, intent(in) :: k, inputs(:, :), outputs(:, :)
+    type(linear_model_t), intent(out) :: lin
+    type(error_t), intent(out) :: err
+    if (.not. allocated(this%red)) then
+      call linearise(this%dyn, this%time(k), this%dyn%q_hist(:, k), inputs, outputs, &
+        .true., lin, err, this%dyn%v_hist(:, k))
+      return
+    end if
+    associate (b => this%red%bases(this%red%basis_of(k)), eta => this%red%eta_hist(:, k))
+      call linearise(this%dyn, this%time(k), b%q_ref + matmul(b%v, eta), inputs, outputs, &
+        .true., lin, err, matmul(b%v, this%red%eta_dot_hist(:, k)), basis=b%v)
+    end associate
+  end subroutine linearise_sample
+
+  !> The basis of &reduction at the configuration it names (basis_time or basis_prescribed,
+  !> deformed as q_static), with `dyn` (the reduced run's model or, for &linear, the run's).
+  module subroutine reduction_basis(this, dyn, basis, err)
+    type(run_t), intent(in) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    type(basis_t), intent(out) :: basis
+    type(error_t), intent(out) :: err
+    type(basis_spec_t) :: spec
+    associate (r => this%scene%reduction)
+      spec%selection = r%selection
+      spec%n_modes = r%n_modes
+      spec%cutoff_hz = r%cutoff_hz
+      spec%auto_factor = r%auto_factor
+      spec%eigensolver = r%eigensolver
+      if (allocated(r%basis_prescribed)) then
+        if (size(r%basis_prescribed) /= dyn%model%n_rh) then
+          call err%set(ERR_INPUT, 'group &reduction: variable ''basis_prescribed'' needs ' // &
+            int_str(dyn%model%n_rh) // ' values, one per prescribed coordinate (' // &
+            prescribed_names(dyn%model) // '), got ' // int_str(size(r%basis_prescribed)))
+          return
+        end if
+      end if
+      ! An unallocated basis_prescribed counts as absent: the motions at basis_time apply.
+      call compute_basis(dyn, spec, r%basis_time, this%q_static, r%basis_prescribed, basis, &
+        err)
+      if (.not. err%ok()) call err%prefix('group &reduction: basis configuration ' // &
+        '(basis_time = ' // real_str(r%basis_time) // '): ')
+    end associate
+  end subroutine reduction_basis
+
+  function prescribed_names(model) result(names)
+    type(model_t), intent(in) :: model
+    character(len=:), allocatable :: names
+    integer :: i
+    names = ''
+    do i = 1, model%n_rh
+      if (i > 1) names = names // ', '
+      names = names // model%q_name(i)
+    end do
+  end function prescribed_names
 
   !> 'node.component' names as node coordinates plus the component number (the last dot
   !> splits: link nodes are named 'link.3').
@@ -94,6 +157,12 @@ contains
       dot = index(names(i)%s, '.', back=.true.)
       node = names(i)%s(1:max(dot - 1, 0))
       comp = names(i)%s(dot + 1:)
+      if (dot > 1 .and. is_mode_name(comp)) then
+        ! A deformation mode of an element, or its stress: 'arm#1.e2', 'arm#1.sigma2'.
+        call element_mode(this, node, comp, var, which(:, i), err)
+        if (.not. err%ok()) return
+        cycle
+      end if
       in = 0
       if (dot > 1) in = this%dyn%model%find_node(node)
       if (in == 0 .and. dot > 1) then
@@ -156,6 +225,61 @@ contains
     end associate
   end subroutine joint_coordinate
 
+  !> 'e' or 'sigma' followed by digits only: a mode component (no node component looks so).
+  pure logical function is_mode_name(comp)
+    character(len=*), intent(in) :: comp
+    integer :: start
+    start = 0
+    if (index(comp, 'e') == 1) start = 2
+    if (index(comp, 'sigma') == 1) start = 6
+    if (start > len(comp)) start = 0
+    is_mode_name = start > 0
+    if (is_mode_name) is_mode_name = verify(comp(start:), '0123456789') == 0
+  end function is_mode_name
+
+  !> Element `label`'s mode 'e<j>' (its deformation e_j) or 'sigma<j>' (its stress resultant
+  !> (S e)_j) as an output: which = (element, j, 1 for the stress else 0, 0, 0, -1), the -1
+  !> in the component slot telling dynamics_linear's component_rows so.
+  subroutine element_mode(this, label, comp, var, which, err)
+    type(run_t), intent(in) :: this
+    character(len=*), intent(in) :: label, comp, var
+    integer, intent(out) :: which(:)
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: where
+    integer :: iel, j, digits, ios
+    logical :: stress
+    which = 0
+    where = 'group &linear: variable ''' // var // ''': ''' // label // '.' // comp // ''': '
+    if (var == 'inputs') then
+      call err%set(ERR_INPUT, where // 'a deformation mode or stress is an output only ' // &
+        '(inputs are node forces and moments or hinge torques)')
+      return
+    end if
+    stress = comp(1:1) == 's'
+    digits = merge(6, 2, stress)
+    iel = 0
+    do j = 1, this%dyn%model%n_elements
+      if (this%dyn%model%elements(j)%e%label == label) iel = j
+    end do
+    if (iel == 0) then
+      call err%set(ERR_INPUT, where // 'no element is labelled ''' // label // ''' (beams ' // &
+        'are ''link#k'', k = 1 .. n_elements, hinges, trusses and sliders their label; ' // &
+        'see /model/elements/label)')
+      return
+    end if
+    associate (el => this%dyn%model%elements(iel)%e)
+      ! Too many digits for an integer is out of range as well.
+      read(comp(digits:), *, iostat=ios) j
+      if (ios /= 0 .or. j < 1 .or. j > el%n_modes()) then
+        call err%set(ERR_INPUT, where // 'element ''' // label // ''' (' // el%type_name() // &
+          ') has modes 1 to ' // int_str(el%n_modes()))
+        return
+      end if
+    end associate
+    which(1:3) = [iel, j, merge(1, 0, stress)]
+    which(size(which)) = -1
+  end subroutine element_mode
+
   pure function join(words) result(s)
     character(len=*), intent(in) :: words(:)
     character(len=:), allocatable :: s
@@ -183,6 +307,10 @@ contains
       err)
     if (err%ok()) call h5%write_string_1d('/linear/outputs', &
       padded(this%scene%linear%outputs), err)
+    ! The state z = (eta, eta') of a reduced model: k reduced coordinates instead of q_dy.
+    if (err%ok()) call h5%write_string_attr('/linear', 'reduced', &
+      trim(merge('yes', 'no ', this%linear(1)%k_reduced > 0)), err)
+    if (err%ok()) call h5%write_int_attr('/linear', 'n_modes', this%linear(1)%k_reduced, err)
 
   end subroutine write_linear
 

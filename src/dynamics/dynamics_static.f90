@@ -114,7 +114,7 @@ contains
   !> like tangent_stiffness' accurate form; symmetrised (at a relative equilibrium, a = 0,
   !> the centrifugal potential makes it symmetric; the rest is difference noise). Leaves
   !> dyn%mbar at q_dy.
-  subroutine motion_tangent(dyn, t, q_dy, k, err, v_dy)
+  subroutine motion_tangent(dyn, t, q_dy, k, err, v_dy, accel)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     real(wp), intent(out) :: k(:, :)
@@ -122,6 +122,9 @@ contains
     !> The state's velocity (a state along a dynamic run); default 0, at rest relative to the
     !> prescribed motions. Not symmetrised then: the state need not be an equilibrium.
     real(wp), intent(in), optional :: v_dy(:)
+    !> The state's acceleration a0 when it is not the full model's own: a reduced model's
+    !> state accelerates with V eta'' (dynamics_linear).
+    real(wp), intent(in), optional :: accel(:)
     real(wp) :: h, d1(size(q_dy)), d2(size(q_dy)), v0(size(q_dy)), a(size(q_dy))
     real(wp) :: a0(size(q_dy))
     integer :: j
@@ -137,6 +140,7 @@ contains
       dyn%locked = was_locked
       return
     end if
+    if (present(accel)) a0 = accel
     h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
     do j = 1, size(q_dy)
       call force_difference(h, d1)

@@ -170,6 +170,7 @@ contains
       red%basis%k_chol = modes%k0
       call chol_factor(red%basis%k_chol, info)
       if (info /= 0) deallocate(red%basis%k_chol)
+      call red%keep_basis()
       log%n_updates = log%n_updates + 1
     end if
     log%time = [log%time, t]

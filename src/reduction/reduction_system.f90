@@ -33,7 +33,13 @@ module reduction_system
     logical :: has_estimate = .true.          !< false once a basis has no definite K0
     !> State at the last record call: where the next segment starts.
     real(wp), allocatable :: last_eta(:), last_eta_dot(:)
+    !> With keep_bases (&linear times): every basis of the run, the first and each update
+    !> (V, q_ref, time only), and per output which one the state is relative to.
+    logical :: keep_bases = .false.
+    type(basis_t), allocatable :: bases(:)
+    integer, allocatable :: basis_of(:)
   contains
+    procedure :: keep_basis => red_keep_basis
     procedure :: accel => red_accel
     procedure :: record => red_record
     procedure :: jacobian => red_jacobian
@@ -74,7 +80,24 @@ contains
     allocate(this%eta_hist(k, nt), this%eta_dot_hist(k, nt), this%residual(nt))
     allocate(this%estimate(nt))
     this%estimate = 0.0_wp
+    if (this%keep_bases) then
+      if (allocated(this%bases)) deallocate(this%bases)
+      allocate(this%bases(0))
+      this%basis_of = [(0, k = 1, nt)]
+      call this%keep_basis()
+    end if
   end subroutine red_allocate_history
+
+  !> Append the current basis to the kept ones (with keep_bases).
+  subroutine red_keep_basis(this)
+    class(reduced_t), intent(inout) :: this
+    type(basis_t) :: kept
+    if (.not. this%keep_bases) return
+    kept%v = this%basis%v
+    kept%q_ref = this%basis%q_ref
+    kept%time = this%basis%time
+    this%bases = [this%bases, kept]
+  end subroutine red_keep_basis
 
   !> Nodal shapes of the basis at the last evaluation, W = DF_dy V (n_x, k): one solve with
   !> k right-hand sides and the factors of the kinematic Jacobian, no dense DF.
@@ -190,6 +213,7 @@ contains
     end if
     this%eta_hist(:, kg) = q
     this%eta_dot_hist(:, kg) = v
+    if (this%keep_bases) this%basis_of(kg) = size(this%bases)
     if (this%static_correction) then
       call this%dyn%record(kg, t, q_dy, v_dy, status)
     else
