@@ -174,7 +174,8 @@ class Result:
     empty dicts): ``time``, ``nodes``, ``q``, ``qd``, ``energy`` and ``x`` come from
     ``&dynamic``, ``static`` from ``&static``, ``modal`` from ``&modal``, ``buckling`` from
     ``&buckling``, ``linear`` (:class:`flexmor.control.Linear`) from ``&linear``, ``reduction``
-    from ``&reduction``, ``model`` from files that store the ``/model`` group."""
+    from ``&reduction``, ``model`` from files that store the ``/model`` group, ``controllers``
+    (label -> {"error": (n_t,), "input": (n_t,)}) from ``&controller`` in a dynamic run."""
 
     path: str
     attrs: dict[str, Any]
@@ -190,6 +191,7 @@ class Result:
     reduction: dict[str, Any] | None = None
     model: Model | None = None
     linear: Linear | None = None
+    controllers: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
 
     @property
     def node_labels(self) -> list[str]:
@@ -344,6 +346,22 @@ def _read_group(group: h5py.Group) -> dict[str, Any]:
     return out
 
 
+def _read_controllers(path: str, group: Any, nt: int) -> dict[str, dict[str, np.ndarray]]:
+    """/controllers/<label>/{error,input}, each (nt,) like /time."""
+    out: dict[str, dict[str, np.ndarray]] = {}
+    if not isinstance(group, h5py.Group):
+        return out
+    for label, sub in group.items():
+        out[label] = {}
+        for name in ("error", "input"):
+            value = np.asarray(sub[name][...], dtype=float) if name in sub else None
+            if value is None or value.shape != (nt,):
+                raise ResultFileError(f"{path}: /controllers/{label}/{name} is missing or not "
+                                      f"({nt},) like /time")
+            out[label][name] = value
+    return out
+
+
 def read_result(path: str | os.PathLike) -> Result:
     """Read a flexmor result file. Raises :class:`ResultFileError` naming the file when it is
     missing, not HDF5, not a flexmor result file (no root attribute ``flexmor_version``, or a
@@ -378,6 +396,7 @@ def read_result(path: str | os.PathLike) -> Result:
                 result.energy = {k: np.asarray(v[...], dtype=float)
                                  for k, v in f["energy"].items() if isinstance(v, h5py.Dataset)}
             result.x = _coordinates(path, _float(path, f, "x"), "x", nt, "/time", model)
+            result.controllers = _read_controllers(path, f.get("controllers"), nt)
         elif "x" in f:
             raise ResultFileError(f"{path}: dataset /x without /time")
         result.static = _read_static(path, f, model)

@@ -53,6 +53,7 @@ contains
     n_done = 0
     iterations = 0
     dyn%locked = .true.
+    dyn%kin%keep_failed_guess = .true.
     lambda = 0.0_wp
     scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
     ! The scale of q: the linear response to the full load at the start.
@@ -258,5 +259,6 @@ contains
     type(dynamics_t), intent(inout) :: dyn
     dyn%locked = .false.
     dyn%load_factor = 1.0_wp
+    dyn%kin%keep_failed_guess = .false.
   end subroutine finish
 end module dynamics_continuation

@@ -3,6 +3,7 @@ submodule (model_build) model_build_control
   use model_control, only: controller_t, ACT_MODE, ACT_COORD, MEAS_MODE, MEAS_COORD
   use model_scene, only: controller_rec_t, label_t
   use core_strings, only: int_str
+  use elements_base, only: mode_class_name
   implicit none
 
   !> Node components by name, as rows of model%node_coord (x, y, phi, z).
@@ -124,6 +125,7 @@ contains
     type(controller_t), intent(out) :: c
     type(error_t), intent(inout) :: err
     character(len=:), allocatable :: where
+    integer :: h
     where = 'group &controller ''' // r%label // ''''
     c%label = r%label
     c%kp = r%kp
@@ -136,6 +138,12 @@ contains
     if (.not. err%ok()) return
     call point_of(model, r%actuator, where, 'actuator', c%act_kind, c%act_index, err)
     if (.not. err%ok()) return
+    if (any([(scene%hinges(h)%kp > 0 .and. r%actuator == scene%hinges(h)%label // '.torque', &
+              h = 1, size(scene%hinges))])) then
+      call err%set(ERR_INPUT, where // ': variable ''actuator'': the hinge has a PD of its ' // &
+        'own (&hinge kp): give the law in one place')
+      return
+    end if
     call point_of(model, r%measure, where, 'measure', c%meas_kind, c%meas_index, err)
     if (.not. err%ok() .or. .not. r%feedforward) return
     ! The rigid model's inverse dynamics gives the torque (force) of a joint that follows its
@@ -205,9 +213,10 @@ contains
     end if
   end subroutine point_of
 
-  !> The first mode of element iel, a hinge (its angle, driven by a torque) or a truss (its
-  !> elongation, driven by a force along it: a linear actuator between two nodes). Its q must
-  !> be a degree of freedom for an actuator, and exist (dynamic or prescribed) to be measured.
+  !> A mode of element iel: the first mode of a hinge (its angle, driven by a torque) or a truss
+  !> (its elongation, driven by a force along it: a linear actuator between two nodes), or, to
+  !> be measured, mode j of any element as 'e<j>' (a leaf's bending at its root). Its q must be
+  !> a degree of freedom for an actuator, and exist (dynamic or prescribed) to be measured.
   subroutine joint_point(model, iel, comp, acts, ctx, index, err)
     type(model_t), intent(in) :: model
     integer, intent(in) :: iel
@@ -217,14 +226,34 @@ contains
     type(error_t), intent(inout) :: err
     character(len=10) :: want
     logical :: truss
+    integer :: j, ios
     index = model%mode_first(iel)
-    truss = model%elements(iel)%e%type_name() == 'truss'
-    if (.not. (truss .or. model%elements(iel)%e%type_name() == 'hinge' .or. &
-               model%elements(iel)%e%type_name() == 'hinge3d')) then
-      call err%set(ERR_INPUT, ctx // ': ''' // model%elements(iel)%e%label // &
-        ''' is no hinge or truss')
-      return
-    end if
+    associate (el => model%elements(iel)%e)
+      if (.not. acts .and. len(comp) > 1 .and. comp(1:1) == 'e' .and. &
+          verify(comp(2:), '0123456789') == 0) then
+        read(comp(2:), *, iostat=ios) j
+        if (ios /= 0 .or. j < 1 .or. j > el%n_modes()) then
+          call err%set(ERR_INPUT, ctx // ': element ''' // el%label // ''' (' // &
+            el%type_name() // ') has modes e1 to e' // int_str(el%n_modes()))
+        else if (model%modes(index + j - 1)%q == 0) then
+          call err%set(ERR_INPUT, ctx // ': that mode is ' // &
+            mode_class_name(model%modes(index + j - 1)%class) // ', not a coordinate: ' // &
+            'a measured mode must be dynamic or prescribed')
+        end if
+        index = index + j - 1
+        return
+      end if
+      truss = el%type_name() == 'truss'
+      if (.not. (truss .or. el%type_name() == 'hinge' .or. el%type_name() == 'hinge3d')) then
+        if (acts) then
+          call err%set(ERR_INPUT, ctx // ': ''' // el%label // ''' is no hinge or truss')
+        else
+          call err%set(ERR_INPUT, ctx // ': ''' // el%label // ''' is no hinge or truss ' // &
+            '(any element''s mode j is measured as ''e<j>'')')
+        end if
+        return
+      end if
+    end associate
     if (acts) then
       want = merge('force     ', 'torque    ', truss)
     else

@@ -43,6 +43,11 @@ module model_kinematics
     !> failure must reach the caller: arc-length and the integrators cut their own steps, and
     !> continuation could land on another branch of a snapping structure.
     logical :: continuation = .false.
+    !> Where a failed solve leaves x: the last solution (the default: an integrator that tried
+    !> a wild step then retries a shorter one from where the model was), or, when set, the
+    !> failed attempt's predicted guess, which lets arc-length continuation cross a fold of the
+    !> kinematics (a von Mises truss passing flat).
+    logical :: keep_failed_guess = .false.
     integer :: n_solves = 0, n_iterations = 0
   contains
     procedure :: init => kin_init
@@ -270,7 +275,7 @@ contains
     real(wp), intent(in) :: q(:)
     type(error_t), intent(out) :: err
     real(wp) :: r(model%n_c), dx(model%n_c, 1), rmax, rprev, dxp(model%n_x)
-    real(wp) :: x_start(model%n_x)
+    real(wp) :: x_start(model%n_x), x_last(model%n_x)
     integer :: it, info, worst
     logical :: stale
     character(len=200) :: msg
@@ -279,10 +284,7 @@ contains
     ! close to it they contract nearly as well as fresh ones, and the solution then needs one
     ! factorisation (at the final x, for the transfer functions) instead of two.
     stale = this%has_factors
-    ! A failed solve leaves the last solution in place (not the predictor's guess for this q,
-    ! which may lie far off when an integrator tried a wild step): the next, shorter step
-    ! starts from where the model was.
-    x_start = this%x
+    x_last = this%x
     if (this%has_factors) then
       call this%apply_df(model, q - this%q, dxp)
       this%x = this%x + dxp
@@ -290,6 +292,7 @@ contains
     do it = 1, model%n_q
       if (model%q_coord(it) > 0) this%x(model%q_coord(it)) = model%x0(model%q_coord(it)) + q(it)
     end do
+    x_start = this%x
     this%has_df = .false.
     this%has_factors = .false.
     rprev = huge(1.0_wp)
@@ -337,7 +340,7 @@ contains
     write(msg, '(a,i0,a,es10.3)') 'kinematic Newton iteration did not converge in ', it - 1, &
       ' iterations, residual ', rmax
     call err%set(ERR_NUMERIC, trim(msg))
-    this%x = x_start
+    this%x = merge(x_start, x_last, this%keep_failed_guess)
   end subroutine kin_newton
 
   !> Why J_c is singular, from a dense factorisation (also in sparse mode: this is the error
