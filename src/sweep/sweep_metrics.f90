@@ -10,11 +10,13 @@ module sweep_metrics
   private
   public :: METRIC_NAMES, METRIC_UNITS, case_metrics, not_available, check_metric_node
 
-  character(len=18), parameter :: METRIC_NAMES(6) = [character(len=18) :: &
+  !> The control errors are in the measured outputs' units (m or rad), the largest over all
+  !> controllers: NaN without &controller.
+  character(len=19), parameter :: METRIC_NAMES(8) = [character(len=19) :: &
     'max_tip_deflection', 'residual_vibration', 'n_steps', 'n_model_evals', 'error_estimate', &
-    'n_modes']
-  character(len=1), parameter :: METRIC_UNITS(6) = [character(len=1) :: 'm', 'm', '', '', &
-    'm', '']
+    'n_modes', 'max_control_error', 'final_control_error']
+  character(len=1), parameter :: METRIC_UNITS(8) = [character(len=1) :: 'm', 'm', '', '', &
+    'm', '', '', '']
 
 contains
 
@@ -73,6 +75,12 @@ contains
       if (allocated(run%red)) then
         metrics(6) = real(run%red%basis%k(), wp)
         if (run%red%has_estimate) metrics(5) = maxval(run%red%estimate)
+      end if
+      if (allocated(run%control%error_hist)) then
+        if (size(run%control%error_hist, 1) > 0) then
+          metrics(7) = maxval(abs(run%control%error_hist))
+          metrics(8) = maxval(abs(run%control%error_hist(:, nt)))
+        end if
       end if
     end associate
   end subroutine case_metrics

@@ -15,7 +15,7 @@ PNG = b"\x89PNG\r\n\x1a\n"
 END, MODES = "motion.phi1.end", "reduction.n_modes"
 FAILED_MESSAGE = "numerical: CVODE too many steps at t = 0.31 s (dynamic.rtol 1e-06)"
 METRICS = ("max_tip_deflection", "residual_vibration", "n_steps", "n_model_evals",
-           "error_estimate", "n_modes")
+           "error_estimate", "n_modes", "max_control_error", "final_control_error")
 
 
 def write_sweep(path, parameters, status, metrics, wall, messages=None, rank=None, title="",
