@@ -106,6 +106,49 @@ module dynamics_system
       class(dynamics_t), intent(inout) :: this
       real(wp), intent(in) :: t
     end subroutine dyn_apply_controllers
+    !> -Mbar^-1 [K0, D0]: by Cholesky of Mbar (dense path) or by solves with the factors of
+    !> the augmented system (sparse path, O(n) per column).
+    module subroutine dyn_jacobian(this, t, q, v, dadq, dadv, status)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: t, q(:), v(:)
+      real(wp), intent(out) :: dadq(:, :), dadv(:, :)
+      integer, intent(out) :: status
+    end subroutine dyn_jacobian
+    !> The sparse path solves the Newton systems of implicit integrators itself, in O(n)
+    !> (docs/theory.md 5.2), instead of handing them a dense n_dy x n_dy Jacobian.
+    module logical function dyn_has_iteration_solver(this)
+      class(dynamics_t), intent(in) :: this
+    end function dyn_has_iteration_solver
+    !> Factor I - c_q da/dq - c_v da/dv = Mbar^-1 (Mbar + c_q K0 + c_v D0) (linearised Jacobian)
+    !> at the state of the last evaluation.
+    module subroutine dyn_iteration_factor(this, c_q, c_v, status)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: c_q, c_v
+      integer, intent(out) :: status
+    end subroutine dyn_iteration_factor
+    !> One Newton correction dx = (Mbar_s + c_q K0_s + c_v D0_s)^-1 r with the factors of the
+    !> last iteration_factor (state s) and the residual of eq. (1) at the current state,
+    !>   r = DF_dy^T (f - M DF_dy x) - sigma_dy,
+    !> by two solves with the kinematic factors: no factorisation of the augmented mass system
+    !> per iteration (the default, accelerations then a solve, needs one). r is projected with
+    !> the current DF (its zero is eq. 1); the stale factors only change how fast it converges.
+    module subroutine dyn_newton_correction(this, t, q, v, x, dx, status)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: t, q(:), v(:), x(:)
+      real(wp), intent(out) :: dx(:)
+      integer, intent(out) :: status
+    end subroutine dyn_newton_correction
+    !> The local error of the nodal coordinates, dx = DF_dy dq at the last kinematic solution,
+    !> in the largest-entry norm with weights atol + rtol s, s the largest motion of a
+    !> translation (or rotation) that the dynamic coordinates make, DF_dy q at the step's start
+    !> or end: an error bound on where the nodes are, the same on every mesh. (A norm on q
+    !> itself depends on the mesh: bending modes are l0 times angles, and an RMS over many of
+    !> them dilutes the error of the few that move the tip.)
+    module subroutine dyn_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: dq(:), q_old(:), q_new(:), rtol, atol
+      real(wp), intent(out) :: norm
+    end subroutine dyn_error_norm
   end interface
 
 contains
@@ -575,118 +618,6 @@ contains
     call this%last_error%set(err%code, err%message)
   end subroutine dyn_report
 
-  !> -Mbar^-1 [K0, D0]: by Cholesky of Mbar (dense path) or by solves with the factors of
-  !> the augmented system (sparse path, O(n) per column).
-  subroutine dyn_jacobian(this, t, q, v, dadq, dadv, status)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q(:), v(:)
-    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
-    integer, intent(out) :: status
-    real(wp) :: a(size(q)), chol(size(q), size(q)), k0(size(q), size(q)), d0(size(q), size(q))
-    integer :: j, info
-    if (this%jacobian_kind == 'fd') then
-      call system_fd_jacobian(this, t, q, v, dadq, dadv, status)
-      return
-    end if
-    call this%accel(t, q, v, a, status)
-    if (status /= 0) return
-    call this%structural_stiffness(k0, d0)
-    if (this%sparse) then
-      call this%aug%accelerations(this%model, -this%aug%nodal_equivalent(this%model, k0), dadq)
-      call this%aug%accelerations(this%model, -this%aug%nodal_equivalent(this%model, d0), dadv)
-      return
-    end if
-    chol = this%mbar
-    call chol_factor(chol, info)
-    do j = 1, size(q)
-      dadq(:, j) = -k0(:, j)
-      dadv(:, j) = -d0(:, j)
-      call chol_solve(chol, dadq(:, j))
-      call chol_solve(chol, dadv(:, j))
-    end do
-  end subroutine dyn_jacobian
-
-  !> The sparse path solves the Newton systems of implicit integrators itself, in O(n)
-  !> (docs/theory.md 5.2), instead of handing them a dense n_dy x n_dy Jacobian.
-  logical function dyn_has_iteration_solver(this)
-    class(dynamics_t), intent(in) :: this
-    dyn_has_iteration_solver = this%sparse .and. this%jacobian_kind == 'linearised'
-  end function dyn_has_iteration_solver
-
-  !> Factor I - c_q da/dq - c_v da/dv = Mbar^-1 (Mbar + c_q K0 + c_v D0) (linearised Jacobian)
-  !> at the state of the last evaluation.
-  subroutine dyn_iteration_factor(this, c_q, c_v, status)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: c_q, c_v
-    integer, intent(out) :: status
-    integer :: info
-    call this%aug%factor_newton(this%model, this%mass, c_q, c_v, info)
-    status = 0
-    if (info /= 0) status = 1
-  end subroutine dyn_iteration_factor
-
-  !> One Newton correction dx = (Mbar_s + c_q K0_s + c_v D0_s)^-1 r with the factors of the
-  !> last iteration_factor (state s) and the residual of eq. (1) at the current state,
-  !>   r = DF_dy^T (f - M DF_dy x) - sigma_dy,
-  !> by two solves with the kinematic factors: no factorisation of the augmented mass system
-  !> per iteration (the default, accelerations then a solve, needs one). r is projected with
-  !> the current DF (its zero is eq. 1); the stale factors only change how fast it converges.
-  subroutine dyn_newton_correction(this, t, q, v, x, dx, status)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q(:), v(:), x(:)
-    real(wp), intent(out) :: dx(:)
-    integer, intent(out) :: status
-    real(wp) :: dq(this%model%n_q), w(this%model%n_x, 1), r_q(this%model%n_q)
-    real(wp) :: r(size(x), 1), a(size(x), 1)
-    type(error_t) :: err
-    dx = 0.0_wp
-    call this%prepare(t, q, v, err)
-    if (err%ok()) then
-      dq = 0.0_wp
-      dq(this%model%n_rh + 1:) = x
-      call this%kin%apply_df(this%model, dq, w(:, 1))
-      w = this%mass%times(this%model, w)
-      call this%kin%apply_dft(this%model, this%nodal_force - w(:, 1), r_q)
-      r(:, 1) = r_q(this%model%n_rh + 1:) - this%sigma_now
-      call this%aug%accelerations(this%model, this%aug%nodal_equivalent(this%model, r), a, &
-        newton=.true.)
-      dx = a(:, 1)
-      call check_finite(dx, t, err)
-    end if
-    call this%report(err, status)
-    if (status /= 0) dx = 0.0_wp
-  end subroutine dyn_newton_correction
-
-  !> The local error of the nodal coordinates, dx = DF_dy dq at the last kinematic solution,
-  !> in the largest-entry norm with weights atol + rtol s, s the largest motion of a
-  !> translation (or rotation) that the dynamic coordinates make, DF_dy q at the step's start
-  !> or end: an error bound on where the nodes are, the same on every mesh. (A norm on q
-  !> itself depends on the mesh: bending modes are l0 times angles, and an RMS over many of
-  !> them dilutes the error of the few that move the tip.)
-  subroutine dyn_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: dq(:), q_old(:), q_new(:), rtol, atol
-    real(wp), intent(out) :: norm
-    real(wp) :: dqf(this%model%n_q, 3), dx(this%model%n_x, 3), motion(this%model%n_x)
-    real(wp) :: scale(this%model%n_x)
-    integer :: nr
-    nr = this%model%n_rh
-    dqf(1:nr, :) = 0.0_wp
-    dqf(nr + 1:, 1) = dq
-    dqf(nr + 1:, 2) = q_old
-    dqf(nr + 1:, 3) = q_new
-    call this%kin%apply_df_many(this%model, dqf, dx)
-    motion = max(abs(dx(:, 2)), abs(dx(:, 3)))
-    associate (rotation => this%model%coord_kind == COORD_PHI .or. &
-               this%model%coord_kind == COORD_EULER)
-      where (rotation)
-        scale = maxval(motion, mask=rotation)
-      elsewhere
-        scale = maxval(motion, mask=.not. rotation)
-      end where
-    end associate
-    norm = maxval(abs(dx(:, 1)) / (atol + rtol * scale))
-  end subroutine dyn_error_norm
 
   subroutine dyn_allocate_history(this, nt)
     class(dynamics_t), intent(inout) :: this
