@@ -2,7 +2,8 @@
 """Closed-loop trade-off: full against reduced models under feedback control.
 
 Two closed loops, each run with the full model and with reduced models (basis fixed, or
-updated when the MAC of a kept mode falls below 0.999, checked every 10 ms): the arm's open
+updated when the MAC of a kept mode falls below 0.999, checked every 10 ms, or, for the arm,
+the controlled joints held, &reduction joints = 'held'): the arm's open
 loop has two rigid-body modes (its free joints), so its reduced models keep k = 3..6 modes
 (1..4 elastic ones); the stage's k = 1..4.
 
@@ -107,8 +108,8 @@ def stage_scene(t_end: float) -> str:
 def reduced(text: str, k: int, basis: str) -> str:
     if k == 0:
         return text
-    update = (", update = 'mac', update_interval = 0.01, mac_threshold = 0.999"
-              if basis == "updated" else "")
+    update = {"updated": ", update = 'mac', update_interval = 0.01, mac_threshold = 0.999",
+              "held": ", joints = 'held'"}.get(basis, "")
     return text.replace("&output", f"&reduction n_modes = {k}{update} /\n&output", 1)
 
 
@@ -121,7 +122,7 @@ def cases(quick: bool) -> list[Case]:
         controller = "PD + feedforward" if ff else "PD"
         base = two_link_scene(ff, t_arm)
         out.append(Case("two-link", f"arm-{'ff-' if ff else ''}full", controller, 0, "", base))
-        for basis in ("fixed", "updated"):
+        for basis in ("fixed", "updated", "held"):
             for k in arm_ks:
                 out.append(Case("two-link", f"arm-{'ff-' if ff else ''}k{k}-{basis}", controller,
                                 k, basis, reduced(base, k, basis)))
@@ -235,7 +236,7 @@ def plots(outcomes: list[Outcome], out_dir: Path) -> None:
         for o in ok:
             if o.case.loop != loop or o.case.k == 0:
                 continue
-            marker = "o" if o.case.basis == "fixed" else "s"
+            marker = {"fixed": "o", "updated": "s", "held": "^"}[o.case.basis]
             color = "C1" if "feedforward" in o.case.controller else "C0"
             ax.loglog(statistics.median(o.times), max(o.metrics["diff_from_full_m"], 1e-16),
                       marker, color=color, mfc="none" if o.case.basis == "fixed" else color)
@@ -252,6 +253,8 @@ def plots(outcomes: list[Outcome], out_dir: Path) -> None:
     axes[0].plot([], [], "s", color="C0", label="PD, updated basis")
     axes[0].plot([], [], "o", color="C1", mfc="none", label="PD + feedforward, fixed")
     axes[0].plot([], [], "s", color="C1", label="PD + feedforward, updated")
+    axes[0].plot([], [], "^", color="C0", label="PD, joints held")
+    axes[0].plot([], [], "^", color="C1", label="PD + feedforward, joints held")
     axes[0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out_dir / "control_tradeoff.png", dpi=110)

@@ -4,6 +4,7 @@ submodule (analysis_run) analysis_run_linear
   use model_system, only: NODE_SLOTS
   use dynamics_linear, only: linearise, linear_model_t
   use elements_base, only: MODE_DYNAMIC
+  use model_control, only: ACT_MODE
   use reduction_basis, only: basis_spec_t, compute_basis
   implicit none
 
@@ -113,6 +114,8 @@ contains
       spec%cutoff_hz = r%cutoff_hz
       spec%auto_factor = r%auto_factor
       spec%eigensolver = r%eigensolver
+      if (r%joints == 'held') call held_joints(dyn%model, spec%held, err)
+      if (.not. err%ok()) return
       if (allocated(r%basis_prescribed)) then
         if (size(r%basis_prescribed) /= dyn%model%n_rh) then
           call err%set(ERR_INPUT, 'group &reduction: variable ''basis_prescribed'' needs ' // &
@@ -128,6 +131,24 @@ contains
         '(basis_time = ' // real_str(r%basis_time) // '): ')
     end associate
   end subroutine reduction_basis
+
+  !> The dynamic coordinates that controllers drive through a joint (&reduction joints =
+  !> 'held'), each once.
+  subroutine held_joints(model, held, err)
+    type(model_t), intent(in) :: model
+    integer, allocatable, intent(out) :: held(:)
+    type(error_t), intent(inout) :: err
+    integer :: k, j
+    allocate(held(0))
+    do k = 1, size(model%controllers)
+      if (model%controllers(k)%act_kind /= ACT_MODE) cycle
+      j = model%modes(model%controllers(k)%act_index)%q - model%n_rh
+      if (.not. any(held == j)) held = [held, j]
+    end do
+    if (size(held) == 0) call err%set(ERR_INPUT, 'group &reduction: variable ''joints'': ' // &
+      '''held'' holds the joints that controllers drive, but no &controller drives a hinge ' // &
+      'or truss')
+  end subroutine held_joints
 
   function prescribed_names(model) result(names)
     type(model_t), intent(in) :: model

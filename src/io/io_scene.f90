@@ -684,6 +684,12 @@ contains
       call rd_real(g, 'mac_threshold', r%mac_threshold, err)
       call rd_choice(g, 'eigensolver', r%eigensolver, err)
       if (r%update /= 'none') call rd_real(g, 'update_interval', r%update_interval, err)
+      call rd_choice(g, 'joints', r%joints, err)
+      if (err%ok() .and. r%joints == 'held') then
+        if (r%selection /= 'count' .or. r%update /= 'none') call err%set(ERR_INPUT, &
+          g%where() // ': variable ''joints'': ''held'' takes n_modes and a fixed basis ' // &
+          '(update = ''none''; cutoff_hz, auto_factor and basis updates are not built for it)')
+      end if
     end associate
   end subroutine read_reduction
 

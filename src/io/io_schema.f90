@@ -459,7 +459,7 @@ module io_schema
     var_spec_t('dynamic', 'rho_inf', VK_REAL, '', '0.8', .false., &
       0.0_wp, .false., 1.0_wp, .false., &
       '', 'spectral radius at infinite frequency')]
-  type(var_spec_t), parameter :: REDUCTION_VARS(10) = [ &
+  type(var_spec_t), parameter :: REDUCTION_VARS(11) = [ &
     var_spec_t('reduction', 'n_modes', VK_INT, '', 'one of three', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
       '', 'modes kept'), &
@@ -489,7 +489,10 @@ module io_schema
       '', 'MAC below which the basis is replaced'), &
     var_spec_t('reduction', 'eigensolver', VK_CHOICE, '', 'auto', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      'auto|lapack|arpack', 'eigensolver of the basis')]
+      'auto|lapack|arpack', 'eigensolver of the basis'), &
+    var_spec_t('reduction', 'joints', VK_CHOICE, '', 'free', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'free|held', 'controlled joints free or held in the basis')]
   type(var_spec_t), parameter :: OUTPUT_VARS(2) = [ &
     var_spec_t('output', 'nodes', VK_STRING_LIST, '', 'all nodes', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -498,7 +501,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(146) = [ &
+  type(var_spec_t), parameter :: SCHEMA(147) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

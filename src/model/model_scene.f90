@@ -194,6 +194,9 @@ module model_scene
     character(len=:), allocatable :: update        !< 'none', 'interval' or 'mac'
     real(wp) :: update_interval = 0.0_wp, mac_threshold = 0.9_wp
     character(len=:), allocatable :: eigensolver   !< 'auto', 'lapack' or 'arpack'
+    !> 'free' (modes of the free structure) or 'held' (the controlled joints held: their unit
+    !> motions plus the modes with them held)
+    character(len=:), allocatable :: joints
   end type reduction_rec_t
 
   type :: scene_t

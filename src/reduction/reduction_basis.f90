@@ -5,7 +5,8 @@ module reduction_basis
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use core_strings, only: int_str, real_str
-  use core_linalg, only: chol_factor
+  use core_linalg, only: chol_factor, lu_factor, lu_solve
+  use reduction_eigen, only: lowest_modes
   use dynamics_system, only: dynamics_t
   use model_kinematics, only: kin_state_t
   use reduction_modal, only: modal_result_t, modal_analysis
@@ -15,6 +16,7 @@ module reduction_basis
 
   !> Share of the prescribed acceleration's energy that defines the motion's bandwidth.
   real(wp), parameter :: BANDWIDTH_FRACTION = 0.99_wp
+  real(wp), parameter :: TWO_PI = 6.28318530717958647692_wp
 
   !> How the basis is chosen (the &reduction group).
   type :: basis_spec_t
@@ -23,6 +25,9 @@ module reduction_basis
     real(wp) :: cutoff_hz = 0.0_wp
     real(wp) :: auto_factor = 0.0_wp
     character(len=8) :: eigensolver = 'auto'
+    !> Dynamic coordinates (q_dy indices) held in the basis (joints under control, see
+    !> held_joint_basis); empty: the modes of the free structure.
+    integer, allocatable :: held(:)
   end type basis_spec_t
 
   type :: basis_t
@@ -112,8 +117,18 @@ contains
         basis%reason = basis%reason // '; none below it, so the lowest mode is kept'
       end if
     end select
-    basis%v = modes%shapes(:, 1:k)
-    basis%frequency_hz = modes%frequency_hz(1:k)
+    if (allocated(spec%held)) then
+      if (size(spec%held) > 0) then
+        call held_joint_basis(modes%k0, modes%m0, spec%held, k, spec%eigensolver, basis%v, &
+          basis%frequency_hz, err)
+        if (.not. err%ok()) return
+        basis%reason = basis%reason // ', ' // int_str(size(spec%held)) // ' joints held'
+      end if
+    end if
+    if (.not. allocated(basis%v)) then
+      basis%v = modes%shapes(:, 1:k)
+      basis%frequency_hz = modes%frequency_hz(1:k)
+    end if
     basis%q_ref = q_dy
     basis%time = t
     basis%solver = modes%solver
@@ -121,6 +136,62 @@ contains
     call chol_factor(basis%k_chol, info)
     if (info /= 0) deallocate(basis%k_chol)
   end subroutine compute_basis
+
+  !> A basis for joints under feedback control (Craig-Bampton's fixed-interface idea): the
+  !> unit motions of the held joint coordinates `held`, each with the static deflection the
+  !> rest takes, Psi = [I; -K_FF^-1 K_FL], and the lowest k - n_L modes with those joints held,
+  !> K_FF phi = omega^2 M_FF phi. A stiff controller nearly holds its joint, and links held at
+  !> their joints deflect in their held modes, which the free-joint modes span poorly. The
+  !> columns are then turned into the reduced system's own modes (Ritz vectors: M-orthonormal,
+  !> ordered by frequency), so the basis keeps the form of a modal one.
+  subroutine held_joint_basis(k0, m0, held, k, solver, v, frequency_hz, err)
+    real(wp), intent(in) :: k0(:, :), m0(:, :)
+    integer, intent(in) :: held(:), k
+    character(len=*), intent(in) :: solver
+    real(wp), allocatable, intent(out) :: v(:, :), frequency_hz(:)
+    type(error_t), intent(inout) :: err
+    real(wp), allocatable :: psi(:, :), kff(:, :), lambda(:), phi(:, :), v0(:, :), y(:, :)
+    integer, allocatable :: free(:), ipiv(:)
+    logical :: is_held(size(k0, 1))
+    integer :: n, nl, info, j
+    n = size(k0, 1)
+    nl = size(held)
+    if (k < nl .or. k > n) then
+      call err%set(ERR_INPUT, 'group &reduction: with joints = ''held'', n_modes = ' // &
+        int_str(k) // ' must be between the number of held joints (' // int_str(nl) // &
+        ') and of dynamic coordinates (' // int_str(n) // ')')
+      return
+    end if
+    is_held = .false.
+    is_held(held) = .true.
+    free = pack([(j, j = 1, n)], .not. is_held)
+    allocate(v0(n, k), source=0.0_wp)
+    kff = k0(free, free)
+    psi = -k0(free, held)
+    allocate(ipiv(size(free)))
+    call lu_factor(kff, ipiv, info)
+    if (info /= 0) then
+      call err%set(ERR_NUMERIC, 'group &reduction: joints = ''held'': the structure with ' // &
+        'the controlled joints held has no stiffness against some motion (a free joint ' // &
+        'without a controller, or a mechanism)')
+      return
+    end if
+    call lu_solve(kff, ipiv, psi)
+    do j = 1, nl
+      v0(held(j), j) = 1.0_wp
+      v0(free, j) = psi(:, j)
+    end do
+    if (k > nl) then
+      call lowest_modes(k0(free, free), m0(free, free), k - nl, solver, lambda, phi, err)
+      if (.not. err%ok()) return
+      v0(free, nl + 1:) = phi
+    end if
+    call lowest_modes(matmul(transpose(v0), matmul(k0, v0)), &
+      matmul(transpose(v0), matmul(m0, v0)), k, 'lapack', lambda, y, err)
+    if (.not. err%ok()) return
+    v = matmul(v0, y)
+    frequency_hz = sign(sqrt(abs(lambda)), lambda) / TWO_PI
+  end subroutine held_joint_basis
 
   !> The cut-off frequency of 'cutoff' and 'auto' selections.
   subroutine choose_cutoff(dyn, spec, basis, err)
