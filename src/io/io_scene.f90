@@ -289,6 +289,10 @@ contains
     call rd_choice(g, 'mode', r%mode, err)
     call rd_choice(g, 'mass', r%mass, err)
     call rd_real(g, 'damping', r%damping, err)
+    if (err%ok()) call only_with(g, ['force    ', 'force_law'], r%mode == 'dynamic', &
+      'with mode = ''dynamic'' (an actuator drives a degree of freedom)', err)
+    call rd_real(g, 'force', r%force, err)
+    call rd_string(g, 'force_law', r%force_law, err)
   end subroutine read_truss
 
   !> A slider; the node and the guide's length are checked by model_build (add_sliders).

@@ -202,7 +202,7 @@ module io_schema
     var_spec_t('hinge', 'reference', VK_STRING, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'PD controller: motion of the reference angle')]
-  type(var_spec_t), parameter :: TRUSS_VARS(9) = [ &
+  type(var_spec_t), parameter :: TRUSS_VARS(11) = [ &
     var_spec_t('truss', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'name'), &
@@ -229,7 +229,13 @@ module io_schema
       'consistent|lumped', 'mass model'), &
     var_spec_t('truss', 'damping', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
-      '', 'stiffness-proportional time constant')]
+      '', 'stiffness-proportional time constant'), &
+    var_spec_t('truss', 'force', VK_REAL, 'N', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'actuator force along a dynamic truss'), &
+    var_spec_t('truss', 'force_law', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion whose value scales force')]
   type(var_spec_t), parameter :: SLIDER_VARS(6) = [ &
     var_spec_t('slider', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -501,7 +507,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(147) = [ &
+  type(var_spec_t), parameter :: SCHEMA(149) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

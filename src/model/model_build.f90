@@ -301,6 +301,10 @@ contains
         if (allocated(scene%controllers(h)%reference)) used(i) = used(i) .or. &
           scene%controllers(h)%reference == scene%motions(i)%label
       end do
+      do h = 1, size(scene%trusses)
+        if (allocated(scene%trusses(h)%force_law)) used(i) = used(i) .or. &
+          scene%trusses(h)%force_law == scene%motions(i)%label
+      end do
     end do
     grew = .true.
     do while (grew)

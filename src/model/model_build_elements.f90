@@ -148,7 +148,7 @@ contains
 
   module procedure add_trusses
     type(truss_t) :: truss
-    integer :: i, ia, ib, idx, c, k
+    integer :: i, ia, ib, idx, c, k, im
     do i = 1, size(scene%trusses)
       associate (r => scene%trusses(i), where => 'group &truss ''' // scene%trusses(i)%label // '''')
         call require_node(scene, r%from, where, 'from', ia, err)
@@ -177,6 +177,9 @@ contains
         truss%damping = r%damping
         truss%mode_class = [c]
         idx = model%add_element(truss, [0])
+        call motion_named(scene, r%force_law, where, 'force_law', im, err)
+        if (.not. err%ok()) return
+        if (r%force /= 0 .or. im > 0) call model%add_actuator(idx, r%force, im)
       end associate
     end do
   end procedure add_trusses

@@ -85,6 +85,10 @@ module model_scene
   type :: truss_rec_t
     character(len=:), allocatable :: label, from, to, mode, mass
     real(wp) :: e_modulus = 0.0_wp, area = 0.0_wp, density = 0.0_wp, damping = 0.0_wp
+    !> A linear actuator along a dynamic truss: a force [N], constant or times the value of
+    !> the motion `force_law` ('' none).
+    real(wp) :: force = 0.0_wp
+    character(len=:), allocatable :: force_law
   end type truss_rec_t
 
   !> A slider: `node` moves along the line through its reference position along `direction`.
