@@ -187,7 +187,8 @@ contains
       in = 0
       if (dot > 1) in = this%dyn%model%find_node(node)
       if (in == 0 .and. dot > 1) then
-        ! A hinge: 'label.torque' (input) or 'label.angle' (output) of its dynamic angle.
+        ! A hinge's 'label.torque' (input) or 'label.angle' (output) of its dynamic angle, or
+        ! a truss's 'label.force' or 'label.elongation'.
         call joint_coordinate(this, node, comp, var, which(:, i), err)
         if (.not. err%ok()) return
         if (which(1, i) > 0) cycle
@@ -215,29 +216,39 @@ contains
     end do
   end subroutine components
 
-  !> The dynamic coordinate of hinge `label`'s angle, for the component 'torque' (an input)
-  !> or 'angle' (an output): which = (index in q_dy, 0, ..., 0). which(1) = 0 when `label` is
-  !> no hinge; an error when it is one but the component or its mode class does not fit.
+  !> The dynamic coordinate of a hinge's angle or a truss's elongation, for the component
+  !> 'torque' / 'force' (an input) or 'angle' / 'elongation' (an output): which = (index in
+  !> q_dy, 0, ..., 0). which(1) = 0 when `label` is no hinge or truss; an error when it is one
+  !> but the component or its mode class does not fit.
   subroutine joint_coordinate(this, label, comp, var, which, err)
     type(run_t), intent(in) :: this
     character(len=*), intent(in) :: label, comp, var
     integer, intent(out) :: which(:)
     type(error_t), intent(inout) :: err
-    character(len=6) :: want
+    character(len=10) :: want
+    character(len=:), allocatable :: kind
     integer :: iel, h
     which = 0
-    if (.not. any([(this%scene%hinges(h)%label == label, h = 1, size(this%scene%hinges))])) &
+    if (any([(this%scene%hinges(h)%label == label, h = 1, size(this%scene%hinges))])) then
+      kind = 'hinge'
+      want = merge('torque    ', 'angle     ', var == 'inputs')
+    else if (any([(this%scene%trusses(h)%label == label, h = 1, &
+                   size(this%scene%trusses))])) then
+      kind = 'truss'
+      want = merge('force     ', 'elongation', var == 'inputs')
+    else
       return
+    end if
     associate (m => this%dyn%model)
       do iel = 1, m%n_elements
         if (m%elements(iel)%e%label /= label) cycle
-        want = merge('torque', 'angle ', var == 'inputs')
         if (comp /= trim(want)) then
           call err%set(ERR_INPUT, 'group &linear: variable ''' // var // ''': ''' // label // &
-            '.' // comp // ''': a hinge''s ' // var // ' component is ''' // trim(want) // '''')
+            '.' // comp // ''': a ' // kind // '''s ' // var // ' component is ''' // &
+            trim(want) // '''')
         else if (m%modes(m%mode_first(iel))%class /= MODE_DYNAMIC) then
-          call err%set(ERR_INPUT, 'group &linear: variable ''' // var // ''': hinge ''' // &
-            label // ''' is not dynamic (its angle is no degree of freedom)')
+          call err%set(ERR_INPUT, 'group &linear: variable ''' // var // ''': ' // kind // &
+            ' ''' // label // ''' is not dynamic (its mode is no degree of freedom)')
         else
           which(1) = m%modes(m%mode_first(iel))%q - m%n_rh
         end if

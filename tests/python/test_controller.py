@@ -424,3 +424,24 @@ def test_truss_force_needs_a_dynamic_truss(tmp_path):
     text = BLOCK.replace("mode = 'dynamic' /", "mode = 'rigid', force = 1.0 /")
     proc, out = run_scene(tmp_path, text)
     assert_clean_error(proc, out, "&truss", "'force'", "dynamic")
+
+
+def test_linear_model_of_a_truss_actuator(tmp_path):
+    """&linear with the truss's force as input and its elongation as output: 1/(m s^2 + k),
+    so the DC gain is 1/k and the eigenvalues +-i sqrt(k/m) (a 2-state model). Observed 1e-12
+    relative; bound 1e-8. A hinge component on a truss is refused."""
+    block = BLOCK.replace("&motion label = 'step', law = 'constant', start = 1.0e-3 /\n", "")
+    out = run_ok(tmp_path, block + "&linear inputs = 'spring.force', "
+                 "outputs = 'spring.elongation', 'block.x' /\n")
+    with h5py.File(out) as f:
+        a, b, c = f["linear/A"][0], f["linear/B"][0], f["linear/C"][0]
+    k = EA / L0
+    dc = -c @ np.linalg.solve(a, b)
+    assert dc[0, 0] == pytest.approx(1 / k, rel=1e-8)
+    assert dc[1, 0] == pytest.approx(C / k, rel=1e-8)
+    assert np.allclose(np.sort(np.linalg.eigvals(a).imag), [-math.sqrt(k / M), math.sqrt(k / M)],
+                       rtol=1e-8, atol=0)
+    (tmp_path / "bad").mkdir()
+    proc, out = run_scene(tmp_path / "bad", block + "&linear inputs = 'spring.torque', "
+                          "outputs = 'block.x' /\n")
+    assert_clean_error(proc, out, "&linear", "'inputs'", "'force'")
