@@ -12,10 +12,15 @@
 !> computes u = kp e + ki I + kd e' and adds T e to its discrete integral I.
 !> Either kind stops integrating while its actuator is at a limit and e pushes further into it
 !> (model_control's winds_up).
+!> A user law (law = 'user') has n_states states x of its own, carried like the PID's I: the
+!> velocities of extra coordinates whose accelerations are the law's dx/dt (continuous), or
+!> replaced by the law's next x at each sample (sampled, where u is held as above).
 module dynamics_control
   use core_kinds, only: wp
   use integrators_system, only: ode2_system_t
   use dynamics_system, only: dynamics_t
+  use model_control, only: LAW_USER, controller_sizes
+  use core_error, only: error_t
   implicit none
   private
   public :: controlled_t
@@ -26,15 +31,18 @@ module dynamics_control
     !> The full model the plant evaluates (the plant itself, or the reduced model's): it
     !> holds the controllers and their last errors and outputs.
     type(dynamics_t), pointer :: dyn => null()
-    integer :: n = 0, nc = 0
+    !> Plant coordinates, controllers, and the controllers' actuators, outputs and states.
+    integer :: n = 0, nc = 0, nu = 0, ny = 0, nx = 0
     real(wp) :: t0 = 0.0_wp
-    !> Sampled controllers: their discrete integrals and the number of samples taken.
-    real(wp), allocatable :: integral(:)
+    !> Sampled controllers: their states (a PID's discrete integral, a user law's x; the
+    !> continuous ones' entries are unused) and the number of samples taken.
+    real(wp), allocatable :: x_sampled(:)
     integer, allocatable :: n_samples(:)
     !> Last state recorded, for a run that continues in segments (reduced with updates).
     real(wp), allocatable :: last_s(:), last_i(:)
-    !> At the output times, per controller: the error e = r - y and the applied output u.
-    real(wp), allocatable, public :: error_hist(:, :), u_hist(:, :)
+    !> At the output times: per controller a PID's error e = r - y, per actuator the applied
+    !> output u, per measured output y (model_control's offsets).
+    real(wp), allocatable, public :: error_hist(:, :), u_hist(:, :), y_hist(:, :)
     !> A run in segments (reduced with basis updates) maps the output index k of a record to
     !> the run's (0: not an output); not allocated: the same.
     integer, allocatable, public :: out_index(:)
@@ -51,7 +59,7 @@ module dynamics_control
 contains
 
   !> Wrap `plant` (n coordinates), whose evaluations go through `dyn`, from time t0. The
-  !> controllers start with zero integrals.
+  !> controllers start with zero states.
   subroutine control_init(this, plant, dyn, n, t0)
     class(controlled_t), intent(inout) :: this
     class(ode2_system_t), intent(in), target :: plant
@@ -62,16 +70,17 @@ contains
     this%dyn => dyn
     this%n = n
     this%nc = size(dyn%model%controllers)
+    call controller_sizes(dyn%model%controllers, this%nu, this%ny, this%nx)
     this%t0 = t0
-    allocate(this%integral(this%nc), this%n_samples(this%nc))
-    this%integral = 0.0_wp
+    allocate(this%x_sampled(this%nx), this%n_samples(this%nc))
+    this%x_sampled = 0.0_wp
     this%n_samples = 0
-    this%last_s = this%integral
-    this%last_i = this%integral
+    this%last_s = this%x_sampled
+    this%last_i = this%x_sampled
   end subroutine control_init
 
-  !> The augmented initial state: the plant's (q, v), then s = 0 and the integrals recorded
-  !> last (zero at the start).
+  !> The augmented initial state: the plant's (q, v), then s and the controllers' states
+  !> recorded last (zero at the start).
   subroutine control_state(this, q_plant, v_plant, q, v)
     class(controlled_t), intent(in) :: this
     real(wp), intent(in) :: q_plant(:), v_plant(:)
@@ -83,25 +92,31 @@ contains
   subroutine control_allocate_history(this, nt)
     class(controlled_t), intent(inout) :: this
     integer, intent(in) :: nt
-    if (allocated(this%error_hist)) deallocate(this%error_hist, this%u_hist)
-    allocate(this%error_hist(this%nc, nt), this%u_hist(this%nc, nt))
+    if (allocated(this%error_hist)) deallocate(this%error_hist, this%u_hist, this%y_hist)
+    allocate(this%error_hist(this%nc, nt), this%u_hist(this%nu, nt), this%y_hist(this%ny, nt))
     this%error_hist = 0.0_wp
     this%u_hist = 0.0_wp
+    this%y_hist = 0.0_wp
   end subroutine control_allocate_history
 
-  !> Continuous controllers take their integral from the state, sampled ones their own.
-  subroutine set_integrals(this, v)
+  !> Continuous controllers take their states from the integrated state, sampled ones their
+  !> own.
+  subroutine set_states(this, v)
     type(controlled_t), intent(inout) :: this
     real(wp), intent(in) :: v(:)
     integer :: k
     do k = 1, this%nc
-      if (this%dyn%model%controllers(k)%sampled()) then
-        this%dyn%ctrl_integral(k) = this%integral(k)
-      else
-        this%dyn%ctrl_integral(k) = v(this%n + k)
-      end if
+      associate (c => this%dyn%model%controllers(k))
+        associate (i => c%x_offset + 1, j => c%x_offset + c%n_x())
+          if (c%sampled()) then
+            this%dyn%ctrl_x(i:j) = this%x_sampled(i:j)
+          else
+            this%dyn%ctrl_x(i:j) = v(this%n + i:this%n + j)
+          end if
+        end associate
+      end associate
     end do
-  end subroutine set_integrals
+  end subroutine set_states
 
   subroutine control_accel(this, t, q, v, a, status)
     class(controlled_t), intent(inout) :: this
@@ -110,13 +125,20 @@ contains
     integer, intent(out) :: status
     integer :: k, n
     n = this%n
-    call set_integrals(this, v)
+    call set_states(this, v)
     call this%plant%accel(t, q(1:n), v(1:n), a(1:n), status)
     a(n + 1:) = 0.0_wp
     if (status /= 0) return
     do k = 1, this%nc
       associate (c => this%dyn%model%controllers(k), e => this%dyn%ctrl_error(k))
-        if (.not. c%sampled() .and. .not. c%winds_up(this%dyn%ctrl_law(k), e)) a(n + k) = e
+        if (c%sampled()) cycle
+        associate (i => n + c%x_offset + 1, j => n + c%x_offset + c%n_x())
+          if (c%law_kind == LAW_USER) then
+            a(i:j) = this%dyn%ctrl_x_rate(i - n:j - n)
+          else if (.not. c%winds_up(this%dyn%ctrl_law(k), e)) then
+            a(i) = e
+          end if
+        end associate
       end associate
     end do
   end subroutine control_accel
@@ -137,6 +159,7 @@ contains
     if (kg > 0) then
       this%error_hist(:, kg) = this%dyn%ctrl_error
       this%u_hist(:, kg) = this%dyn%ctrl_u
+      this%y_hist(:, kg) = this%dyn%ctrl_y
     end if
     this%last_s = q(this%n + 1:)
     this%last_i = v(this%n + 1:)
@@ -153,12 +176,15 @@ contains
   end subroutine control_error_norm
 
   !> Samples due at t (t0 + i T, the times the run made breakpoints of): measure, hold the
-  !> limited output, and integrate the error over the coming period.
+  !> limited output, and integrate the error over the coming period (a PID) or take the
+  !> law's next states (a user law).
   subroutine control_at_breakpoint(this, t, q, v, status)
     class(controlled_t), intent(inout) :: this
     real(wp), intent(in) :: t, q(:), v(:)
     integer, intent(out) :: status
     real(wp) :: a(size(q))
+    real(wp), allocatable :: x_next(:), u(:)
+    type(error_t) :: err
     logical :: measured
     integer :: k
     status = 0
@@ -173,9 +199,22 @@ contains
           if (status /= 0) return
           measured = .true.
         end if
-        this%dyn%ctrl_held(k) = c%limited(this%dyn%ctrl_law(k))
-        if (.not. c%winds_up(this%dyn%ctrl_law(k), this%dyn%ctrl_error(k))) &
-          this%integral(k) = this%integral(k) + c%period * this%dyn%ctrl_error(k)
+        associate (i => c%x_offset + 1, j => c%x_offset + c%n_x(), &
+                   iu => c%u_offset + 1, ju => c%u_offset + size(c%act_index))
+          if (c%law_kind == LAW_USER) then
+            allocate(x_next(j - i + 1), u(ju - iu + 1))
+            call this%dyn%user_law(k, t, x_next, u, err)
+            call this%dyn%report(err, status)
+            if (status /= 0) return
+            this%dyn%ctrl_held(iu:ju) = c%limited(u)
+            this%x_sampled(i:j) = x_next
+            deallocate(x_next, u)
+          else
+            this%dyn%ctrl_held(iu) = c%limited(this%dyn%ctrl_law(k))
+            if (.not. c%winds_up(this%dyn%ctrl_law(k), this%dyn%ctrl_error(k))) &
+              this%x_sampled(i) = this%x_sampled(i) + c%period * this%dyn%ctrl_error(k)
+          end if
+        end associate
         this%n_samples(k) = this%n_samples(k) + 1
       end associate
     end do

@@ -1,6 +1,7 @@
 !> &controller groups: where each controller measures and acts, resolved on the built model.
 submodule (model_build) model_build_control
-  use model_control, only: controller_t, ACT_MODE, ACT_COORD, MEAS_MODE, MEAS_COORD
+  use model_control, only: controller_t, ACT_MODE, ACT_COORD, MEAS_MODE, MEAS_COORD, LAW_USER, &
+    LAW_PID, controller_sizes
   use model_scene, only: controller_rec_t
   implicit none
 
@@ -23,6 +24,7 @@ contains
         end if
         call controller_of(scene, model, r, c, err)
         if (.not. err%ok()) return
+        call controller_sizes(model%controllers, c%u_offset, c%y_offset, c%x_offset)
         model%controllers = [model%controllers, c]
       end associate
     end do
@@ -35,8 +37,11 @@ contains
     type(controller_t), intent(out) :: c
     type(error_t), intent(inout) :: err
     character(len=:), allocatable :: where
+    integer :: i
     where = 'group &controller ''' // r%label // ''''
     c%label = r%label
+    c%law_kind = merge(LAW_USER, LAW_PID, r%law == 'user')
+    c%n_states = r%n_states
     c%kp = r%kp
     c%ki = r%ki
     c%kd = r%kd
@@ -45,9 +50,18 @@ contains
     c%u_max = r%u_max
     call motion_named(scene, r%reference, where, 'reference', c%reference, err)
     if (.not. err%ok()) return
-    call point_of(model, r%actuator, where, 'actuator', c%act_kind, c%act_index, err)
-    if (.not. err%ok()) return
-    call point_of(model, r%measure, where, 'measure', c%meas_kind, c%meas_index, err)
+    allocate(c%act_kind(size(r%actuator)), c%act_index(size(r%actuator)))
+    allocate(c%meas_kind(size(r%measure)), c%meas_index(size(r%measure)))
+    do i = 1, size(r%actuator)
+      call point_of(model, r%actuator(i)%s, where, 'actuator', c%act_kind(i), c%act_index(i), &
+        err)
+      if (.not. err%ok()) return
+    end do
+    do i = 1, size(r%measure)
+      call point_of(model, r%measure(i)%s, where, 'measure', c%meas_kind(i), c%meas_index(i), &
+        err)
+      if (.not. err%ok()) return
+    end do
   end subroutine controller_of
 
   !> 'name.component' of an actuator (var = 'actuator') or a measured output: a joint's mode
