@@ -175,7 +175,8 @@ class Result:
     ``&dynamic``, ``static`` from ``&static``, ``modal`` from ``&modal``, ``buckling`` from
     ``&buckling``, ``linear`` (:class:`flexmor.control.Linear`) from ``&linear``, ``reduction``
     from ``&reduction``, ``model`` from files that store the ``/model`` group, ``controllers``
-    (label -> {"error": (n_t,), "input": (n_t,)}) from ``&controller`` in a dynamic run."""
+    (label -> {"error": (n_t,), "input": ..., "measure": ...}) from ``&controller`` in a
+    dynamic run."""
 
     path: str
     attrs: dict[str, Any]
@@ -347,17 +348,18 @@ def _read_group(group: h5py.Group) -> dict[str, Any]:
 
 
 def _read_controllers(path: str, group: Any, nt: int) -> dict[str, dict[str, np.ndarray]]:
-    """/controllers/<label>/{error,input}, each (nt,) like /time."""
+    """/controllers/<label>/{error,input,measure}: (nt,) like /time, or (n, nt) for a user
+    law's several actuators or measured outputs (a user law has no error)."""
     out: dict[str, dict[str, np.ndarray]] = {}
     if not isinstance(group, h5py.Group):
         return out
     for label, sub in group.items():
         out[label] = {}
-        for name in ("error", "input"):
-            value = np.asarray(sub[name][...], dtype=float) if name in sub else None
-            if value is None or value.shape != (nt,):
-                raise ResultFileError(f"{path}: /controllers/{label}/{name} is missing or not "
-                                      f"({nt},) like /time")
+        for name, value in sub.items():
+            value = np.asarray(value[...], dtype=float)
+            if value.ndim not in (1, 2) or value.shape[-1] != nt:
+                raise ResultFileError(f"{path}: /controllers/{label}/{name} has shape "
+                                      f"{value.shape}, expected (..., {nt}) like /time")
             out[label][name] = value
     return out
 

@@ -27,6 +27,7 @@ module analysis_run
   use reduction_basis, only: basis_t
   use reduction_system, only: reduced_t
   use dynamics_control, only: controlled_t
+  use model_control, only: control_law_t
   use reduction_adaptive, only: update_spec_t, update_log_t, integrate_reduced
   implicit none
   private
@@ -74,9 +75,23 @@ module analysis_run
     procedure :: load_parsed => run_load_parsed
     procedure :: execute => run_execute
     procedure :: write => run_write
+    procedure :: set_control_law => run_set_control_law
   end type run_t
 
   interface
+    !> Give the &controller `label` (law = 'user') its law, after load and before execute; the
+    !> run keeps a copy (analysis_run_control).
+    module subroutine run_set_control_law(this, label, law, err)
+      class(run_t), intent(inout) :: this
+      character(len=*), intent(in) :: label
+      class(control_law_t), intent(in) :: law
+      type(error_t), intent(out) :: err
+    end subroutine run_set_control_law
+    !> Every &controller with law = 'user' has its law (analysis_run_control).
+    module subroutine check_control_laws(this, err)
+      type(run_t), intent(in) :: this
+      type(error_t), intent(inout) :: err
+    end subroutine check_control_laws
     !> Write the result file (temporary name, renamed on success); layout in docs/output.md.
     module subroutine run_write(this, path, err)
       class(run_t), intent(inout) :: this
@@ -234,7 +249,8 @@ contains
     integer(i8) :: c0, c1, rate
     this%progress%enabled = this%verbose
     call system_clock(c0, rate)
-    call run_analyses(this, err)
+    call check_control_laws(this, err)
+    if (err%ok()) call run_analyses(this, err)
     if (.not. err%ok()) then
       call err%prefix(this%file%path // ': ')
       return

@@ -138,12 +138,16 @@ contains
     type(model_t), intent(in) :: model
     integer, allocatable, intent(out) :: held(:)
     type(error_t), intent(inout) :: err
-    integer :: k, j
+    integer :: k, j, i
     allocate(held(0))
     do k = 1, size(model%controllers)
-      if (model%controllers(k)%act_kind /= ACT_MODE) cycle
-      j = model%modes(model%controllers(k)%act_index)%q - model%n_rh
-      if (.not. any(held == j)) held = [held, j]
+      associate (c => model%controllers(k))
+        do i = 1, size(c%act_index)
+          if (c%act_kind(i) /= ACT_MODE) cycle
+          j = model%modes(c%act_index(i))%q - model%n_rh
+          if (.not. any(held == j)) held = [held, j]
+        end do
+      end associate
     end do
     if (size(held) == 0) call err%set(ERR_INPUT, 'group &reduction: variable ''joints'': ' // &
       '''held'' holds the joints that controllers drive, but no &controller drives a hinge ' // &

@@ -1,6 +1,7 @@
 !> The result file of one run (layout: docs/output.md): the writers of analysis_run.
 submodule (analysis_run) analysis_run_output
   use model_system, only: COORD_PHI, COORD_Y, COORD_Z, COORD_EULER, NODE_SLOTS
+  use model_control, only: LAW_PID
   implicit none
 
 contains
@@ -252,7 +253,9 @@ contains
     if (err%ok()) call write_controllers(this, h5, err)
   end subroutine write_dynamic
 
-  !> /controllers/<label>/error (e = r - y) and /input (the applied u) at the output times.
+  !> /controllers/<label>/input (the applied u) and /measure (y) at the output times, one
+  !> column per actuator or measured output when there are several; /error (e = r - y) of a
+  !> PID.
   subroutine write_controllers(this, h5, err)
     type(run_t), intent(in) :: this
     type(h5_writer_t), intent(inout) :: h5
@@ -261,12 +264,25 @@ contains
     associate (c => this%dyn%model%controllers)
       if (.not. allocated(this%control%error_hist)) return
       do k = 1, size(c)
-        if (err%ok()) call h5%write_real_1d('/controllers/' // c(k)%label // '/error', &
-          this%control%error_hist(k, :), err)
-        if (err%ok()) call h5%write_real_1d('/controllers/' // c(k)%label // '/input', &
-          this%control%u_hist(k, :), err)
+        if (err%ok() .and. c(k)%law_kind == LAW_PID) call h5%write_real_1d('/controllers/' // &
+          c(k)%label // '/error', this%control%error_hist(k, :), err)
+        call write_channels('/controllers/' // c(k)%label // '/input', &
+          this%control%u_hist(c(k)%u_offset + 1:c(k)%u_offset + size(c(k)%act_index), :))
+        call write_channels('/controllers/' // c(k)%label // '/measure', &
+          this%control%y_hist(c(k)%y_offset + 1:c(k)%y_offset + size(c(k)%meas_index), :))
       end do
     end associate
+  contains
+    subroutine write_channels(name, hist)
+      character(len=*), intent(in) :: name
+      real(wp), intent(in) :: hist(:, :)
+      if (.not. err%ok()) return
+      if (size(hist, 1) == 1) then
+        call h5%write_real_1d(name, hist(1, :), err)
+      else
+        call h5%write_real_2d(name, hist, err)
+      end if
+    end subroutine write_channels
   end subroutine write_controllers
 
   !> The reduced analysis: basis, reduced coordinates, error indicator and basis updates.

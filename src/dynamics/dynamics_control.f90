@@ -12,12 +12,16 @@
 !> computes u = kp e + ki I + kd e' and adds T e to its discrete integral I.
 !> Either kind stops integrating while its actuator is at a limit and e pushes further into it
 !> (model_control's winds_up).
+!> A user law (law = 'user') has n_states states x of its own, carried like the PID's I: the
+!> velocities of extra coordinates whose accelerations are the law's dx/dt (continuous), or
+!> replaced by the law's next x at each sample (sampled, where u is held as above).
 module dynamics_control
   use core_kinds, only: wp
   use core_error, only: error_t
   use model_system, only: model_t
   use integrators_system, only: ode2_system_t
   use dynamics_system, only: dynamics_t
+  use model_control, only: LAW_USER, controller_sizes
   implicit none
   private
   public :: controlled_t
@@ -28,10 +32,12 @@ module dynamics_control
     !> The full model the plant evaluates (the plant itself, or the reduced model's): it
     !> holds the controllers and their last errors and outputs.
     type(dynamics_t), pointer :: dyn => null()
-    integer :: n = 0, nc = 0
+    !> Plant coordinates, controllers, and the controllers' actuators, outputs and states.
+    integer :: n = 0, nc = 0, nu = 0, ny = 0, nx = 0
     real(wp) :: t0 = 0.0_wp
-    !> Sampled controllers: their discrete integrals and the number of samples taken.
-    real(wp), allocatable :: integral(:)
+    !> Sampled controllers: their states (a PID's discrete integral, a user law's x; the
+    !> continuous ones' entries are unused) and the number of samples taken.
+    real(wp), allocatable :: x_sampled(:)
     integer, allocatable :: n_samples(:)
     !> Feedforward: the rigid-body model, whose dynamic coordinate ff_q(k) is the joint that
     !> controller k drives (0: no feedforward).
@@ -39,8 +45,9 @@ module dynamics_control
     integer, allocatable :: ff_q(:)
     !> Last state recorded, for a run that continues in segments (reduced with updates).
     real(wp), allocatable :: last_s(:), last_i(:)
-    !> At the output times, per controller: the error e = r - y and the applied output u.
-    real(wp), allocatable, public :: error_hist(:, :), u_hist(:, :)
+    !> At the output times: per controller a PID's error e = r - y, per actuator the applied
+    !> output u, per measured output y (model_control's offsets).
+    real(wp), allocatable, public :: error_hist(:, :), u_hist(:, :), y_hist(:, :)
     !> A run in segments (reduced with basis updates) maps the output index k of a record to
     !> the run's (0: not an output); not allocated: the same.
     integer, allocatable, public :: out_index(:)
@@ -59,7 +66,7 @@ module dynamics_control
 contains
 
   !> Wrap `plant` (n coordinates), whose evaluations go through `dyn`, from time t0. The
-  !> controllers start with zero integrals.
+  !> controllers start with zero states.
   subroutine control_init(this, plant, dyn, n, t0)
     class(controlled_t), intent(inout) :: this
     class(ode2_system_t), intent(in), target :: plant
@@ -70,12 +77,13 @@ contains
     this%dyn => dyn
     this%n = n
     this%nc = size(dyn%model%controllers)
+    call controller_sizes(dyn%model%controllers, this%nu, this%ny, this%nx)
     this%t0 = t0
-    allocate(this%integral(this%nc), this%n_samples(this%nc))
-    this%integral = 0.0_wp
+    allocate(this%x_sampled(this%nx), this%n_samples(this%nc))
+    this%x_sampled = 0.0_wp
     this%n_samples = 0
-    this%last_s = this%integral
-    this%last_i = this%integral
+    this%last_s = this%x_sampled
+    this%last_i = this%x_sampled
   end subroutine control_init
 
   !> Feedforward from the rigid-body model `rigid` (model_build's build_rigid_model), whose
@@ -126,12 +134,13 @@ contains
     if (status /= 0) return
     tau = matmul(this%rigid%mbar, a) - this%rigid%gen_force
     do k = 1, size(this%ff_q)
-      if (this%ff_q(k) > 0) this%dyn%ctrl_ff(k) = tau(this%ff_q(k))
+      if (this%ff_q(k) > 0) &
+        this%dyn%ctrl_ff(this%dyn%model%controllers(k)%u_offset + 1) = tau(this%ff_q(k))
     end do
   end subroutine feedforward
 
-  !> The augmented initial state: the plant's (q, v), then s = 0 and the integrals recorded
-  !> last (zero at the start).
+  !> The augmented initial state: the plant's (q, v), then s and the controllers' states
+  !> recorded last (zero at the start).
   subroutine control_state(this, q_plant, v_plant, q, v)
     class(controlled_t), intent(in) :: this
     real(wp), intent(in) :: q_plant(:), v_plant(:)
@@ -143,25 +152,31 @@ contains
   subroutine control_allocate_history(this, nt)
     class(controlled_t), intent(inout) :: this
     integer, intent(in) :: nt
-    if (allocated(this%error_hist)) deallocate(this%error_hist, this%u_hist)
-    allocate(this%error_hist(this%nc, nt), this%u_hist(this%nc, nt))
+    if (allocated(this%error_hist)) deallocate(this%error_hist, this%u_hist, this%y_hist)
+    allocate(this%error_hist(this%nc, nt), this%u_hist(this%nu, nt), this%y_hist(this%ny, nt))
     this%error_hist = 0.0_wp
     this%u_hist = 0.0_wp
+    this%y_hist = 0.0_wp
   end subroutine control_allocate_history
 
-  !> Continuous controllers take their integral from the state, sampled ones their own.
-  subroutine set_integrals(this, v)
+  !> Continuous controllers take their states from the integrated state, sampled ones their
+  !> own.
+  subroutine set_states(this, v)
     type(controlled_t), intent(inout) :: this
     real(wp), intent(in) :: v(:)
     integer :: k
     do k = 1, this%nc
-      if (this%dyn%model%controllers(k)%sampled()) then
-        this%dyn%ctrl_integral(k) = this%integral(k)
-      else
-        this%dyn%ctrl_integral(k) = v(this%n + k)
-      end if
+      associate (c => this%dyn%model%controllers(k))
+        associate (i => c%x_offset + 1, j => c%x_offset + c%n_x())
+          if (c%sampled()) then
+            this%dyn%ctrl_x(i:j) = this%x_sampled(i:j)
+          else
+            this%dyn%ctrl_x(i:j) = v(this%n + i:this%n + j)
+          end if
+        end associate
+      end associate
     end do
-  end subroutine set_integrals
+  end subroutine set_states
 
   subroutine control_accel(this, t, q, v, a, status)
     class(controlled_t), intent(inout) :: this
@@ -171,7 +186,7 @@ contains
     integer :: k, n
     n = this%n
     a = 0.0_wp
-    call set_integrals(this, v)
+    call set_states(this, v)
     if (allocated(this%rigid)) then
       call feedforward(this, t, status)
       if (status /= 0) then
@@ -185,7 +200,14 @@ contains
     if (status /= 0) return
     do k = 1, this%nc
       associate (c => this%dyn%model%controllers(k), e => this%dyn%ctrl_error(k))
-        if (.not. c%sampled() .and. .not. c%winds_up(this%dyn%ctrl_law(k), e)) a(n + k) = e
+        if (c%sampled()) cycle
+        associate (i => n + c%x_offset + 1, j => n + c%x_offset + c%n_x())
+          if (c%law_kind == LAW_USER) then
+            a(i:j) = this%dyn%ctrl_x_rate(i - n:j - n)
+          else if (.not. c%winds_up(this%dyn%ctrl_law(k), e)) then
+            a(i) = e
+          end if
+        end associate
       end associate
     end do
   end subroutine control_accel
@@ -206,6 +228,7 @@ contains
     if (kg > 0) then
       this%error_hist(:, kg) = this%dyn%ctrl_error
       this%u_hist(:, kg) = this%dyn%ctrl_u
+      this%y_hist(:, kg) = this%dyn%ctrl_y
     end if
     this%last_s = q(this%n + 1:)
     this%last_i = v(this%n + 1:)
@@ -213,13 +236,14 @@ contains
   end subroutine control_record
 
   !> da/dq and da/dv of the closed loop: the plant's own Jacobian (its linearised structural
-  !> part, as without controllers) plus what the controllers add through their outputs,
+  !> part, as without controllers) plus what the PID controllers add through their outputs,
   !>   du_k = kp de_k + kd de_k' + ki dI_k,   de_k = (de_k/dq) dq,   de_k' = (de_k/dq) dv,
   !> with the actuator's column da/du_k from one evaluation with u_k raised by 1 (exact: u
   !> enters linearly) and the measurement's gradient de_k/dq by differences of the kinematics
   !> with steps far above its tolerance. (Differences of the whole system with the usual
   !> sqrt(eps) steps drown in the kinematic solver's 1e-11 tolerance.) A saturated or sampled
-  !> output does not depend on the state.
+  !> output does not depend on the state. A continuous user law, whose structure is unknown,
+  !> makes the whole Jacobian come from differences with those larger steps.
   subroutine control_jacobian(this, t, q, v, dadq, dadv, status)
     class(controlled_t), intent(inout) :: this
     real(wp), intent(in) :: t, q(:), v(:)
@@ -230,9 +254,14 @@ contains
     logical :: live(this%nc), integrating(this%nc)
     integer :: n, j, k
     n = this%n
+    if (any([(this%dyn%model%controllers(k)%law_kind == LAW_USER .and. &
+              .not. this%dyn%model%controllers(k)%sampled(), k = 1, this%nc)])) then
+      call difference_jacobian(this, t, q, v, dadq, dadv, status)
+      return
+    end if
     dadq = 0.0_wp
     dadv = 0.0_wp
-    call set_integrals(this, v)
+    call set_states(this, v)
     call this%plant%jacobian(t, q(1:n), v(1:n), dadq(1:n, 1:n), dadv(1:n, 1:n), status)
     if (status /= 0) return
     call this%accel(t, q, v, a0, status)
@@ -245,9 +274,11 @@ contains
       end associate
     end do
     do k = 1, this%nc
-      this%dyn%ctrl_probe(k) = 1.0_wp
-      call this%accel(t, q, v, a1, status)
-      this%dyn%ctrl_probe(k) = 0.0_wp
+      associate (iu => this%dyn%model%controllers(k)%u_offset + 1)
+        this%dyn%ctrl_probe(iu) = 1.0_wp
+        call this%accel(t, q, v, a1, status)
+        this%dyn%ctrl_probe(iu) = 0.0_wp
+      end associate
       if (status /= 0) return
       g(:, k) = a1(1:n) - a0(1:n)
     end do
@@ -261,19 +292,49 @@ contains
     end do
     do k = 1, this%nc
       associate (c => this%dyn%model%controllers(k))
-        if (live(k)) then
-          do j = 1, n
-            dadq(1:n, j) = dadq(1:n, j) + c%kp * dedq(k, j) * g(:, k)
-            dadv(1:n, j) = dadv(1:n, j) + c%kd * dedq(k, j) * g(:, k)
-          end do
-          dadv(1:n, n + k) = c%ki * g(:, k)
-        end if
-        if (integrating(k)) dadq(n + k, 1:n) = dedq(k, :)
+        associate (ix => n + c%x_offset + 1)
+          if (live(k)) then
+            do j = 1, n
+              dadq(1:n, j) = dadq(1:n, j) + c%kp * dedq(k, j) * g(:, k)
+              dadv(1:n, j) = dadv(1:n, j) + c%kd * dedq(k, j) * g(:, k)
+            end do
+            dadv(1:n, ix) = c%ki * g(:, k)
+          end if
+          if (integrating(k)) dadq(ix, 1:n) = dedq(k, :)
+        end associate
       end associate
     end do
     ! Leave the model at the state asked for (the integrators use the last evaluation).
     call this%accel(t, q, v, a0, status)
   end subroutine control_jacobian
+
+  !> The closed loop's Jacobian by forward differences with steps 1e-6 max(|q_j|, 1e-2)
+  !> (and the same on the rates), far above the kinematic tolerance.
+  subroutine difference_jacobian(this, t, q, v, dadq, dadv, status)
+    type(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp), intent(out) :: dadq(:, :), dadv(:, :)
+    integer, intent(out) :: status
+    real(wp) :: a0(size(q)), a1(size(q)), qp(size(q)), h
+    integer :: j
+    call this%accel(t, q, v, a0, status)
+    if (status /= 0) return
+    do j = 1, size(q)
+      qp = q
+      h = 1.0e-6_wp * max(abs(q(j)), 1.0e-2_wp)
+      qp(j) = q(j) + h
+      call this%accel(t, qp, v, a1, status)
+      if (status /= 0) return
+      dadq(:, j) = (a1 - a0) / h
+      qp = v
+      h = 1.0e-6_wp * max(abs(v(j)), 1.0e-2_wp)
+      qp(j) = v(j) + h
+      call this%accel(t, q, qp, a1, status)
+      if (status /= 0) return
+      dadv(:, j) = (a1 - a0) / h
+    end do
+    call this%accel(t, q, v, a0, status)
+  end subroutine difference_jacobian
 
   subroutine control_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
     class(controlled_t), intent(inout) :: this
@@ -285,12 +346,15 @@ contains
   end subroutine control_error_norm
 
   !> Samples due at t (t0 + i T, the times the run made breakpoints of): measure, hold the
-  !> limited output, and integrate the error over the coming period.
+  !> limited output, and integrate the error over the coming period (a PID) or take the
+  !> law's next states (a user law).
   subroutine control_at_breakpoint(this, t, q, v, status)
     class(controlled_t), intent(inout) :: this
     real(wp), intent(in) :: t, q(:), v(:)
     integer, intent(out) :: status
     real(wp) :: a(size(q))
+    real(wp), allocatable :: x_next(:), u(:)
+    type(error_t) :: err
     logical :: measured
     integer :: k
     status = 0
@@ -305,9 +369,22 @@ contains
           if (status /= 0) return
           measured = .true.
         end if
-        this%dyn%ctrl_held(k) = c%limited(this%dyn%ctrl_law(k))
-        if (.not. c%winds_up(this%dyn%ctrl_law(k), this%dyn%ctrl_error(k))) &
-          this%integral(k) = this%integral(k) + c%period * this%dyn%ctrl_error(k)
+        associate (i => c%x_offset + 1, j => c%x_offset + c%n_x(), &
+                   iu => c%u_offset + 1, ju => c%u_offset + size(c%act_index))
+          if (c%law_kind == LAW_USER) then
+            allocate(x_next(j - i + 1), u(ju - iu + 1))
+            call this%dyn%user_law(k, t, x_next, u, err)
+            call this%dyn%report(err, status)
+            if (status /= 0) return
+            this%dyn%ctrl_held(iu:ju) = c%limited(u)
+            this%x_sampled(i:j) = x_next
+            deallocate(x_next, u)
+          else
+            this%dyn%ctrl_held(iu) = c%limited(this%dyn%ctrl_law(k))
+            if (.not. c%winds_up(this%dyn%ctrl_law(k), this%dyn%ctrl_error(k))) &
+              this%x_sampled(i) = this%x_sampled(i) + c%period * this%dyn%ctrl_error(k)
+          end if
+        end associate
         this%n_samples(k) = this%n_samples(k) + 1
       end associate
     end do

@@ -8,9 +8,10 @@
 !> DF_e,dy^T sigma over all their stressed modes (docs/theory.md section 5.3).
 module dynamics_system
   use core_kinds, only: wp, i8
-  use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
+  use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC, ERR_INPUT
   use core_linalg, only: chol_factor, chol_solve
   use model_system, only: model_t, COORD_X, COORD_Y, COORD_Z, COORD_PHI, COORD_EULER
+  use model_control, only: controller_sizes
   use elements_rotation, only: euler_e
   use model_kinematics, only: kinematics_t
   use dynamics_augmented, only: augmented_t, element_mass_t
@@ -59,15 +60,18 @@ module dynamics_system
     !> Feedback controllers (model%controllers) act only where a run switches them on (dynamic
     !> runs); statics, modal analysis and &linear see the open-loop plant.
     logical :: controls_on = .false.
-    !> Controller states, set by the run (dynamics_control) before each evaluation: the
-    !> integral of each controller's error and the held output of sampled ones.
-    real(wp), allocatable :: ctrl_integral(:), ctrl_held(:)
-    !> and the feedforward of each controller at the time of the evaluation (0: none), and
-    !> an extra output that probes how the accelerations depend on each actuator (Jacobians).
+    !> Controller states, set by the run (dynamics_control) before each evaluation, over all
+    !> controllers (model_control's offsets): their states (a PID's integral of its error, a
+    !> user law's own) and the held outputs of sampled ones, per actuator.
+    real(wp), allocatable :: ctrl_x(:), ctrl_held(:)
+    !> Of the last evaluation, per controller: a PID's error r - y, its rate and the unlimited
+    !> output of its law; per actuator the applied output (limited, or held); per measured
+    !> output y and y'; per state a continuous user law's dx/dt.
+    !> Per actuator (u_offset): the feedforward at the time of the evaluation (0: none), and
+    !> an extra output that probes how the accelerations depend on the actuator (Jacobians).
     real(wp), allocatable :: ctrl_ff(:), ctrl_probe(:)
-    !> Of the last evaluation, per controller: the error r - y, its rate, the unlimited
-    !> output of the law and the applied one (limited, or held).
     real(wp), allocatable :: ctrl_error(:), ctrl_error_rate(:), ctrl_law(:), ctrl_u(:)
+    real(wp), allocatable :: ctrl_y(:), ctrl_y_dot(:), ctrl_x_rate(:)
   contains
     procedure :: init => dyn_init
     procedure :: prescribed => dyn_prescribed
@@ -96,16 +100,29 @@ module dynamics_system
     procedure :: elastic_forces => dyn_elastic_forces
     procedure :: allocate_history => dyn_allocate_history
     procedure :: apply_controllers => dyn_apply_controllers
+    procedure :: user_law => dyn_user_law
   end type dynamics_t
 
   interface
     !> The controllers' outputs at time t from the state of the evaluation under way (q_now,
     !> qd_now, xd_now, kin%x): applied as nodal forces (nodal_force) or on their dynamic
     !> modes (sigma_now), with their errors kept in ctrl_*. dynamics_system_control.
-    module subroutine dyn_apply_controllers(this, t)
+    module subroutine dyn_apply_controllers(this, t, err)
       class(dynamics_t), intent(inout) :: this
       real(wp), intent(in) :: t
+      type(error_t), intent(inout) :: err
     end subroutine dyn_apply_controllers
+    !> Controller k's user law at time t on the measured ctrl_y, ctrl_y_dot and the states
+    !> ctrl_x: its output u (unlimited) and x_out (dx/dt, or the states after a sample). A
+    !> failure or a non-finite result is an error naming the controller: recoverable
+    !> (ERR_NUMERIC) unless the law says it is fatal (ERR_INPUT).
+    module subroutine dyn_user_law(this, k, t, x_out, u, err)
+      class(dynamics_t), intent(in) :: this
+      integer, intent(in) :: k
+      real(wp), intent(in) :: t
+      real(wp), intent(out) :: x_out(:), u(:)
+      type(error_t), intent(inout) :: err
+    end subroutine dyn_user_law
     !> -Mbar^-1 [K0, D0]: by Cholesky of Mbar (dense path) or by solves with the factors of
     !> the augmented system (sparse path, O(n) per column).
     module subroutine dyn_jacobian(this, t, q, v, dadq, dadv, status)
@@ -164,7 +181,7 @@ contains
     type(error_t), intent(out) :: err
     character(len=*), intent(in), optional :: linear_solver
     real(wp) :: a(model%n_dy)
-    integer :: i
+    integer :: i, n_u, n_y, n_x
     this%model = model
     this%load = model%force
     where (model%coord_kind == COORD_X) this%load = this%load + model%lumped * model%gravity(1)
@@ -182,16 +199,18 @@ contains
     if (allocated(this%mbar)) deallocate(this%mbar)
     this%n_evals = 0
     allocate(this%gen_force(model%n_dy))
-    associate (nc => size(model%controllers))
-      this%ctrl_integral = [(0.0_wp, i = 1, nc)]
-      this%ctrl_held = this%ctrl_integral
-      this%ctrl_ff = this%ctrl_integral
-      this%ctrl_probe = this%ctrl_integral
-      this%ctrl_error = this%ctrl_integral
-      this%ctrl_error_rate = this%ctrl_integral
-      this%ctrl_law = this%ctrl_integral
-      this%ctrl_u = this%ctrl_integral
-    end associate
+    call controller_sizes(model%controllers, n_u, n_y, n_x)
+    this%ctrl_error = [(0.0_wp, i = 1, size(model%controllers))]
+    this%ctrl_error_rate = this%ctrl_error
+    this%ctrl_law = this%ctrl_error
+    this%ctrl_x = [(0.0_wp, i = 1, n_x)]
+    this%ctrl_x_rate = this%ctrl_x
+    this%ctrl_held = [(0.0_wp, i = 1, n_u)]
+    this%ctrl_u = this%ctrl_held
+    this%ctrl_y = [(0.0_wp, i = 1, n_y)]
+    this%ctrl_y_dot = this%ctrl_y
+    this%ctrl_ff = this%ctrl_held
+    this%ctrl_probe = this%ctrl_held
     call this%evaluate(t0, q_dy0, 0.0_wp * q_dy0, a, err)
     if (.not. err%ok()) call err%prefix('initial configuration: ')
   end subroutine dyn_init
@@ -353,7 +372,7 @@ contains
       ! An actuator's torque works on its mode like a stress of the opposite sign.
       if (size(m%actuator_element) > 0) this%sigma_now = this%sigma_now - &
         this%load_factor * m%actuator_forces(t)
-      if (this%controls_on) call this%apply_controllers(t)
+      if (this%controls_on) call this%apply_controllers(t, err)
     end associate
   end subroutine dyn_prepare
 
@@ -605,7 +624,7 @@ contains
 
   !> The integrator callback status of an evaluation's outcome; the error is kept for the
   !> message. A kinematic solve that fails may succeed with a smaller step: recoverable;
-  !> a model error (singular mass) is not.
+  !> a model error (singular mass) is not, nor a control law's fatal status.
   subroutine dyn_report(this, err, status)
     class(dynamics_t), intent(inout) :: this
     type(error_t), intent(in) :: err
@@ -613,7 +632,8 @@ contains
     status = 0
     if (err%ok()) return
     status = 1
-    if (err%code == ERR_MODEL) status = -1
+    ! ERR_INPUT: a user control law that declared itself failed for good.
+    if (err%code == ERR_MODEL .or. err%code == ERR_INPUT) status = -1
     call this%last_error%clear()
     call this%last_error%set(err%code, err%message)
   end subroutine dyn_report

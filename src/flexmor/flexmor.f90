@@ -14,6 +14,10 @@
 !>     call res%from_run(run)
 !>     if (.not. err%ok()) print '(a)', err%message   ! err%code: ERR_INPUT, ...
 !>
+!> A &controller with law = 'user' gets its law from the program: extend control_law_t
+!> (deferred evaluate, docs/api.md) and call run%set_control_law('label', law, err) between
+!> load and execute. C programs use the same through include/flexmor.h (flexmor_c).
+!>
 !> Library code never stops the program: every failure comes back as an error_t whose
 !> message names the file, group and variable. With CMake: find_package(flexmor) and
 !> target_link_libraries(app PRIVATE flexmor::flexmor).
@@ -24,12 +28,13 @@ module flexmor
   use core_error, only: error_t, ERR_NONE, ERR_INPUT, ERR_MODEL, ERR_NUMERIC, ERR_IO, ERR_INTERNAL
   use analysis_run, only: run_t
   use analysis_results, only: results_t
+  use model_control, only: control_law_t
   implicit none
   private
   public :: flexmor_version
   public :: wp, i8
   public :: error_t, ERR_NONE, ERR_INPUT, ERR_MODEL, ERR_NUMERIC, ERR_IO, ERR_INTERNAL
-  public :: run_t, results_t
+  public :: run_t, results_t, control_law_t
 
 contains
 

@@ -514,20 +514,32 @@ contains
     type(nml_group_t), intent(inout) :: g
     type(controller_rec_t), intent(out) :: r
     type(error_t), intent(inout) :: err
+    logical :: pid
     call rd_label(g, r%label, err)
-    call rd_string(g, 'actuator', r%actuator, err)
-    call rd_string(g, 'measure', r%measure, err)
+    call rd_choice(g, 'law', r%law, err)
+    call rd_labels(g, 'actuator', r%actuator, err)
+    call rd_labels(g, 'measure', r%measure, err)
     call rd_string(g, 'reference', r%reference, err)
     call rd_real(g, 'kp', r%kp, err)
     call rd_real(g, 'ki', r%ki, err)
     call rd_real(g, 'kd', r%kd, err)
+    call rd_int(g, 'n_states', r%n_states, err)
     call rd_real(g, 'period', r%period, err)
     call rd_real(g, 'u_min', r%u_min, err, -huge(1.0_wp))
     call rd_real(g, 'u_max', r%u_max, err, huge(1.0_wp))
     call rd_logical(g, 'feedforward', r%feedforward, err)
     if (.not. err%ok()) return
-    if (.not. (r%kp > 0 .or. r%ki > 0 .or. r%kd > 0)) call err%set(ERR_INPUT, g%where() // &
-      ': a controller needs a gain: ''kp'', ''ki'' or ''kd'' > 0')
+    pid = r%law == 'pid'
+    ! A user law computes its own errors: gains and a reference would be silently unused.
+    call only_with(g, [character(len=9) :: 'kp', 'ki', 'kd', 'reference'], pid, &
+      'with law = ''pid''', err)
+    call only_with(g, ['n_states'], .not. pid, 'with law = ''user''', err)
+    if (err%ok() .and. pid .and. (size(r%actuator) /= 1 .or. size(r%measure) /= 1)) &
+      call err%set(ERR_INPUT, g%where() // ': law = ''pid'' takes one ''actuator'' and ' // &
+      'one ''measure'' (several: law = ''user'')')
+    if (err%ok() .and. pid .and. .not. (r%kp > 0 .or. r%ki > 0 .or. r%kd > 0)) &
+      call err%set(ERR_INPUT, g%where() // ': a controller needs a gain: ''kp'', ''ki'' ' // &
+      'or ''kd'' > 0')
     if (err%ok() .and. .not. r%u_min < r%u_max) call err%set(ERR_INPUT, g%where() // &
       ': ''u_min'' must be below ''u_max''')
   end subroutine read_controller

@@ -342,14 +342,17 @@ module io_schema
     var_spec_t('motion', 'file', VK_STRING, '', 'law', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'table CSV file')]
-  type(var_spec_t), parameter :: CONTROLLER_VARS(11) = [ &
+  type(var_spec_t), parameter :: CONTROLLER_VARS(13) = [ &
     var_spec_t('controller', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'name (output /controllers/<label>)'), &
-    var_spec_t('controller', 'actuator', VK_STRING, '', '', .true., &
+    var_spec_t('controller', 'law', VK_CHOICE, '', 'pid', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'pid|user', 'PID, or a law set by the program (API)'), &
+    var_spec_t('controller', 'actuator', VK_STRING_LIST, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'hinge.torque, truss.force or node.fx (...)'), &
-    var_spec_t('controller', 'measure', VK_STRING, '', '', .true., &
+    var_spec_t('controller', 'measure', VK_STRING_LIST, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'hinge.angle, truss.elongation or node.x (...)'), &
     var_spec_t('controller', 'reference', VK_STRING, '', '', .false., &
@@ -364,6 +367,9 @@ module io_schema
     var_spec_t('controller', 'kd', VK_REAL, 'u s/y', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'derivative gain'), &
+    var_spec_t('controller', 'n_states', VK_INT, '', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'law = ''user'': number of the law''s own states'), &
     var_spec_t('controller', 'period', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'sampling period with zero-order hold (0: none)'), &
@@ -507,7 +513,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(149) = [ &
+  type(var_spec_t), parameter :: SCHEMA(151) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

@@ -1,6 +1,7 @@
 !> &controller groups: where each controller measures and acts, resolved on the built model.
 submodule (model_build) model_build_control
-  use model_control, only: controller_t, ACT_MODE, ACT_COORD, MEAS_MODE, MEAS_COORD
+  use model_control, only: controller_t, ACT_MODE, ACT_COORD, MEAS_MODE, MEAS_COORD, LAW_USER, &
+    LAW_PID, controller_sizes
   use model_scene, only: controller_rec_t, label_t
   use core_strings, only: int_str
   use elements_base, only: mode_class_name
@@ -25,6 +26,7 @@ contains
         end if
         call controller_of(scene, model, r, c, err)
         if (.not. err%ok()) return
+        call controller_sizes(model%controllers, c%u_offset, c%y_offset, c%x_offset)
         model%controllers = [model%controllers, c]
       end associate
     end do
@@ -91,7 +93,7 @@ contains
     do k = 1, size(model%controllers)
       associate (c => model%controllers(k))
         if (.not. c%feedforward) cycle
-        iel = model%modes(c%act_index)%element
+        iel = model%modes(c%act_index(1))%element
         do i = 1, rigid%n_elements
           if (rigid%elements(i)%e%label == model%elements(iel)%e%label) &
             ff_q(k) = rigid%modes(rigid%mode_first(i))%q - rigid%n_rh
@@ -111,9 +113,11 @@ contains
     feedforward_drives = .false.
     do k = 1, size(scene%controllers)
       associate (r => scene%controllers(k))
-        if (.not. r%feedforward) cycle
-        dot = index(r%actuator, '.', back=.true.)
-        if (dot > 1) feedforward_drives = feedforward_drives .or. r%actuator(1:dot - 1) == label
+        if (.not. r%feedforward .or. size(r%actuator) /= 1) cycle
+        associate (name => r%actuator(1)%s)
+          dot = index(name, '.', back=.true.)
+          if (dot > 1) feedforward_drives = feedforward_drives .or. name(1:dot - 1) == label
+        end associate
       end associate
     end do
   end function feedforward_drives
@@ -125,9 +129,11 @@ contains
     type(controller_t), intent(out) :: c
     type(error_t), intent(inout) :: err
     character(len=:), allocatable :: where
-    integer :: h
+    integer :: i, h
     where = 'group &controller ''' // r%label // ''''
     c%label = r%label
+    c%law_kind = merge(LAW_USER, LAW_PID, r%law == 'user')
+    c%n_states = r%n_states
     c%kp = r%kp
     c%ki = r%ki
     c%kd = r%kd
@@ -136,21 +142,34 @@ contains
     c%u_max = r%u_max
     call motion_named(scene, r%reference, where, 'reference', c%reference, err)
     if (.not. err%ok()) return
-    call point_of(model, r%actuator, where, 'actuator', c%act_kind, c%act_index, err)
-    if (.not. err%ok()) return
-    if (any([(scene%hinges(h)%kp > 0 .and. r%actuator == scene%hinges(h)%label // '.torque', &
-              h = 1, size(scene%hinges))])) then
-      call err%set(ERR_INPUT, where // ': variable ''actuator'': the hinge has a PD of its ' // &
-        'own (&hinge kp): give the law in one place')
-      return
-    end if
-    call point_of(model, r%measure, where, 'measure', c%meas_kind, c%meas_index, err)
-    if (.not. err%ok() .or. .not. r%feedforward) return
+    allocate(c%act_kind(size(r%actuator)), c%act_index(size(r%actuator)))
+    allocate(c%meas_kind(size(r%measure)), c%meas_index(size(r%measure)))
+    do i = 1, size(r%actuator)
+      call point_of(model, r%actuator(i)%s, where, 'actuator', c%act_kind(i), c%act_index(i), &
+        err)
+      if (.not. err%ok()) return
+    end do
+    do i = 1, size(r%measure)
+      call point_of(model, r%measure(i)%s, where, 'measure', c%meas_kind(i), c%meas_index(i), &
+        err)
+      if (.not. err%ok()) return
+    end do
+    do i = 1, size(r%actuator)
+      if (any([(scene%hinges(h)%kp > 0 .and. r%actuator(i)%s == scene%hinges(h)%label // &
+                '.torque', h = 1, size(scene%hinges))])) then
+        call err%set(ERR_INPUT, where // ': variable ''actuator'': the hinge has a PD of ' // &
+          'its own (&hinge kp): give the law in one place')
+        return
+      end if
+    end do
+    if (.not. r%feedforward) return
     ! The rigid model's inverse dynamics gives the torque (force) of a joint that follows its
     ! reference: the controller must drive the joint it measures.
     c%feedforward = .true.
-    if (c%act_kind /= ACT_MODE .or. c%meas_kind /= MEAS_MODE .or. &
-        c%act_index /= c%meas_index) then
+    if (c%law_kind /= LAW_PID) then
+      call err%set(ERR_INPUT, where // ': variable ''feedforward'' is for law = ''pid''')
+    else if (c%act_kind(1) /= ACT_MODE .or. c%meas_kind(1) /= MEAS_MODE .or. &
+        c%act_index(1) /= c%meas_index(1)) then
       call err%set(ERR_INPUT, where // ': variable ''feedforward'' needs the controller to ' // &
         'measure the hinge (truss) it drives')
     else if (c%reference == 0) then

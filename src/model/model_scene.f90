@@ -157,7 +157,10 @@ module model_scene
 
   !> A feedback controller (docs/input.md, &controller).
   type :: controller_rec_t
-    character(len=:), allocatable :: label, actuator, measure, reference
+    character(len=:), allocatable :: label, reference
+    character(len=:), allocatable :: law          !< 'pid' or 'user'
+    type(label_t), allocatable :: actuator(:), measure(:)
+    integer :: n_states = 0
     real(wp) :: kp = 0.0_wp, ki = 0.0_wp, kd = 0.0_wp, period = 0.0_wp
     real(wp) :: u_min = -huge(1.0_wp), u_max = huge(1.0_wp)
     logical :: feedforward = .false.

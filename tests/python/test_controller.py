@@ -185,6 +185,41 @@ def test_bad_controller(tmp_path, ctrl, fragments):
     assert_clean_error(proc, out, "&controller", *fragments[1:])
 
 
+@pytest.mark.parametrize("ctrl,fragments", [
+    ("actuator = 'j1.torque', 'j1.torque', measure = 'j1.angle', kp = 1.0",
+     ["&controller 'c1'", "law = 'pid'", "one 'actuator'"]),
+    ("actuator = 'j1.torque', measure = 'j1.angle', 'tip.x', kp = 1.0",
+     ["&controller 'c1'", "one 'measure'"]),
+    ("law = 'user', actuator = 'j1.torque', measure = 'j1.angle', n_states = -1",
+     ["&controller 'c1'", "'n_states'"]),
+    ("law = 'user', actuator = 'j1.torque', measure = 'j1.angle', kp = 1.0",
+     ["&controller 'c1'", "'kp'", "law = 'pid'"]),
+    ("actuator = 'j1.torque', measure = 'j1.angle', kp = 1.0, n_states = 2",
+     ["&controller 'c1'", "'n_states'", "law = 'user'"]),
+    ("law = 'fuzzy', actuator = 'j1.torque', measure = 'j1.angle'",
+     ["&controller 'c1'", "'law'", "'fuzzy'"]),
+    ("law = 'user', actuator = 'j1.torque', 'j9.torque', measure = 'j1.angle'",
+     ["&controller 'c1'", "'actuator'", "'j9'"]),
+])
+def test_bad_user_controller(tmp_path, ctrl, fragments):
+    text = (ARM + "&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic' /\n"
+            f"&controller label = 'c1', {ctrl} /\n" + RUN.format(t_end=0.1))
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, "&controller", *fragments[1:])
+
+
+def test_user_law_needs_a_program(tmp_path):
+    """law = 'user' takes its law from a program through the API: the flexmor program has
+    none and says so (the library test test_user_control checks the same for run_t); without
+    a &dynamic analysis the controllers are not run, so the open-loop analyses work."""
+    ctrl = ("&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic' /\n"
+            "&controller label = 'ext', law = 'user', actuator = 'j1.torque', "
+            "measure = 'j1.angle', n_states = 1, period = 0.01 /\n")
+    proc, out = run_scene(tmp_path, ARM + ctrl + RUN.format(t_end=0.1))
+    assert_clean_error(proc, out, "&controller 'ext'", "'law'", "'user'", "flexmor program")
+    run_ok(tmp_path, ARM + ctrl + "&modal n_modes = 1 /\n", "modal")
+
+
 def test_controller_on_a_prescribed_joint(tmp_path):
     """A controller drives a degree of freedom: a prescribed hinge is refused."""
     text = (ARM.replace("bending = 'rigid'", "bending = 'dynamic'")
