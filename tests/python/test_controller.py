@@ -70,7 +70,8 @@ def test_pid_rejects_a_constant_torque(tmp_path):
     """A constant torque on the rigid link's hinge, a PID holding the angle at 0: the closed
     loop J y''' + kd y'' + kp y' + ki y = 0 from rest with y'' = tau/J at the start, and the
     integral drives the angle back to 0 (a PD would leave tau/kp). Observed 1.3e-10 rad at
-    BDF rtol 1e-9; bound 1e-8. The written error is -y, the input settles at -tau."""
+    BDF rtol 1e-9; bound 1e-8. The written error is -y, the measure y, the input settles at
+    -tau."""
     kp, ki, kd, tau = 2.0, 1.0, 0.5, 0.05
     out = run_ok(tmp_path, ARM + f"&hinge label = 'j1', node = 'base', link = 'arm', "
                  f"mode = 'dynamic', torque = {tau} /\n&controller label = 'c1', "
@@ -83,7 +84,9 @@ def test_pid_rejects_a_constant_torque(tmp_path):
     with h5py.File(out) as f:
         error = f["controllers/c1/error"][:]
         u = f["controllers/c1/input"][:]
+        measure = f["controllers/c1/measure"][:]
     assert np.max(np.abs(error + angle)) < 1e-8
+    assert np.max(np.abs(measure - angle)) < 1e-8   # the hinge's q is the tip's angle
     assert abs(u[-1] + tau) < 1e-3 * tau      # observed 3e-6 tau at t = 10 s (decay)
 
 
