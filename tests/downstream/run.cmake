@@ -32,7 +32,7 @@ if(MODE STREQUAL "install")
   step("install into ${prefix}" ${CMAKE_COMMAND} --install ${FLEXMOR_BUILD_DIR}
        --prefix ${prefix} --config ${BUILD_TYPE})
   step("configure" ${CMAKE_COMMAND} -S ${CMAKE_CURRENT_LIST_DIR} -B ${build} ${config_args}
-       -DCMAKE_PREFIX_PATH=${prefix})
+       -DCMAKE_C_COMPILER=${C_COMPILER} -DCMAKE_PREFIX_PATH=${prefix})
 elseif(MODE STREQUAL "subdirectory")
   step("configure" ${CMAKE_COMMAND} -S ${CMAKE_CURRENT_LIST_DIR} -B ${build} ${config_args}
        -DCMAKE_C_COMPILER=${C_COMPILER} -DFLEXMOR_SOURCE_DIR=${FLEXMOR_SOURCE_DIR})
@@ -41,3 +41,4 @@ else()
 endif()
 step("build" ${CMAKE_COMMAND} --build ${build} -j 2)
 step("run" ${build}/downstream ${WORK_DIR}/downstream.h5)
+step("run the C example" ${build}/pd_rigid_link ${CMAKE_CURRENT_LIST_DIR}/../../examples/c)
