@@ -438,6 +438,7 @@ contains
         call add_feedforward(this, err)
         if (.not. err%ok()) return
         call this%control%state(this%q_static, v0, q_aug, v_aug)
+        call this%control%check_sampling(this%time(1), q_aug, v_aug)
         call integrate(this%control, opts, this%time, q_aug, v_aug, breaks, this%stats, err)
       else
         call integrate(this%dyn, opts, this%time, this%q_static, v0, breaks, this%stats, err)
@@ -446,6 +447,10 @@ contains
     this%dyn%controls_on = .false.
     if (.not. err%ok() .and. allocated(this%dyn%last_error%message)) &
       err%message = err%message // ' (' // this%dyn%last_error%message // ')'
+    if (.not. err%ok() .and. allocated(this%control%hint)) then
+      if (len(this%control%hint) > 0) err%message = err%message // '. A sampled ' // &
+        'controller may be unstable: ' // this%control%hint(3:)
+    end if
     if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a,i0,a)') 'dynamic: ', &
       this%stats%n_steps, ' steps, ', this%stats%n_rhs_evals, ' evaluations, ', &
       this%stats%n_jac_evals, ' Jacobians'
@@ -563,6 +568,12 @@ contains
       call this%control%allocate_history(size(this%time))
       call add_feedforward(this, err)
       if (.not. err%ok()) return
+      block
+        real(wp), allocatable :: eta(:), eta_dot(:)
+        call this%control%state(0.0_wp * this%red%basis%v(1, :), &
+          0.0_wp * this%red%basis%v(1, :), eta, eta_dot)
+        call this%control%check_sampling(this%time(1), eta, eta_dot)
+      end block
       call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
         this%updates, err, this%control)
     else

@@ -18,6 +18,7 @@
 module dynamics_control
   use core_kinds, only: wp
   use core_error, only: error_t
+  use core_strings, only: real_str
   use model_system, only: model_t
   use integrators_system, only: ode2_system_t
   use dynamics_system, only: dynamics_t
@@ -51,6 +52,8 @@ module dynamics_control
     !> A run in segments (reduced with basis updates) maps the output index k of a record to
     !> the run's (0: not an output); not allocated: the same.
     integer, allocatable, public :: out_index(:)
+    !> Why a sampled controller may be unstable ('' if no reason is seen): check_sampling.
+    character(len=:), allocatable, public :: hint
   contains
     procedure :: init => control_init
     procedure :: set_feedforward => control_set_feedforward
@@ -60,6 +63,7 @@ module dynamics_control
     procedure :: jacobian => control_jacobian
     procedure :: at_breakpoint => control_at_breakpoint
     procedure :: state => control_state
+    procedure :: check_sampling => control_check_sampling
     procedure :: allocate_history => control_allocate_history
   end type controlled_t
 
@@ -138,6 +142,51 @@ contains
         this%dyn%ctrl_ff(this%dyn%model%controllers(k)%u_offset + 1) = tau(this%ff_q(k))
     end do
   end subroutine feedforward
+
+  !> Why a sampled PID may be unstable, from the state (t, q, v) at the start: its output
+  !> reaches the measured rate at once through G = (de/dq) (da/du) (the inverse of the
+  !> inertia the actuator sees at the instant, for a joint its own), and a rate gain held over
+  !> a period T acts like explicit Euler on the fast pole -kd G of the continuous loop, which
+  !> grows unless kd G T < 2. A joint driving a flexible link sees little inertia (the link's
+  !> end turns against its bending), so that pole can be fast. '' when every such product is
+  !> below 2; otherwise a hint (this%hint, entries after '; ') for the error of a failed run.
+  subroutine control_check_sampling(this, t, q, v)
+    class(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+    real(wp) :: a0(size(q)), a1(size(q)), e0(this%nc), qp(size(q)), h, gain
+    real(wp) :: g(this%n), dedq(this%n)
+    integer :: k, j, status, n
+    this%hint = ''
+    n = this%n
+    call this%accel(t, q, v, a0, status)
+    if (status /= 0) return
+    e0 = this%dyn%ctrl_error
+    do k = 1, this%nc
+      associate (c => this%dyn%model%controllers(k))
+        if (.not. c%sampled() .or. c%law_kind == LAW_USER .or. c%kd <= 0) cycle
+        this%dyn%ctrl_probe(c%u_offset + 1) = 1.0_wp
+        call this%accel(t, q, v, a1, status)
+        this%dyn%ctrl_probe(c%u_offset + 1) = 0.0_wp
+        if (status /= 0) return
+        g = a1(1:n) - a0(1:n)
+        do j = 1, n
+          qp = q
+          h = 1.0e-6_wp * max(abs(q(j)), 1.0e-2_wp)
+          qp(j) = q(j) + h
+          call this%accel(t, qp, v, a1, status)
+          if (status /= 0) return
+          dedq(j) = (this%dyn%ctrl_error(k) - e0(k)) / h
+        end do
+        gain = -dot_product(dedq, g)
+        if (c%kd * gain * c%period > 2) this%hint = this%hint // '; controller ''' // &
+          c%label // ''': kd G T = ' // real_str(c%kd * gain * c%period) // ' > 2 with ' // &
+          'G = ' // real_str(gain) // ' (the inverse of the inertia its actuator sees at ' // &
+          'the instant): sample faster than 2/(kd G) = ' // real_str(2 / (c%kd * gain)) // &
+          ' s or lower kd'
+      end associate
+    end do
+    call this%accel(t, q, v, a0, status)
+  end subroutine control_check_sampling
 
   !> The augmented initial state: the plant's (q, v), then s and the controllers' states
   !> recorded last (zero at the start).

@@ -500,3 +500,15 @@ def test_pid_holds_a_spatial_cantilever_tip(tmp_path):
     k_tip = 1 / (length**3 / (3 * e * iy) + length / (5 / 6 * g * area))
     assert abs(z[-1] - r) < 1e-8
     assert u[-1] == pytest.approx(k_tip * r, rel=1e-4)
+
+
+def test_unstable_sampling_is_explained(tmp_path):
+    """The arm's joints drive flexible links, whose ends turn against their bending: the
+    inertia a joint torque sees at the instant is small (1/G = 7.7e-5 kg m^2 at joint 1), so
+    the continuous PD has a fast pole -kd G = -1.8e6 /s, and holding kd's output over
+    T = 0.1 ms (kd G T = 181) makes it grow by a factor of about 1 - kd G T per sample. The
+    run fails, and its error says why and how fast to sample."""
+    text = arm_under_pd().replace("kd = 140.0", "kd = 140.0, period = 1.0e-4").replace(
+        "kd = 40.0", "kd = 40.0, period = 1.0e-4").replace("t_end = 1.0", "t_end = 0.01")
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, "may be unstable", "'joint1'", "kd G T", "sample faster")
