@@ -11,7 +11,7 @@ module io_fields
   implicit none
   private
   public :: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, rd_classes, rd_label, &
-    only_with
+    only_with, rd_fixed_list, rd_labels
 
 contains
 
@@ -256,4 +256,50 @@ contains
       end if
     end do
   end subroutine only_with
+
+  !> An optional list of exactly n reals: left unallocated when the group does not give it;
+  !> `hint` (after 'needs n values') says what they are.
+  subroutine rd_fixed_list(g, name, n, hint, values, err)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: name, hint
+    integer, intent(in) :: n
+    real(wp), allocatable, intent(out) :: values(:)
+    type(error_t), intent(inout) :: err
+    type(error_t) :: e
+    if (.not. g%has(name) .or. .not. err%ok()) return
+    call g%get_real_array(name, values, e)
+    if (.not. e%ok()) then
+      err = e
+    else if (size(values) /= n) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''' // name // ''' needs ' // &
+        int_str(n) // ' values' // hint)
+    end if
+  end subroutine rd_fixed_list
+
+  !> A list of strings as labels; `optional_list`: missing is the empty list (else an error).
+  subroutine rd_labels(g, name, labels, err, optional_list)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: name
+    type(label_t), allocatable, intent(out) :: labels(:)
+    type(error_t), intent(inout) :: err
+    logical, intent(in), optional :: optional_list
+    type(string_t), allocatable :: values(:)
+    type(error_t) :: e
+    integer :: i
+    allocate(labels(0))
+    if (.not. err%ok()) return
+    if (present(optional_list)) then
+      if (optional_list .and. .not. g%has(name)) return
+    end if
+    call g%get_string_array(name, values, e)
+    if (.not. e%ok()) then
+      err = e
+      return
+    end if
+    deallocate(labels)
+    allocate(labels(size(values)))
+    do i = 1, size(values)
+      labels(i)%s = values(i)%s
+    end do
+  end subroutine rd_labels
 end module io_fields

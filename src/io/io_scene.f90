@@ -6,13 +6,14 @@
 module io_scene
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
-  use core_strings, only: int_str
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, &
-    rd_classes, rd_label, only_with
-  use model_scene, only: auto_integrator, scene_t, node_rec_t, link_rec_t, hinge_rec_t, &
-    truss_rec_t, mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t, controller_rec_t, label_t
+    rd_classes, rd_label, only_with, rd_fixed_list
+  use io_scene_analyses, only: read_static, read_modal, read_buckling, read_controller, &
+    read_linear, read_dynamic, read_reduction, read_output
+  use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
+    mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t
   use motion_law, only: table_problem
   use io_table, only: read_table_csv, relative_to
   implicit none
@@ -474,248 +475,14 @@ contains
     if (len(msg) > 0) call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''': ' // msg)
   end subroutine read_motion_table
 
-  subroutine read_static(g, scene, err)
-    type(nml_group_t), intent(inout) :: g
-    type(scene_t), intent(inout) :: scene
-    type(error_t), intent(inout) :: err
-    scene%static%active = .true.
-    call rd_int(g, 'n_steps', scene%static%n_steps, err)
-    call rd_real(g, 'tol', scene%static%tol, err)
-    call rd_int(g, 'max_iter', scene%static%max_iter, err)
-    call rd_int(g, 'n_frequencies', scene%static%n_frequencies, err)
-    call rd_choice(g, 'method', scene%static%method, err)
-    if (err%ok()) call only_with(g, ['arc_length     ', 'max_load_factor'], &
-      scene%static%method == 'arc_length', 'with method = ''arc_length''', err)
-    if (g%has('arc_length')) call rd_real(g, 'arc_length', scene%static%arc_length, err)
-    if (g%has('max_load_factor')) call rd_real(g, 'max_load_factor', &
-      scene%static%max_load_factor, err)
-  end subroutine read_static
 
-  subroutine read_modal(g, scene, err)
-    type(nml_group_t), intent(inout) :: g
-    type(scene_t), intent(inout) :: scene
-    type(error_t), intent(inout) :: err
-    scene%modal%active = .true.
-    call rd_int(g, 'n_modes', scene%modal%n_modes, err)
-    call rd_real(g, 'time', scene%modal%time, err)
-    call rd_logical(g, 'along_motion', scene%modal%along_motion, err)
-  end subroutine read_modal
 
-  subroutine read_buckling(g, scene, err)
-    type(nml_group_t), intent(inout) :: g
-    type(scene_t), intent(inout) :: scene
-    type(error_t), intent(inout) :: err
-    scene%buckling%active = .true.
-    call rd_int(g, 'n_modes', scene%buckling%n_modes, err)
-    call rd_real(g, 'load_factor', scene%buckling%load_factor, err)
-  end subroutine read_buckling
 
-  subroutine read_controller(g, r, err)
-    type(nml_group_t), intent(inout) :: g
-    type(controller_rec_t), intent(out) :: r
-    type(error_t), intent(inout) :: err
-    logical :: pid
-    call rd_label(g, r%label, err)
-    call rd_choice(g, 'law', r%law, err)
-    call rd_labels(g, 'actuator', r%actuator, err)
-    call rd_labels(g, 'measure', r%measure, err)
-    call rd_string(g, 'reference', r%reference, err)
-    call rd_real(g, 'kp', r%kp, err)
-    call rd_real(g, 'ki', r%ki, err)
-    call rd_real(g, 'kd', r%kd, err)
-    call rd_int(g, 'n_states', r%n_states, err)
-    call rd_real(g, 'period', r%period, err)
-    call rd_real(g, 'u_min', r%u_min, err, -huge(1.0_wp))
-    call rd_real(g, 'u_max', r%u_max, err, huge(1.0_wp))
-    call rd_logical(g, 'feedforward', r%feedforward, err)
-    if (.not. err%ok()) return
-    pid = r%law == 'pid'
-    ! A user law computes its own errors: gains and a reference would be silently unused.
-    call only_with(g, [character(len=9) :: 'kp', 'ki', 'kd', 'reference'], pid, &
-      'with law = ''pid''', err)
-    call only_with(g, ['n_states'], .not. pid, 'with law = ''user''', err)
-    if (err%ok() .and. pid .and. (size(r%actuator) /= 1 .or. size(r%measure) /= 1)) &
-      call err%set(ERR_INPUT, g%where() // ': law = ''pid'' takes one ''actuator'' and ' // &
-      'one ''measure'' (several: law = ''user'')')
-    if (err%ok() .and. pid .and. .not. (r%kp > 0 .or. r%ki > 0 .or. r%kd > 0)) &
-      call err%set(ERR_INPUT, g%where() // ': a controller needs a gain: ''kp'', ''ki'' ' // &
-      'or ''kd'' > 0')
-    if (err%ok() .and. .not. r%u_min < r%u_max) call err%set(ERR_INPUT, g%where() // &
-      ': ''u_min'' must be below ''u_max''')
-  end subroutine read_controller
 
-  subroutine read_linear(g, scene, err)
-    type(nml_group_t), intent(inout) :: g
-    type(scene_t), intent(inout) :: scene
-    type(error_t), intent(inout) :: err
-    type(error_t) :: e
-    scene%linear%active = .true.
-    call rd_real(g, 'time', scene%linear%time, err)
-    call rd_logical(g, 'along_motion', scene%linear%along_motion, err)
-    call rd_labels(g, 'inputs', scene%linear%inputs, err)
-    call rd_labels(g, 'outputs', scene%linear%outputs, err)
-    if (g%has('times') .and. err%ok()) then
-      call g%get_real_array('times', scene%linear%times, e)
-      if (.not. e%ok()) then
-        err = e
-      else if (g%has('time') .or. g%has('along_motion')) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''times'' (states along the ' // &
-          'dynamic run) excludes ''time'' and ''along_motion'' (one configuration)')
-      end if
-    end if
-  end subroutine read_linear
 
-  !> An optional list of exactly n reals: left unallocated when the group does not give it;
-  !> `hint` (after 'needs n values') says what they are.
-  subroutine rd_fixed_list(g, name, n, hint, values, err)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: name, hint
-    integer, intent(in) :: n
-    real(wp), allocatable, intent(out) :: values(:)
-    type(error_t), intent(inout) :: err
-    type(error_t) :: e
-    if (.not. g%has(name) .or. .not. err%ok()) return
-    call g%get_real_array(name, values, e)
-    if (.not. e%ok()) then
-      err = e
-    else if (size(values) /= n) then
-      call err%set(ERR_INPUT, g%where() // ': variable ''' // name // ''' needs ' // &
-        int_str(n) // ' values' // hint)
-    end if
-  end subroutine rd_fixed_list
 
-  !> A list of strings as labels; `optional_list`: missing is the empty list (else an error).
-  subroutine rd_labels(g, name, labels, err, optional_list)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: name
-    type(label_t), allocatable, intent(out) :: labels(:)
-    type(error_t), intent(inout) :: err
-    logical, intent(in), optional :: optional_list
-    type(string_t), allocatable :: values(:)
-    type(error_t) :: e
-    integer :: i
-    allocate(labels(0))
-    if (.not. err%ok()) return
-    if (present(optional_list)) then
-      if (optional_list .and. .not. g%has(name)) return
-    end if
-    call g%get_string_array(name, values, e)
-    if (.not. e%ok()) then
-      err = e
-      return
-    end if
-    deallocate(labels)
-    allocate(labels(size(values)))
-    do i = 1, size(values)
-      labels(i)%s = values(i)%s
-    end do
-  end subroutine rd_labels
 
-  subroutine read_dynamic(g, scene, err)
-    type(nml_group_t), intent(inout) :: g
-    type(scene_t), intent(inout) :: scene
-    type(error_t), intent(inout) :: err
-    associate (d => scene%dynamic)
-      d%active = .true.
-      call rd_real(g, 't_end', d%t_end, err)
-      call rd_real(g, 'output_dt', d%output_dt, err)
-      call rd_real(g, 'rtol', d%rtol, err)
-      call rd_choice(g, 'integrator', d%integrator, err)
-      if (err%ok() .and. d%integrator == 'auto') d%integrator = auto_integrator(d%rtol)
-      ! Still 'auto' (tight rtol): the run chooses by the model's stiffness, unless BDF's own
-      ! option says which one is meant.
-      if (err%ok() .and. d%integrator == 'auto' .and. g%has('max_order')) d%integrator = 'bdf'
-      if (err%ok()) then
-        associate (m => d%integrator, when => 'with integrator = ')
-          call only_with(g, ['dt     ', 'rho_inf'], m(1:min(6, len(m))) == 'galpha', &
-            when // '''galpha'' or ''galpha_adaptive''' // auto_note(m), err)
-          call only_with(g, ['max_order'], m == 'bdf', when // '''bdf''', err)
-          call only_with(g, ['erk_order'], m == 'erk', when // '''erk''' // auto_note(m), err)
-          call only_with(g, ['max_step'], m /= 'galpha', &
-            when // '''bdf'', ''galpha_adaptive'' or ''erk''', err)
-          call only_with(g, ['jacobian'], m /= 'erk', &
-            when // '''bdf'', ''galpha'' or ''galpha_adaptive''', err)
-        end associate
-      end if
-      call rd_choice(g, 'jacobian', d%jacobian, err)
-      call rd_real(g, 'atol', d%atol, err)
-      call rd_real(g, 'max_step', d%max_step, err)
-      call rd_int(g, 'max_order', d%max_order, err)
-      call rd_int(g, 'erk_order', d%erk_order, err)
-      call rd_real(g, 'dt', d%dt, err)
-      call rd_real(g, 'rho_inf', d%rho_inf, err)
-      if (.not. err%ok()) return
-      if (d%jacobian == 'internal' .and. d%integrator /= 'bdf') call err%set(ERR_INPUT, &
-        g%where() // ': variable ''jacobian'': ''internal'' (CVODE''s difference quotients) ' &
-        // 'needs integrator = ''bdf''' // auto_note(d%integrator))
-    end associate
-  end subroutine read_dynamic
 
-  !> Why an option of one integrator is refused when the integrator is still 'auto'.
-  function auto_note(method) result(note)
-    character(len=*), intent(in) :: method
-    character(len=:), allocatable :: note
-    note = ''
-    if (method == 'auto') note = ' (below rtol 1e-6 integrator = ''auto'' chooses by the ' // &
-      'model''s stiffness when the run starts: name the integrator)'
-  end function auto_note
 
-  subroutine read_reduction(g, scene, err)
-    type(nml_group_t), intent(inout) :: g
-    type(scene_t), intent(inout) :: scene
-    type(error_t), intent(inout) :: err
-    type(error_t) :: e
-    integer :: n_given
-    associate (r => scene%reduction)
-      r%active = .true.
-      n_given = count([g%has('n_modes'), g%has('cutoff_hz'), g%has('auto_factor')])
-      if (n_given /= 1) then
-        call err%set(ERR_INPUT, g%where() // ': give exactly one of n_modes (a count), ' // &
-          'cutoff_hz (a frequency) or auto_factor (a multiple of the motion bandwidth)')
-        return
-      end if
-      if (g%has('n_modes')) then
-        r%selection = 'count'
-        call rd_int(g, 'n_modes', r%n_modes, err)
-      else if (g%has('cutoff_hz')) then
-        r%selection = 'cutoff'
-        call rd_real(g, 'cutoff_hz', r%cutoff_hz, err)
-      else
-        r%selection = 'auto'
-        call rd_real(g, 'auto_factor', r%auto_factor, err)
-      end if
-      call rd_real(g, 'basis_time', r%basis_time, err)
-      if (g%has('basis_prescribed') .and. err%ok()) then
-        call g%get_real_array('basis_prescribed', r%basis_prescribed, e)
-        if (.not. e%ok()) err = e
-      end if
-      call rd_logical(g, 'static_correction', r%static_correction, err)
-      call rd_choice(g, 'update', r%update, err)
-      if (err%ok()) then
-        call only_with(g, ['update_interval'], r%update == 'interval' .or. r%update == 'mac', &
-          'with update = ''interval'' or ''mac''', err)
-        call only_with(g, ['mac_threshold'], r%update == 'mac', &
-          'with update = ''mac''', err)
-      end if
-      call rd_real(g, 'mac_threshold', r%mac_threshold, err)
-      call rd_choice(g, 'eigensolver', r%eigensolver, err)
-      if (r%update /= 'none') call rd_real(g, 'update_interval', r%update_interval, err)
-      call rd_choice(g, 'joints', r%joints, err)
-      if (err%ok() .and. r%joints == 'held') then
-        if (r%selection /= 'count' .or. r%update /= 'none') call err%set(ERR_INPUT, &
-          g%where() // ': variable ''joints'': ''held'' takes n_modes and a fixed basis ' // &
-          '(update = ''none''; cutoff_hz, auto_factor and basis updates are not built for it)')
-      end if
-    end associate
-  end subroutine read_reduction
 
-  subroutine read_output(g, scene, err)
-    type(nml_group_t), intent(inout) :: g
-    type(scene_t), intent(inout) :: scene
-    type(error_t), intent(inout) :: err
-    if (.not. err%ok()) return
-    ! Without 'nodes' output_nodes stays unallocated: every node.
-    if (g%has('nodes')) call rd_labels(g, 'nodes', scene%output_nodes, err)
-    call rd_labels(g, 'compliance_nodes', scene%compliance_nodes, err, optional_list=.true.)
-  end subroutine read_output
 end module io_scene
