@@ -315,6 +315,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     start = time.time()
+    commit = git_commit(ROOT)
     outcomes = []
     with tempfile.TemporaryDirectory() as tmp:
         for case in cases(args.quick):
@@ -330,7 +331,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     header = ["# Closed-loop trade-off: full and reduced models under feedback control", "",
               f"- Command: `{command_line(PROG, argv)}`",
               f"- Date: {datetime.now().astimezone().isoformat(timespec='seconds')}",
-              f"- Machine: {cpu_model()}, git commit {git_commit(ROOT)}",
+              f"- Machine: {cpu_model()}, git commit {commit}",
               f"- Repeats: {repeats} per case; whole benchmark {time.time() - start:.0f} s",
               "- Scenes: input/two_link_pd.nml (as &controller groups, 1.5 s) and "
               "input/stage_pid.nml (0.3 s); reduced: k modes, basis fixed or updated "
