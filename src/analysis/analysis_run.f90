@@ -24,7 +24,7 @@ module analysis_run
   use core_progress, only: progress_t
   use integrators_driver, only: integrate
   use core_strings, only: int_str, real_str, approx_str
-  use reduction_basis, only: basis_t
+  use reduction_basis, only: basis_t, held_joints
   use reduction_system, only: reduced_t
   use dynamics_control, only: controlled_t
   use model_control, only: control_law_t
@@ -537,6 +537,8 @@ contains
       update%interval = r%update_interval
       update%mac_threshold = r%mac_threshold
       update%eigensolver = r%eigensolver
+      if (r%joints == 'held') call held_joints(this%dyn%model, update%held, err)
+      if (.not. err%ok()) return
       if (allocated(this%red)) deallocate(this%red)
       allocate(this%red)
       this%red%dyn = this%dyn

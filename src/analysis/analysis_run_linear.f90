@@ -4,8 +4,7 @@ submodule (analysis_run) analysis_run_linear
   use model_system, only: NODE_SLOTS
   use dynamics_linear, only: linearise, linear_model_t
   use elements_base, only: MODE_DYNAMIC
-  use model_control, only: ACT_MODE
-  use reduction_basis, only: basis_spec_t, compute_basis
+  use reduction_basis, only: basis_spec_t, compute_basis, held_joints
   implicit none
 
   !> Component names of inputs (forces, moments) and outputs (displacements, rotations):
@@ -131,28 +130,6 @@ contains
         '(basis_time = ' // real_str(r%basis_time) // '): ')
     end associate
   end subroutine reduction_basis
-
-  !> The dynamic coordinates that controllers drive through a joint (&reduction joints =
-  !> 'held'), each once.
-  subroutine held_joints(model, held, err)
-    type(model_t), intent(in) :: model
-    integer, allocatable, intent(out) :: held(:)
-    type(error_t), intent(inout) :: err
-    integer :: k, j, i
-    allocate(held(0))
-    do k = 1, size(model%controllers)
-      associate (c => model%controllers(k))
-        do i = 1, size(c%act_index)
-          if (c%act_kind(i) /= ACT_MODE) cycle
-          j = model%modes(c%act_index(i))%q - model%n_rh
-          if (.not. any(held == j)) held = [held, j]
-        end do
-      end associate
-    end do
-    if (size(held) == 0) call err%set(ERR_INPUT, 'group &reduction: variable ''joints'': ' // &
-      '''held'' holds the joints that controllers drive, but no &controller drives a hinge ' // &
-      'or truss')
-  end subroutine held_joints
 
   function prescribed_names(model) result(names)
     type(model_t), intent(in) :: model

@@ -188,9 +188,8 @@ contains
       if (r%update /= 'none') call rd_real(g, 'update_interval', r%update_interval, err)
       call rd_choice(g, 'joints', r%joints, err)
       if (err%ok() .and. r%joints == 'held') then
-        if (r%selection /= 'count' .or. r%update /= 'none') call err%set(ERR_INPUT, &
-          g%where() // ': variable ''joints'': ''held'' takes n_modes and a fixed basis ' // &
-          '(update = ''none''; cutoff_hz, auto_factor and basis updates are not built for it)')
+        if (r%selection /= 'count') call err%set(ERR_INPUT, g%where() // ': variable ' // &
+          '''joints'': ''held'' takes n_modes (cutoff_hz and auto_factor are not built for it)')
       end if
     end associate
   end subroutine read_reduction

@@ -15,7 +15,7 @@ module reduction_adaptive
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use integrators_driver, only: integrate
   use reduction_modal, only: modal_result_t, modal_analysis
-  use reduction_basis, only: track_modes
+  use reduction_basis, only: track_modes, held_joint_basis
   use reduction_system, only: reduced_t
   use dynamics_control, only: controlled_t
   implicit none
@@ -27,6 +27,8 @@ module reduction_adaptive
     real(wp) :: interval = 0.0_wp             !< time between checks [s]
     real(wp) :: mac_threshold = 0.9_wp
     character(len=8) :: eigensolver = 'auto'
+    !> Joints held in the basis (reduction_basis's held_joint_basis); empty: free modes.
+    integer, allocatable :: held(:)
   end type update_spec_t
 
   !> One entry per check.
@@ -154,6 +156,12 @@ contains
     call modal_analysis(red%dyn, t, q_dy, min(n_dy, k + 2), modes, err, &
       solver=spec%eigensolver)
     red%dyn%controls_on = controls_on
+    ! A held-joint basis is replaced by the one of the new configuration, k columns (spare
+    ! candidates would let tracking drop part of the joints' motions from the span).
+    if (err%ok() .and. allocated(spec%held)) then
+      if (size(spec%held) > 0) call held_joint_basis(modes%k0, modes%m0, spec%held, k, &
+        spec%eigensolver, modes%shapes, modes%frequency_hz, err)
+    end if
     if (err%ok()) call track_modes(red%basis%v, modes%shapes, modes%m0, tracked, mac, pick, err)
     if (.not. err%ok()) then
       call err%prefix('basis update at t = ' // real_str(t) // ': ')

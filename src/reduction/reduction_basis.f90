@@ -8,11 +8,14 @@ module reduction_basis
   use core_linalg, only: chol_factor, lu_factor, lu_solve
   use reduction_eigen, only: lowest_modes
   use dynamics_system, only: dynamics_t
+  use model_system, only: model_t
+  use model_control, only: ACT_MODE
   use model_kinematics, only: kin_state_t
   use reduction_modal, only: modal_result_t, modal_analysis
   implicit none
   private
-  public :: basis_spec_t, basis_t, compute_basis, track_modes, BANDWIDTH_FRACTION
+  public :: basis_spec_t, basis_t, compute_basis, track_modes, BANDWIDTH_FRACTION, &
+    held_joint_basis, held_joints
 
   !> Share of the prescribed acceleration's energy that defines the motion's bandwidth.
   real(wp), parameter :: BANDWIDTH_FRACTION = 0.99_wp
@@ -192,6 +195,28 @@ contains
     v = matmul(v0, y)
     frequency_hz = sign(sqrt(abs(lambda)), lambda) / TWO_PI
   end subroutine held_joint_basis
+
+  !> The dynamic coordinates that controllers drive through a joint (&reduction joints =
+  !> 'held'), each once.
+  subroutine held_joints(model, held, err)
+    type(model_t), intent(in) :: model
+    integer, allocatable, intent(out) :: held(:)
+    type(error_t), intent(inout) :: err
+    integer :: k, j, i
+    allocate(held(0))
+    do k = 1, size(model%controllers)
+      associate (c => model%controllers(k))
+        do i = 1, size(c%act_index)
+          if (c%act_kind(i) /= ACT_MODE) cycle
+          j = model%modes(c%act_index(i))%q - model%n_rh
+          if (.not. any(held == j)) held = [held, j]
+        end do
+      end associate
+    end do
+    if (size(held) == 0) call err%set(ERR_INPUT, 'group &reduction: variable ''joints'': ' // &
+      '''held'' holds the joints that controllers drive, but no &controller drives a hinge ' // &
+      'or truss')
+  end subroutine held_joints
 
   !> The cut-off frequency of 'cutoff' and 'auto' selections.
   subroutine choose_cutoff(dyn, spec, basis, err)
