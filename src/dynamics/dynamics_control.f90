@@ -153,31 +153,24 @@ contains
   subroutine control_check_sampling(this, t, q, v)
     class(controlled_t), intent(inout) :: this
     real(wp), intent(in) :: t, q(:), v(:)
-    real(wp) :: a0(size(q)), a1(size(q)), e0(this%nc), qp(size(q)), h, gain
-    real(wp) :: g(this%n), dedq(this%n)
-    integer :: k, j, status, n
+    real(wp) :: a0(size(q)), e0(this%nc), g(this%n, this%nc), dedq(this%nc, this%n), gain
+    logical :: want(this%nc)
+    integer :: k, status
     this%hint = ''
-    n = this%n
+    associate (c => this%dyn%model%controllers)
+      want = [(c(k)%sampled() .and. c(k)%law_kind /= LAW_USER .and. c(k)%kd > 0, &
+               k = 1, this%nc)]
+    end associate
+    if (.not. any(want)) return
     call this%accel(t, q, v, a0, status)
     if (status /= 0) return
     e0 = this%dyn%ctrl_error
+    call couplings(this, t, q, v, a0, e0, want, g, dedq, status)
+    if (status /= 0) return
     do k = 1, this%nc
       associate (c => this%dyn%model%controllers(k))
-        if (.not. c%sampled() .or. c%law_kind == LAW_USER .or. c%kd <= 0) cycle
-        this%dyn%ctrl_probe(c%u_offset + 1) = 1.0_wp
-        call this%accel(t, q, v, a1, status)
-        this%dyn%ctrl_probe(c%u_offset + 1) = 0.0_wp
-        if (status /= 0) return
-        g = a1(1:n) - a0(1:n)
-        do j = 1, n
-          qp = q
-          h = 1.0e-6_wp * max(abs(q(j)), 1.0e-2_wp)
-          qp(j) = q(j) + h
-          call this%accel(t, qp, v, a1, status)
-          if (status /= 0) return
-          dedq(j) = (this%dyn%ctrl_error(k) - e0(k)) / h
-        end do
-        gain = -dot_product(dedq, g)
+        if (.not. want(k)) cycle
+        gain = -dot_product(dedq(k, :), g(:, k))
         if (c%kd * gain * c%period > 2) this%hint = this%hint // '; controller ''' // &
           c%label // ''': kd G T = ' // real_str(c%kd * gain * c%period) // ' > 2 with ' // &
           'G = ' // real_str(gain) // ' (the inverse of the inertia its actuator sees at ' // &
@@ -298,8 +291,7 @@ contains
     real(wp), intent(in) :: t, q(:), v(:)
     real(wp), intent(out) :: dadq(:, :), dadv(:, :)
     integer, intent(out) :: status
-    real(wp) :: a0(size(q)), a1(size(q)), e0(this%nc), dedq(this%nc, this%n)
-    real(wp) :: g(this%n, this%nc), qp(size(q)), h
+    real(wp) :: a0(size(q)), e0(this%nc), dedq(this%nc, this%n), g(this%n, this%nc)
     logical :: live(this%nc), integrating(this%nc)
     integer :: n, j, k
     n = this%n
@@ -322,23 +314,8 @@ contains
         integrating(k) = .not. c%sampled() .and. .not. c%winds_up(law, e0(k))
       end associate
     end do
-    do k = 1, this%nc
-      associate (iu => this%dyn%model%controllers(k)%u_offset + 1)
-        this%dyn%ctrl_probe(iu) = 1.0_wp
-        call this%accel(t, q, v, a1, status)
-        this%dyn%ctrl_probe(iu) = 0.0_wp
-      end associate
-      if (status /= 0) return
-      g(:, k) = a1(1:n) - a0(1:n)
-    end do
-    do j = 1, n
-      qp = q
-      h = 1.0e-6_wp * max(abs(q(j)), 1.0e-2_wp)
-      qp(j) = q(j) + h
-      call this%accel(t, qp, v, a1, status)
-      if (status /= 0) return
-      dedq(:, j) = (this%dyn%ctrl_error - e0) / h
-    end do
+    call couplings(this, t, q, v, a0, e0, live, g, dedq, status)
+    if (status /= 0) return
     do k = 1, this%nc
       associate (c => this%dyn%model%controllers(k))
         associate (ix => n + c%x_offset + 1)
@@ -357,8 +334,48 @@ contains
     call this%accel(t, q, v, a0, status)
   end subroutine control_jacobian
 
-  !> The closed loop's Jacobian by forward differences with steps 1e-6 max(|q_j|, 1e-2)
-  !> (and the same on the rates), far above the kinematic tolerance.
+  !> Difference step for coordinate (or rate) x: far above the kinematic solver's 1e-11
+  !> tolerance, which differences with sqrt(eps) steps drown in.
+  pure real(wp) function fd_step(x)
+    real(wp), intent(in) :: x
+    fd_step = 1.0e-6_wp * max(abs(x), 1.0e-2_wp)
+  end function fd_step
+
+  !> How the PID controllers couple to the plant at (t, q, v), where the accelerations are a0
+  !> and the errors e0: g(:, k), the plant's accelerations per unit of controller k's output
+  !> (one evaluation with it raised by 1, exact as u enters linearly), for the controllers in
+  !> `want`, and dedq(k, :), the gradients of all errors by differences (n evaluations).
+  subroutine couplings(this, t, q, v, a0, e0, want, g, dedq, status)
+    type(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:), a0(:), e0(:)
+    logical, intent(in) :: want(:)
+    real(wp), intent(out) :: g(:, :), dedq(:, :)
+    integer, intent(out) :: status
+    real(wp) :: a1(size(q)), qp(size(q)), h
+    integer :: j, k
+    g = 0.0_wp
+    status = 0
+    do k = 1, this%nc
+      if (.not. want(k)) cycle
+      associate (iu => this%dyn%model%controllers(k)%u_offset + 1)
+        this%dyn%ctrl_probe(iu) = 1.0_wp
+        call this%accel(t, q, v, a1, status)
+        this%dyn%ctrl_probe(iu) = 0.0_wp
+      end associate
+      if (status /= 0) return
+      g(:, k) = a1(1:this%n) - a0(1:this%n)
+    end do
+    do j = 1, this%n
+      qp = q
+      h = fd_step(q(j))
+      qp(j) = q(j) + h
+      call this%accel(t, qp, v, a1, status)
+      if (status /= 0) return
+      dedq(:, j) = (this%dyn%ctrl_error - e0) / h
+    end do
+  end subroutine couplings
+
+  !> The closed loop's Jacobian by forward differences with steps fd_step.
   subroutine difference_jacobian(this, t, q, v, dadq, dadv, status)
     type(controlled_t), intent(inout) :: this
     real(wp), intent(in) :: t, q(:), v(:)
@@ -370,13 +387,13 @@ contains
     if (status /= 0) return
     do j = 1, size(q)
       qp = q
-      h = 1.0e-6_wp * max(abs(q(j)), 1.0e-2_wp)
+      h = fd_step(q(j))
       qp(j) = q(j) + h
       call this%accel(t, qp, v, a1, status)
       if (status /= 0) return
       dadq(:, j) = (a1 - a0) / h
       qp = v
-      h = 1.0e-6_wp * max(abs(v(j)), 1.0e-2_wp)
+      h = fd_step(v(j))
       qp(j) = v(j) + h
       call this%accel(t, q, qp, a1, status)
       if (status /= 0) return
