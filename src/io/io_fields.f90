@@ -204,7 +204,6 @@ contains
     type(label_t), allocatable, intent(out) :: classes(:)
     type(error_t), intent(inout) :: err
     type(string_t), allocatable :: values(:)
-    integer :: i
     allocate(classes(0))
     call rd_choices(g, var, values, err)
     if (.not. err%ok()) return
@@ -216,11 +215,7 @@ contains
         var == 'bending')) // ', got ' // int_str(size(values)))
       return
     end if
-    deallocate(classes)
-    allocate(classes(size(values)))
-    do i = 1, size(values)
-      classes(i)%s = values(i)%s
-    end do
+    classes = as_labels(values)
   end subroutine rd_classes
 
   !> A label names a node, link, ... in references and in the result file's paths: it must be
@@ -285,7 +280,6 @@ contains
     logical, intent(in), optional :: optional_list
     type(string_t), allocatable :: values(:)
     type(error_t) :: e
-    integer :: i
     allocate(labels(0))
     if (.not. err%ok()) return
     if (present(optional_list)) then
@@ -296,10 +290,15 @@ contains
       err = e
       return
     end if
-    deallocate(labels)
-    allocate(labels(size(values)))
+    labels = as_labels(values)
+  end subroutine rd_labels
+
+  pure function as_labels(values) result(labels)
+    type(string_t), intent(in) :: values(:)
+    type(label_t) :: labels(size(values))
+    integer :: i
     do i = 1, size(values)
       labels(i)%s = values(i)%s
     end do
-  end subroutine rd_labels
+  end function as_labels
 end module io_fields

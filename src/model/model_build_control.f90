@@ -48,7 +48,7 @@ contains
       s%links(i)%damping = 0.0_wp
     end do
     do i = 1, size(s%trusses)
-      driven = feedforward_drives(scene, s%trusses(i)%label)
+      driven = feedforward_drives(model, s%trusses(i)%label)
       if (.not. driven .and. s%trusses(i)%mode /= 'prescribed') s%trusses(i)%mode = 'rigid'
       if (.not. driven) s%trusses(i)%damping = 0.0_wp
     end do
@@ -59,7 +59,7 @@ contains
     end do
     do i = 1, size(s%hinges)
       associate (h => s%hinges(i))
-        driven = feedforward_drives(scene, h%label)
+        driven = feedforward_drives(model, h%label)
         h%kp = 0.0_wp
         h%kd = 0.0_wp
         if (driven .or. h%mode == 'prescribed' .or. h%mode == 'rigid' .or. &
@@ -105,19 +105,16 @@ contains
       ' feedforward controllers drive joints: every free joint needs one')
   end procedure build_rigid_model
 
-  !> Whether a controller with feedforward acts on element `label`.
-  pure logical function feedforward_drives(scene, label)
-    type(scene_t), intent(in) :: scene
+  !> Whether a controller with feedforward drives element `label` (as resolved on the model).
+  pure logical function feedforward_drives(model, label)
+    type(model_t), intent(in) :: model
     character(len=*), intent(in) :: label
-    integer :: k, dot
+    integer :: k
     feedforward_drives = .false.
-    do k = 1, size(scene%controllers)
-      associate (r => scene%controllers(k))
-        if (.not. r%feedforward .or. size(r%actuator) /= 1) cycle
-        associate (name => r%actuator(1)%s)
-          dot = index(name, '.', back=.true.)
-          if (dot > 1) feedforward_drives = feedforward_drives .or. name(1:dot - 1) == label
-        end associate
+    do k = 1, size(model%controllers)
+      associate (c => model%controllers(k))
+        if (c%feedforward) feedforward_drives = feedforward_drives .or. &
+          model%elements(model%modes(c%act_index(1))%element)%e%label == label
       end associate
     end do
   end function feedforward_drives
