@@ -15,8 +15,6 @@ contains
   !> nodal coordinate as a nodal force.
   module procedure dyn_apply_controllers
     real(wp) :: r, r_dot, r_ddot
-    ! The law's results come back in copies: the law reads this, which they are part of.
-    real(wp), allocatable :: u_law(:), rate(:)
     integer :: k, i, j
     associate (m => this%model)
       do k = 1, size(m%controllers)
@@ -38,12 +36,15 @@ contains
               if (c%sampled()) then
                 u = held
               else
-                allocate(u_law(size(u)), rate(c%n_states))
-                call this%user_law(k, t, rate, u_law, err)
-                if (.not. err%ok()) return
-                u = c%limited(u_law)
-                this%ctrl_x_rate(c%x_offset + 1:c%x_offset + c%n_states) = rate
-                deallocate(u_law, rate)
+                block
+                  ! The law's results come back in copies: the law reads this, which they
+                  ! are part of.
+                  real(wp) :: u_law(size(c%act_index)), rate(c%n_states)
+                  call this%user_law(k, t, rate, u_law, err)
+                  if (.not. err%ok()) return
+                  u = c%limited(u_law)
+                  this%ctrl_x_rate(c%x_offset + 1:c%x_offset + c%n_states) = rate
+                end block
               end if
             else
               r = 0.0_wp
