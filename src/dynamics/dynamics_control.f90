@@ -44,6 +44,9 @@ module dynamics_control
     !> controller k drives (0: no feedforward).
     type(dynamics_t), allocatable :: rigid
     integer, allocatable :: ff_q(:)
+    !> The time dyn%ctrl_ff was computed for: the feedforward depends on t alone, and a
+    !> Jacobian evaluates the loop many times at one t.
+    real(wp) :: ff_time = -huge(1.0_wp)
     !> Last state recorded, for a run that continues in segments (reduced with updates).
     real(wp), allocatable :: last_s(:), last_i(:)
     !> At the output times: per controller a PID's error e = r - y, per actuator the applied
@@ -132,10 +135,13 @@ contains
     real(wp) :: q(this%rigid%model%n_dy), v(size(q)), a(size(q)), tau(size(q))
     type(error_t) :: err
     integer :: k
+    status = 0
+    if (t == this%ff_time) return
     call references(this, t, q, v, a)
     call this%rigid%assemble(t, q, v, err)
     call this%rigid%report(err, status)
     if (status /= 0) return
+    this%ff_time = t
     tau = matmul(this%rigid%mbar, a) - this%rigid%gen_force
     do k = 1, size(this%ff_q)
       if (this%ff_q(k) > 0) &
