@@ -36,6 +36,15 @@ module model_kinematics
     !> from de_offset(iel), n_modes x n_dofs), for the sparse equations of motion to reuse.
     integer, allocatable :: de_offset(:)
     real(wp), allocatable :: de_val(:)
+    !> The element loops' index lookups, flat and made once (kin_init): per element its mode
+    !> and coordinate counts; per mode (model numbering) its kinematic row, the q index that
+    !> row equals (0: none) and the period; per Jacobian entry (element, mode with a row,
+    !> coordinate, in kin_residual's order) its column of J_c (0: not calculable), value
+    !> slot of the sparse J_c and input entry (0: none).
+    integer, allocatable :: el_nm(:), el_nd(:)
+    integer, allocatable :: mode_row(:), mode_q(:)
+    real(wp), allocatable :: mode_period(:)
+    integer, allocatable :: ent_col(:), ent_slot(:), ent_in(:)
     real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer (allocated there)
     logical :: has_df = .false.          !< df belongs to x
     logical :: has_factors = .false.     !< the factors belong to x (up to the last correction)
@@ -75,7 +84,7 @@ contains
     type(model_t), intent(in) :: model
     logical, intent(in), optional :: sparse
     type(entries_t) :: jac, inputs
-    integer :: iel, j, k, row
+    integer :: iel, j, k, row, m, n_ent
     this%sparse = .false.
     if (present(sparse)) this%sparse = sparse
     if (allocated(this%q)) deallocate(this%q)
@@ -87,14 +96,34 @@ contains
     this%q = 0.0_wp
     this%has_df = .false.
     this%has_factors = .false.
+    this%el_nm = [(model%elements(iel)%e%n_modes(), iel = 1, model%n_elements)]
+    this%el_nd = [(size(model%elements(iel)%e%dofs), iel = 1, model%n_elements)]
+    this%mode_row = model%modes%row
+    this%mode_q = [(0, m = 1, size(model%modes))]
+    this%mode_period = model%modes%period
+    n_ent = 0
+    do m = 1, size(model%modes)
+      row = this%mode_row(m)
+      if (row == 0) cycle
+      this%mode_q(m) = model%row_q(row)
+      n_ent = n_ent + this%el_nd(model%modes(m)%element)
+    end do
+    allocate(this%ent_col(n_ent), this%ent_slot(n_ent), this%ent_in(n_ent))
+    n_ent = 0
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
-        do j = 1, el%n_modes()
-          row = model%modes(model%mode_first(iel) + j - 1)%row
+        do j = 1, this%el_nm(iel)
+          row = this%mode_row(model%mode_first(iel) + j - 1)
           if (row == 0) cycle
           do k = 1, size(el%dofs)
+            n_ent = n_ent + 1
+            this%ent_col(n_ent) = model%calc_index(el%dofs(k))
             call jac%add(row, model%calc_index(el%dofs(k)))
+            this%ent_slot(n_ent) = 0
+            this%ent_in(n_ent) = 0
+            if (model%calc_index(el%dofs(k)) > 0) this%ent_slot(n_ent) = jac%n
             call inputs%add(row, model%input_q(el%dofs(k)))
+            if (model%input_q(el%dofs(k)) > 0) this%ent_in(n_ent) = inputs%n
           end do
         end do
       end associate
@@ -105,12 +134,16 @@ contains
     this%in_val = 0.0_wp
     if (.not. this%sparse) return
     call this%jac_sp%setup(model%n_c, jac%rows(1:jac%n), jac%cols(1:jac%n))
+    ! Entry number -> value slot, now that the pattern is known.
+    do k = 1, n_ent
+      if (this%ent_slot(k) > 0) this%ent_slot(k) = this%jac_sp%pos(this%ent_slot(k))
+    end do
     if (allocated(this%de_offset)) deallocate(this%de_offset, this%de_val)
     allocate(this%de_offset(model%n_elements))
     k = 0
     do iel = 1, model%n_elements
       this%de_offset(iel) = k + 1
-      k = k + model%elements(iel)%e%n_modes() * size(model%elements(iel)%e%dofs)
+      k = k + this%el_nm(iel) * this%el_nd(iel)
     end do
     allocate(this%de_val(k))
   end subroutine kin_init
@@ -123,8 +156,8 @@ contains
     real(wp), intent(in) :: q(:)
     real(wp), intent(out) :: r(:)
     logical, intent(in), optional :: jacobian
-    real(wp) :: e_work(model%max_modes), de_work(model%max_modes, model%max_dofs)
-    integer :: iel, j, k, row, col, nm, nd, n_entry, n_in
+    real(wp) :: e(model%max_modes), de(model%max_modes, model%max_dofs), xe(model%max_dofs)
+    integer :: iel, j, k, m, row, col, nm, nd, p, first
     logical :: with_jac
     with_jac = .false.
     if (present(jacobian)) with_jac = jacobian
@@ -137,49 +170,51 @@ contains
       end if
       this%in_val = 0.0_wp
     end if
-    n_entry = 0
-    n_in = 0
+    p = 0
     do iel = 1, model%n_elements
-      nm = model%elements(iel)%e%n_modes()
-      nd = size(model%elements(iel)%e%dofs)
-      associate (el => model%elements(iel)%e, e => e_work(1:nm), de => de_work(1:nm, 1:nd))
-        call el%evaluate(this%x(el%dofs), e, de)
-        if (with_jac .and. this%sparse) then
-          do k = 1, nd
-            this%de_val(this%de_offset(iel) + (k - 1) * nm:this%de_offset(iel) + k * nm - 1) &
-              = de(:, k)
-          end do
-        end if
-        do j = 1, nm
-          row = model%modes(model%mode_first(iel) + j - 1)%row
-          if (row == 0) cycle
-          r(row) = e(j)
-          if (model%row_q(row) > 0) then
-            r(row) = e(j) - q(model%row_q(row))
-            associate (period => model%modes(model%mode_first(iel) + j - 1)%period)
-              if (period > 0) r(row) = modulo(r(row) + period / 2, period) - period / 2
-            end associate
-          end if
-          if (.not. with_jac) cycle
-          do k = 1, size(el%dofs)
-            col = model%calc_index(el%dofs(k))
-            if (col > 0) then
-              if (this%sparse) then
-                n_entry = n_entry + 1
-                associate (slot => this%jac_sp%pos(n_entry))
-                  this%jac_sp%val(slot) = this%jac_sp%val(slot) + de(j, k)
-                end associate
-              else
-                this%lu(row, col) = this%lu(row, col) + de(j, k)
-              end if
-            end if
-            if (model%input_q(el%dofs(k)) > 0) then
-              n_in = n_in + 1
-              this%in_val(n_in) = de(j, k)
-            end if
+      nm = this%el_nm(iel)
+      nd = this%el_nd(iel)
+      associate (el => model%elements(iel)%e)
+        ! Gathered into a contiguous buffer: a vector subscript as the actual argument makes
+        ! the compiler allocate a temporary per element.
+        do k = 1, nd
+          xe(k) = this%x(el%dofs(k))
+        end do
+        call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
+      end associate
+      if (with_jac .and. this%sparse) then
+        first = this%de_offset(iel) - 1
+        do k = 1, nd
+          do j = 1, nm
+            this%de_val(first + (k - 1) * nm + j) = de(j, k)
           end do
         end do
-      end associate
+      end if
+      do j = 1, nm
+        m = model%mode_first(iel) + j - 1
+        row = this%mode_row(m)
+        if (row == 0) cycle
+        r(row) = e(j)
+        if (this%mode_q(m) > 0) then
+          r(row) = e(j) - q(this%mode_q(m))
+          associate (period => this%mode_period(m))
+            if (period > 0) r(row) = modulo(r(row) + period / 2, period) - period / 2
+          end associate
+        end if
+        if (.not. with_jac) cycle
+        do k = 1, nd
+          p = p + 1
+          col = this%ent_col(p)
+          if (col > 0) then
+            if (this%sparse) then
+              this%jac_sp%val(this%ent_slot(p)) = this%jac_sp%val(this%ent_slot(p)) + de(j, k)
+            else
+              this%lu(row, col) = this%lu(row, col) + de(j, k)
+            end if
+          end if
+          if (this%ent_in(p) > 0) this%in_val(this%ent_in(p)) = de(j, k)
+        end do
+      end do
     end do
   end subroutine kin_residual
 
@@ -275,7 +310,7 @@ contains
     real(wp), intent(in) :: q(:)
     type(error_t), intent(out) :: err
     real(wp) :: r(model%n_c), dx(model%n_c, 1), rmax, rprev, dxp(model%n_x)
-    real(wp) :: x_start(model%n_x), x_last(model%n_x)
+    real(wp) :: x_start(model%n_x), x_last(model%n_x), dq(model%n_q)
     integer :: it, info, worst
     logical :: stale
     character(len=200) :: msg
@@ -286,7 +321,8 @@ contains
     stale = this%has_factors
     x_last = this%x
     if (this%has_factors) then
-      call this%apply_df(model, q - this%q, dxp)
+      dq = q - this%q
+      call this%apply_df(model, dq, dxp)
       this%x = this%x + dxp
     end if
     do it = 1, model%n_q
@@ -309,7 +345,7 @@ contains
         if (rmax > model%newton_tol) then
           dx(:, 1) = -r
           call this%jacobian_solve(dx)
-          this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
+          call add_calculable(this, model, dx(:, 1))
           cycle
         end if
         if (.not. this%sparse) call this%residual(model, q, r, jacobian=.true.)
@@ -327,7 +363,7 @@ contains
         ! rmax to about rmax^2: the stress of a stiff elastic mode is EA/l0 times its error,
         ! and statics differences such stresses. Without them rmax is all the accuracy x
         ! needs, and the factors then belong to x exactly.
-        if (model%n_elastic > 0) this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
+        if (model%n_elastic > 0) call add_calculable(this, model, dx(:, 1))
         this%q = q
         this%has_factors = .true.
         this%n_iterations = this%n_iterations + it - 1
@@ -335,13 +371,25 @@ contains
       end if
       if (it > 3 .and. rmax > rprev) exit
       rprev = rmax
-      this%x(model%calc_coord) = this%x(model%calc_coord) + dx(:, 1)
+      call add_calculable(this, model, dx(:, 1))
     end do
     write(msg, '(a,i0,a,es10.3)') 'kinematic Newton iteration did not converge in ', it - 1, &
       ' iterations, residual ', rmax
     call err%set(ERR_NUMERIC, trim(msg))
     this%x = merge(x_start, x_last, this%keep_failed_guess)
   end subroutine kin_newton
+
+  !> x := x + dx on the calculable coordinates (a loop: the vector-subscripted sum makes a
+  !> temporary).
+  pure subroutine add_calculable(this, model, dx)
+    type(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: dx(:)
+    integer :: i
+    do i = 1, model%n_c
+      this%x(model%calc_coord(i)) = this%x(model%calc_coord(i)) + dx(i)
+    end do
+  end subroutine add_calculable
 
   !> Why J_c is singular, from a dense factorisation (also in sparse mode: this is the error
   !> path, and the dense factors name the undetermined coordinate and the modes it moves).
@@ -429,19 +477,23 @@ contains
       'dynamic and another mode of the same loop elastic'
   end function kin_free_modes_moved
 
-  !> Right-hand sides of J_c DF_c = (selection of q) - J_in for the columns dq (n_q, n).
-  subroutine transfer_rhs(this, model, dq, b)
+  !> Right-hand sides of J_c DF_c = (selection of q) - J_in for the nc columns dq (n_q, nc).
+  !> Explicit shapes: a vector is passed as one column without a reshaped copy.
+  subroutine transfer_rhs(this, model, nc, dq, b)
     type(kinematics_t), intent(in) :: this
     type(model_t), intent(in) :: model
-    real(wp), intent(in) :: dq(:, :)
-    real(wp), intent(out) :: b(:, :)
-    integer :: row, k
-    b = 0.0_wp
-    do row = 1, model%n_c
-      if (model%row_q(row) > 0) b(row, :) = dq(model%row_q(row), :)
-    end do
-    do k = 1, size(this%in_row)
-      b(this%in_row(k), :) = b(this%in_row(k), :) - this%in_val(k) * dq(this%in_q(k), :)
+    integer, intent(in) :: nc
+    real(wp), intent(in) :: dq(model%n_q, nc)
+    real(wp), intent(out) :: b(model%n_c, nc)
+    integer :: row, k, c
+    do c = 1, nc
+      do row = 1, model%n_c
+        b(row, c) = 0.0_wp
+        if (model%row_q(row) > 0) b(row, c) = dq(model%row_q(row), c)
+      end do
+      do k = 1, size(this%in_row)
+        b(this%in_row(k), c) = b(this%in_row(k), c) - this%in_val(k) * dq(this%in_q(k), c)
+      end do
     end do
   end subroutine transfer_rhs
 
@@ -451,9 +503,7 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: dq(:)
     real(wp), intent(out) :: dx(:)
-    real(wp) :: dx2(size(dx), 1)
-    call this%apply_df_many(model, reshape(dq, [size(dq), 1]), dx2)
-    dx = dx2(:, 1)
+    call apply_df_columns(this, model, 1, dq, dx)
   end subroutine kin_apply_df
 
   !> dx = DF_x dq for several columns (n_q, k) -> (n_x, k), by one solve with k right-hand
@@ -463,16 +513,29 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: dq(:, :)
     real(wp), intent(out) :: dx(:, :)
-    real(wp) :: b(model%n_c, size(dq, 2))
-    integer :: iq
-    call transfer_rhs(this, model, dq, b)
-    call this%jacobian_solve(b)
-    dx = 0.0_wp
-    dx(model%calc_coord, :) = b
-    do iq = 1, model%n_q
-      if (model%q_coord(iq) > 0) dx(model%q_coord(iq), :) = dq(iq, :)
-    end do
+    call apply_df_columns(this, model, size(dq, 2), dq, dx)
   end subroutine kin_apply_df_many
+
+  subroutine apply_df_columns(this, model, nc, dq, dx)
+    type(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    integer, intent(in) :: nc
+    real(wp), intent(in) :: dq(model%n_q, nc)
+    real(wp), intent(out) :: dx(model%n_x, nc)
+    real(wp) :: b(model%n_c, nc)
+    integer :: iq, i, c
+    call transfer_rhs(this, model, nc, dq, b)
+    call this%jacobian_solve(b)
+    do c = 1, nc
+      dx(:, c) = 0.0_wp
+      do i = 1, model%n_c
+        dx(model%calc_coord(i), c) = b(i, c)
+      end do
+      do iq = 1, model%n_q
+        if (model%q_coord(iq) > 0) dx(model%q_coord(iq), c) = dq(iq, c)
+      end do
+    end do
+  end subroutine apply_df_columns
 
   !> g_q = DF_x^T g (n_q) for nodal forces g (n_x), by one transposed solve.
   subroutine kin_apply_dft(this, model, g, g_q)
@@ -506,7 +569,7 @@ contains
     do iq = 1, model%n_q
       unit(iq, iq) = 1.0_wp
     end do
-    call transfer_rhs(this, model, unit, b)
+    call transfer_rhs(this, model, model%n_q, unit, b)
     call this%jacobian_solve(b)
     ! Allocated here, on first use: dense (n_x by n_q), it is what the sparse path avoids.
     if (.not. allocated(this%df)) allocate(this%df(model%n_x, model%n_q))
@@ -528,28 +591,39 @@ contains
     real(wp), intent(in) :: qd(:)
     real(wp), intent(out) :: d2x(:)
     real(wp), intent(in), optional :: xd_known(:), qdd(:)
-    real(wp) :: rhs(model%n_c, 1), xd(model%n_x), d2e_work(model%max_modes)
-    integer :: iel, j, row, nm, iq
+    real(wp) :: rhs(model%n_c, 1), xd(model%n_x), d2e(model%max_modes)
+    real(wp) :: xe(model%max_dofs), xde(model%max_dofs)
+    integer :: iel, j, k, row, nm, nd, i, iq
     if (present(xd_known)) then
       xd = xd_known
     else
       call this%apply_df(model, qd, xd)
     end if
-    rhs = 0.0_wp
-    if (present(qdd)) call transfer_rhs(this, model, reshape(qdd, [size(qdd), 1]), rhs)
+    if (present(qdd)) then
+      call transfer_rhs(this, model, 1, qdd, rhs)
+    else
+      rhs = 0.0_wp
+    end if
     do iel = 1, model%n_elements
-      nm = model%elements(iel)%e%n_modes()
-      associate (el => model%elements(iel)%e, d2e => d2e_work(1:nm))
-        call el%second(this%x(el%dofs), xd(el%dofs), d2e)
-        do j = 1, size(d2e)
-          row = model%modes(model%mode_first(iel) + j - 1)%row
-          if (row > 0) rhs(row, 1) = rhs(row, 1) - d2e(j)
+      nm = this%el_nm(iel)
+      nd = this%el_nd(iel)
+      associate (el => model%elements(iel)%e)
+        do k = 1, nd
+          xe(k) = this%x(el%dofs(k))
+          xde(k) = xd(el%dofs(k))
         end do
+        call el%second(xe(1:nd), xde(1:nd), d2e(1:nm))
       end associate
+      do j = 1, nm
+        row = this%mode_row(model%mode_first(iel) + j - 1)
+        if (row > 0) rhs(row, 1) = rhs(row, 1) - d2e(j)
+      end do
     end do
     call this%jacobian_solve(rhs)
     d2x = 0.0_wp
-    d2x(model%calc_coord) = rhs(:, 1)
+    do i = 1, model%n_c
+      d2x(model%calc_coord(i)) = rhs(i, 1)
+    end do
     if (.not. present(qdd)) return
     do iq = 1, model%n_q
       if (model%q_coord(iq) > 0) d2x(model%q_coord(iq)) = qdd(iq)
