@@ -23,6 +23,9 @@ module dynamics_augmented
   type :: element_mass_t
     integer, allocatable :: offset(:)         !< start of element i's block, 0 if no inertia
     real(wp), allocatable :: val(:)
+    !> Every element's coordinates, flat: element i's from dof_first(i) to dof_first(i + 1) - 1
+    !> (the products loop over them without reaching into the polymorphic elements).
+    integer, allocatable :: dof_first(:), dofs(:)
   contains
     procedure :: init => mass_init
     procedure :: times => mass_times
@@ -39,6 +42,8 @@ module dynamics_augmented
     !> q_dy index, element, and position of its row of dD/dx in de_val with the stride
     !> (n_modes) between its entries.
     integer, allocatable :: dyn_q(:), dyn_el(:), dyn_de(:), dyn_stride(:)
+    !> Element coordinates, flat as in element_mass_t; per dynamic mode its first one there.
+    integer, allocatable :: dof_first(:), dofs(:), dyn_dof(:)
     type(sparse_lu_t) :: lu
     !> The iteration matrix of implicit integrators in the same form, M replaced by
     !> M + D_x^T (c_q S + c_v S_d) D_x over the stressed modes (see aug_factor_newton).
@@ -70,7 +75,24 @@ contains
     end do
     allocate(this%val(n))
     this%val = 0.0_wp
+    call flat_dofs(model, this%dof_first, this%dofs)
   end subroutine mass_init
+
+  !> All elements' coordinates in one array, element iel's from first(iel) on.
+  subroutine flat_dofs(model, first, dofs)
+    type(model_t), intent(in) :: model
+    integer, allocatable, intent(out) :: first(:), dofs(:)
+    integer :: iel
+    allocate(first(model%n_elements + 1))
+    first(1) = 1
+    do iel = 1, model%n_elements
+      first(iel + 1) = first(iel) + size(model%elements(iel)%e%dofs)
+    end do
+    allocate(dofs(first(model%n_elements + 1) - 1))
+    do iel = 1, model%n_elements
+      dofs(first(iel):first(iel + 1) - 1) = model%elements(iel)%e%dofs
+    end do
+  end subroutine flat_dofs
 
   !> M w for nodal vectors w (n_x, k): the lumped masses and the element blocks (loops over
   !> the flat blocks in place: no block copies or temporaries per element).
@@ -79,25 +101,30 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: w(:, :)
     real(wp) :: mw(size(w, 1), size(w, 2))
-    integer :: iel, nd, c, k, l, first
-    real(wp) :: wl
+    real(wp) :: we(model%max_dofs), me(model%max_dofs)
+    integer :: iel, nd, c, k, l, first, d0
     do c = 1, size(w, 2)
       mw(:, c) = model%lumped * w(:, c)
     end do
     do iel = 1, model%n_elements
       first = this%offset(iel)
       if (first == 0) cycle
-      associate (dofs => model%elements(iel)%e%dofs)
-        nd = size(dofs)
-        do c = 1, size(w, 2)
-          do l = 1, nd
-            wl = w(dofs(l), c)
-            do k = 1, nd
-              mw(dofs(k), c) = mw(dofs(k), c) + this%val(first + (l - 1) * nd + k - 1) * wl
-            end do
+      d0 = this%dof_first(iel) - 1
+      nd = this%dof_first(iel + 1) - 1 - d0
+      do c = 1, size(w, 2)
+        do l = 1, nd
+          we(l) = w(this%dofs(d0 + l), c)
+          me(l) = 0.0_wp
+        end do
+        do l = 1, nd
+          do k = 1, nd
+            me(k) = me(k) + this%val(first + (l - 1) * nd + k - 1) * we(l)
           end do
         end do
-      end associate
+        do k = 1, nd
+          mw(this%dofs(d0 + k), c) = mw(this%dofs(d0 + k), c) + me(k)
+        end do
+      end do
     end do
   end function mass_times
 
@@ -160,6 +187,7 @@ contains
         end do
       end associate
     end do
+    call flat_dofs(model, this%dof_first, this%dofs)
     call list_dynamic_modes(this, model)
     call this%lu%setup(n, mass_pattern%rows(1:mass_pattern%n), mass_pattern%cols(1:mass_pattern%n))
     call this%newton%setup(n, newton_pattern%rows(1:newton_pattern%n), &
@@ -171,7 +199,7 @@ contains
     type(model_t), intent(in) :: model
     integer :: iel, j, m, n
     n = count(model%modes%class == MODE_DYNAMIC)
-    allocate(this%dyn_q(n), this%dyn_el(n), this%dyn_de(n), this%dyn_stride(n))
+    allocate(this%dyn_q(n), this%dyn_el(n), this%dyn_de(n), this%dyn_stride(n), this%dyn_dof(n))
     n = 0
     do iel = 1, model%n_elements
       do j = 1, model%elements(iel)%e%n_modes()
@@ -182,6 +210,7 @@ contains
         this%dyn_el(n) = iel
         this%dyn_de(n) = this%de_offset(iel) + j - 1
         this%dyn_stride(n) = model%elements(iel)%e%n_modes()
+        this%dyn_dof(n) = this%dof_first(iel)
       end do
     end do
   end subroutine list_dynamic_modes
@@ -322,19 +351,21 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: g(:, :)
     real(wp) :: f(model%n_x, size(g, 2))
-    integer :: d, k, iq
-    f = 0.0_wp
-    do d = 1, size(this%dyn_q)
-      associate (dofs => model%elements(this%dyn_el(d))%e%dofs, iq_d => this%dyn_q(d))
-        do k = 1, size(dofs)
-          f(dofs(k), :) = f(dofs(k), :) + &
-            this%de_val(this%dyn_de(d) + (k - 1) * this%dyn_stride(d)) * g(iq_d, :)
+    integer :: c, d, k, iq, d0, nd
+    do c = 1, size(g, 2)
+      f(:, c) = 0.0_wp
+      do d = 1, size(this%dyn_q)
+        d0 = this%dyn_dof(d) - 1
+        nd = this%dof_first(this%dyn_el(d) + 1) - 1 - d0
+        do k = 1, nd
+          f(this%dofs(d0 + k), c) = f(this%dofs(d0 + k), c) + &
+            this%de_val(this%dyn_de(d) + (k - 1) * this%dyn_stride(d)) * g(this%dyn_q(d), c)
         end do
-      end associate
-    end do
-    do iq = model%n_rh + 1, model%n_q
-      if (model%q_coord(iq) > 0) f(model%q_coord(iq), :) = f(model%q_coord(iq), :) + &
-        g(iq - model%n_rh, :)
+      end do
+      do iq = model%n_rh + 1, model%n_q
+        if (model%q_coord(iq) > 0) f(model%q_coord(iq), c) = f(model%q_coord(iq), c) + &
+          g(iq - model%n_rh, c)
+      end do
     end do
   end function aug_nodal_equivalent
 
@@ -346,11 +377,13 @@ contains
     real(wp), intent(in) :: f(:, :)
     real(wp), intent(out) :: a(:, :)
     logical, intent(in), optional :: newton
-    real(wp) :: b(this%n_free + this%n_con, size(f, 2)), y(model%n_x, size(f, 2))
-    integer :: i, d, k, iq
-    b = 0.0_wp
-    do i = 1, model%n_x
-      if (this%free_index(i) > 0) b(this%free_index(i), :) = f(i, :)
+    real(wp) :: b(this%n_free + this%n_con, size(f, 2))
+    integer :: i, c, d, k, iq, d0, nd
+    do c = 1, size(f, 2)
+      b(this%n_free + 1:, c) = 0.0_wp
+      do i = 1, model%n_x
+        if (this%free_index(i) > 0) b(this%free_index(i), c) = f(i, c)
+      end do
     end do
     if (present(newton)) then
       if (newton) then
@@ -361,21 +394,26 @@ contains
     else
       call this%lu%solve_many(b)
     end if
-    y = 0.0_wp
-    do i = 1, model%n_x
-      if (this%free_index(i) > 0) y(i, :) = b(this%free_index(i), :)
-    end do
-    a = 0.0_wp
-    do d = 1, size(this%dyn_q)
-      associate (dofs => model%elements(this%dyn_el(d))%e%dofs, iq_d => this%dyn_q(d))
-        do k = 1, size(dofs)
-          a(iq_d, :) = a(iq_d, :) + &
-            this%de_val(this%dyn_de(d) + (k - 1) * this%dyn_stride(d)) * y(dofs(k), :)
+    ! y = DF_dy a is b on the free coordinates (zero elsewhere): read through free_index.
+    do c = 1, size(f, 2)
+      a(:, c) = 0.0_wp
+      do d = 1, size(this%dyn_q)
+        d0 = this%dyn_dof(d) - 1
+        nd = this%dof_first(this%dyn_el(d) + 1) - 1 - d0
+        do k = 1, nd
+          i = this%free_index(this%dofs(d0 + k))
+          if (i == 0) cycle
+          a(this%dyn_q(d), c) = a(this%dyn_q(d), c) + &
+            this%de_val(this%dyn_de(d) + (k - 1) * this%dyn_stride(d)) * b(i, c)
         end do
-      end associate
-    end do
-    do iq = model%n_rh + 1, model%n_q
-      if (model%q_coord(iq) > 0) a(iq - model%n_rh, :) = y(model%q_coord(iq), :)
+      end do
+      do iq = model%n_rh + 1, model%n_q
+        if (model%q_coord(iq) > 0) then
+          i = this%free_index(model%q_coord(iq))
+          a(iq - model%n_rh, c) = 0.0_wp
+          if (i > 0) a(iq - model%n_rh, c) = b(i, c)
+        end if
+      end do
     end do
   end subroutine aug_accelerations
 

@@ -72,6 +72,10 @@ module dynamics_system
     real(wp), allocatable :: ctrl_ff(:), ctrl_probe(:)
     real(wp), allocatable :: ctrl_error(:), ctrl_error_rate(:), ctrl_law(:), ctrl_u(:)
     real(wp), allocatable :: ctrl_y(:), ctrl_y_dot(:), ctrl_x_rate(:)
+    !> sigma_dy is linear in (q, qd) with the constant element stiffness: its entries, made
+    !> once (dyn_init), each sigma_dy(st_row) += st_s (q(st_col) + st_beta qd(st_col)).
+    integer, allocatable :: st_row(:), st_col(:)
+    real(wp), allocatable :: st_s(:), st_beta(:)
   contains
     procedure :: init => dyn_init
     procedure :: prescribed => dyn_prescribed
@@ -211,6 +215,7 @@ contains
     this%ctrl_y_dot = this%ctrl_y
     this%ctrl_ff = this%ctrl_held
     this%ctrl_probe = this%ctrl_held
+    call stress_entries(this)
     call this%evaluate(t0, q_dy0, 0.0_wp * q_dy0, a, err)
     if (.not. err%ok()) call err%prefix('initial configuration: ')
   end subroutine dyn_init
@@ -250,36 +255,57 @@ contains
     if (size(this%model%load_motion) > 0) f = f + this%model%loads_at(t) - this%model%force
   end function dyn_loads_at
 
+  !> The entries of sigma_dy = S (e + beta e_dot) over q (dyn_stresses), element by element
+  !> in the order of S's rows and columns (elements with elastic modes excluded).
+  subroutine stress_entries(this)
+    class(dynamics_t), intent(inout) :: this
+    real(wp) :: s(this%model%max_modes, this%model%max_modes)
+    integer :: iel, i, j, nm, n, pass
+    associate (m => this%model)
+      do pass = 1, 2
+        n = 0
+        do iel = 1, m%n_elements
+          if (m%elastic_element(iel)) cycle
+          nm = m%elements(iel)%e%n_modes()
+          call m%elements(iel)%e%stiffness(s(1:nm, 1:nm))
+          do i = 1, nm
+            associate (row => m%modes(m%mode_first(iel) + i - 1))
+              if (row%class /= MODE_DYNAMIC) cycle
+              do j = 1, nm
+                associate (col => m%modes(m%mode_first(iel) + j - 1))
+                  if (col%q <= 0) cycle
+                  n = n + 1
+                  if (pass == 1) cycle
+                  this%st_row(n) = row%q - m%n_rh
+                  this%st_col(n) = col%q
+                  this%st_s(n) = s(i, j)
+                  this%st_beta(n) = m%elements(iel)%e%damping
+                end associate
+              end do
+            end associate
+          end do
+        end do
+        if (pass == 1) then
+          if (allocated(this%st_row)) deallocate(this%st_row, this%st_col, this%st_s, this%st_beta)
+          allocate(this%st_row(n), this%st_col(n), this%st_s(n), this%st_beta(n))
+        end if
+      end do
+    end associate
+  end subroutine stress_entries
+
   !> Stress resultants of the dynamic modes, sigma_dy = S (e + beta e_dot), in q_dy order, for
-  !> full q = (q_rh, q_dy), element by element (elements with elastic modes excluded: their
-  !> stresses act as nodal forces).
+  !> full q = (q_rh, q_dy), from the entries of stress_entries (elements with elastic modes
+  !> excluded: their stresses act as nodal forces).
   function dyn_stresses(this, q, qd) result(sigma)
     class(dynamics_t), intent(in) :: this
     real(wp), intent(in) :: q(:), qd(:)
     real(wp) :: sigma(this%model%n_dy)
-    real(wp) :: e_work(this%model%max_modes), ed_work(this%model%max_modes)
-    real(wp) :: s_work(this%model%max_modes, this%model%max_modes)
-    integer :: iel, j, nm
-    associate (m => this%model)
-      sigma = 0.0_wp
-      do iel = 1, m%n_elements
-        if (m%elastic_element(iel)) cycle
-        nm = m%elements(iel)%e%n_modes()
-        if (.not. any(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1)%class &
-                      == MODE_DYNAMIC)) cycle
-        associate (e => e_work(1:nm), ed => ed_work(1:nm), s => s_work(1:nm, 1:nm))
-          call m%mode_values(iel, q, e)
-          call m%mode_values(iel, qd, ed)
-          call m%elements(iel)%e%stiffness(s)
-          e = matmul(s, e + m%elements(iel)%e%damping * ed)
-          do j = 1, nm
-            associate (mode => m%modes(m%mode_first(iel) + j - 1))
-              if (mode%class == MODE_DYNAMIC) sigma(mode%q - m%n_rh) = e(j)
-            end associate
-          end do
-        end associate
-      end do
-    end associate
+    integer :: k
+    sigma = 0.0_wp
+    do k = 1, size(this%st_row)
+      sigma(this%st_row(k)) = sigma(this%st_row(k)) + &
+        this%st_s(k) * (q(this%st_col(k)) + this%st_beta(k) * qd(this%st_col(k)))
+    end do
   end function dyn_stresses
 
   !> The constant part of K0 and D0: dsigma_dy/dq_dy and dsigma_dy/dv_dy of the dynamic
@@ -325,6 +351,7 @@ contains
     real(wp) :: dq(this%model%n_q), pot
     real(wp) :: me_work(this%model%max_dofs, this%model%max_dofs)
     real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
+    real(wp) :: xe(this%model%max_dofs), xde(this%model%max_dofs)
     integer :: iel, nr, nd, k, l
     logical :: weighted
     real(wp) :: g(3)
@@ -348,9 +375,14 @@ contains
         nd = size(m%elements(iel)%e%dofs)
         associate (el => m%elements(iel)%e, me => me_work(1:nd, 1:nd), he => he_work(1:nd), &
                    fe => fe_work(1:nd), first => this%mass%offset(iel))
-          call el%inertia(this%kin%x(el%dofs), xd(el%dofs), me, he)
+          ! Gathered: vector-subscripted actual arguments would be temporaries per element.
+          do k = 1, nd
+            xe(k) = this%kin%x(el%dofs(k))
+            xde(k) = xd(el%dofs(k))
+          end do
+          call el%inertia(xe(1:nd), xde(1:nd), me, he)
           fe = 0.0_wp
-          if (weighted) call el%weight(this%kin%x(el%dofs), g(1:m%dim), fe, pot)
+          if (weighted) call el%weight(xe(1:nd), g(1:m%dim), fe, pot)
           fe = fe - he
           ! By hand: the element is small and matmul/reshape here cost more than the product.
           do l = 1, nd
@@ -359,7 +391,9 @@ contains
               this%mass%val(first + (l - 1) * nd + k - 1) = me(k, l)
             end do
           end do
-          rhs(el%dofs) = rhs(el%dofs) + fe
+          do k = 1, nd
+            rhs(el%dofs(k)) = rhs(el%dofs(k)) + fe(k)
+          end do
         end associate
       end do
       this%xd_now = xd
