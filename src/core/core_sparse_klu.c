@@ -51,8 +51,9 @@ void *flexmor_klu_new(int n, const int *ap, const int *ai)
 int flexmor_klu_factor(void *handle, const double *ax, double *rcond)
 {
     flexmor_klu_t *h = handle;
-    int fresh = 0;
     if (h->numeric) {
+        /* The refactorisation's rcond (the cheap min/max |u_ii|, O(n)) is computed once: it
+         * both decides whether to keep the pivot order and is the result. */
         if (!klu_refactor(h->ap, h->ai, (double *)ax, h->symbolic, h->numeric, &h->common)
             || !klu_rcond(h->symbolic, h->numeric, &h->common)
             || h->common.rcond < 1.0e-3 * h->rcond_full) {
@@ -62,10 +63,9 @@ int flexmor_klu_factor(void *handle, const double *ax, double *rcond)
     if (!h->numeric) {
         h->numeric = klu_factor(h->ap, h->ai, (double *)ax, h->symbolic, &h->common);
         if (!h->numeric) return 1;
-        fresh = 1;
+        if (!klu_rcond(h->symbolic, h->numeric, &h->common)) return 1;
+        h->rcond_full = h->common.rcond;
     }
-    if (!klu_rcond(h->symbolic, h->numeric, &h->common)) return 1;
-    if (fresh) h->rcond_full = h->common.rcond;
     *rcond = h->common.rcond;
     return h->common.status == KLU_SINGULAR || !(h->common.rcond > 0.0);
 }
