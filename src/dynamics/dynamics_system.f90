@@ -341,11 +341,15 @@ contains
   !> Kinematics and nodal forces at a state: solves x, x_dot = DF qd, the convective part
   !> conv = D2F qd qd + DF_rh qdd_rh of the accelerations, the element mass matrices and
   !> nodal_force = f - M conv - h (+ weight, - elastic stresses); q_now, qd_now, xd_now and
-  !> sigma_now. Everything by solves with the factors of J_c: no dense DF.
-  subroutine dyn_prepare(this, t, q_dy, v_dy, err)
+  !> sigma_now. Everything by solves with the factors of J_c: no dense DF. With dq_dy, also
+  !> w = DF_dy dq_dy at the new solution, in the same solve as x_dot (the Newton correction's
+  !> product: a second right-hand side costs less than a second solve).
+  subroutine dyn_prepare(this, t, q_dy, v_dy, err, dq_dy, w)
     class(dynamics_t), intent(inout) :: this
     real(wp), intent(in) :: t, q_dy(:), v_dy(:)
     type(error_t), intent(out) :: err
+    real(wp), intent(in), optional :: dq_dy(:)
+    real(wp), intent(out), optional :: w(:)
     real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
     real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
     real(wp) :: dq(this%model%n_q), pot
@@ -363,7 +367,19 @@ contains
       qd(nr + 1:) = v_dy
       call this%kin%solve(m, q, err)
       if (.not. err%ok()) return
-      call this%kin%apply_df(m, qd, xd)
+      if (present(dq_dy) .and. present(w)) then
+        block
+          real(wp) :: dq2(m%n_q, 2), xw(m%n_x, 2)
+          dq2(:, 1) = qd
+          dq2(1:nr, 2) = 0.0_wp
+          dq2(nr + 1:, 2) = dq_dy
+          call this%kin%apply_df_many(m, dq2, xw)
+          xd = xw(:, 1)
+          w = xw(:, 2)
+        end block
+      else
+        call this%kin%apply_df(m, qd, xd)
+      end if
       dq = 0.0_wp
       dq(1:nr) = pdd
       call this%kin%second(m, qd, conv, xd, dq)

@@ -42,15 +42,12 @@ contains
   end procedure dyn_iteration_factor
 
   module procedure dyn_newton_correction
-    real(wp) :: dq(this%model%n_q), w(this%model%n_x, 1), r_q(this%model%n_q)
+    real(wp) :: w(this%model%n_x, 1), r_q(this%model%n_q)
     real(wp) :: r(size(x), 1), a(size(x), 1)
     type(error_t) :: err
     dx = 0.0_wp
-    call this%prepare(t, q, v, err)
+    call this%prepare(t, q, v, err, x, w(:, 1))
     if (err%ok()) then
-      dq = 0.0_wp
-      dq(this%model%n_rh + 1:) = x
-      call this%kin%apply_df(this%model, dq, w(:, 1))
       w = this%mass%times(this%model, w)
       call this%kin%apply_dft(this%model, this%nodal_force - w(:, 1), r_q)
       r(:, 1) = r_q(this%model%n_rh + 1:) - this%sigma_now
