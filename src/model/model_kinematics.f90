@@ -36,15 +36,15 @@ module model_kinematics
     !> from de_offset(iel), n_modes x n_dofs), for the sparse equations of motion to reuse.
     integer, allocatable :: de_offset(:)
     real(wp), allocatable :: de_val(:)
-    !> The element loops' index lookups, flat and made once (kin_init): per element its mode
+      !> The element loops' index lookups, flat and made once (kin_init): per element its mode
     !> and coordinate counts; per mode (model numbering) its kinematic row, the q index that
-    !> row equals (0: none) and the period; per Jacobian entry (element, mode with a row,
-    !> coordinate, in kin_residual's order) its column of J_c (0: not calculable), value
-    !> slot of the sparse J_c and input entry (0: none).
+    !> row equals (0: none) and the period; per entry of J_c its position in de_val, row,
+    !> column and sparse value slot, and per input entry (in_val's order) its position in
+    !> de_val, so that kin_residual assembles after its element pass in flat loops.
     integer, allocatable :: el_nm(:), el_nd(:)
     integer, allocatable :: mode_row(:), mode_q(:)
     real(wp), allocatable :: mode_period(:)
-    integer, allocatable :: ent_col(:), ent_slot(:), ent_in(:)
+    integer, allocatable :: jac_src(:), jac_row(:), jac_col(:), jac_slot(:), in_src(:)
     real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer (allocated there)
     logical :: has_df = .false.          !< df belongs to x
     logical :: has_factors = .false.     !< the factors belong to x (up to the last correction)
@@ -84,6 +84,9 @@ contains
     type(model_t), intent(in) :: model
     logical, intent(in), optional :: sparse
     type(entries_t) :: jac, inputs
+    ! Per entry (element, mode with a row, coordinate): column of J_c (0: not calculable),
+    ! sparse value slot and input entry (0: none).
+    integer, allocatable :: ent_col(:), ent_slot(:), ent_in(:)
     integer :: iel, j, k, row, m, n_ent
     this%sparse = .false.
     if (present(sparse)) this%sparse = sparse
@@ -108,7 +111,7 @@ contains
       this%mode_q(m) = model%row_q(row)
       n_ent = n_ent + this%el_nd(model%modes(m)%element)
     end do
-    allocate(this%ent_col(n_ent), this%ent_slot(n_ent), this%ent_in(n_ent))
+    allocate(ent_col(n_ent), ent_slot(n_ent), ent_in(n_ent))
     n_ent = 0
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
@@ -117,13 +120,13 @@ contains
           if (row == 0) cycle
           do k = 1, size(el%dofs)
             n_ent = n_ent + 1
-            this%ent_col(n_ent) = model%calc_index(el%dofs(k))
+            ent_col(n_ent) = model%calc_index(el%dofs(k))
             call jac%add(row, model%calc_index(el%dofs(k)))
-            this%ent_slot(n_ent) = 0
-            this%ent_in(n_ent) = 0
-            if (model%calc_index(el%dofs(k)) > 0) this%ent_slot(n_ent) = jac%n
+            ent_slot(n_ent) = 0
+            ent_in(n_ent) = 0
+            if (model%calc_index(el%dofs(k)) > 0) ent_slot(n_ent) = jac%n
             call inputs%add(row, model%input_q(el%dofs(k)))
-            if (model%input_q(el%dofs(k)) > 0) this%ent_in(n_ent) = inputs%n
+            if (model%input_q(el%dofs(k)) > 0) ent_in(n_ent) = inputs%n
           end do
         end do
       end associate
@@ -132,12 +135,6 @@ contains
     this%in_q = inputs%cols(1:inputs%n)
     allocate(this%in_val(inputs%n))
     this%in_val = 0.0_wp
-    if (.not. this%sparse) return
-    call this%jac_sp%setup(model%n_c, jac%rows(1:jac%n), jac%cols(1:jac%n))
-    ! Entry number -> value slot, now that the pattern is known.
-    do k = 1, n_ent
-      if (this%ent_slot(k) > 0) this%ent_slot(k) = this%jac_sp%pos(this%ent_slot(k))
-    end do
     if (allocated(this%de_offset)) deallocate(this%de_offset, this%de_val)
     allocate(this%de_offset(model%n_elements))
     k = 0
@@ -146,7 +143,51 @@ contains
       k = k + this%el_nm(iel) * this%el_nd(iel)
     end do
     allocate(this%de_val(k))
+    if (this%sparse) then
+      call this%jac_sp%setup(model%n_c, jac%rows(1:jac%n), jac%cols(1:jac%n))
+      ! Entry number -> value slot, now that the pattern is known.
+      do k = 1, n_ent
+        if (ent_slot(k) > 0) ent_slot(k) = this%jac_sp%pos(ent_slot(k))
+      end do
+    end if
+    call flat_entries(this, model, ent_col, ent_slot, ent_in)
   end subroutine kin_init
+
+  !> The flat entry lists (jac_src, ...) from kin_init's per-entry arrays.
+  subroutine flat_entries(this, model, ent_col, ent_slot, ent_in)
+    type(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    integer, intent(in) :: ent_col(:), ent_slot(:), ent_in(:)
+    integer :: iel, j, k, p, n_jac, n_in, row
+    n_jac = count(ent_col > 0)
+    if (allocated(this%jac_src)) deallocate(this%jac_src, this%jac_row, this%jac_col, &
+      this%jac_slot, this%in_src)
+    allocate(this%jac_src(n_jac), this%jac_row(n_jac), this%jac_col(n_jac), &
+      this%jac_slot(n_jac), this%in_src(count(ent_in > 0)))
+    p = 0
+    n_jac = 0
+    n_in = 0
+    do iel = 1, model%n_elements
+      do j = 1, this%el_nm(iel)
+        row = this%mode_row(model%mode_first(iel) + j - 1)
+        if (row == 0) cycle
+        do k = 1, this%el_nd(iel)
+          p = p + 1
+          if (ent_col(p) > 0) then
+            n_jac = n_jac + 1
+            this%jac_src(n_jac) = this%de_offset(iel) + (k - 1) * this%el_nm(iel) + j - 1
+            this%jac_row(n_jac) = row
+            this%jac_col(n_jac) = ent_col(p)
+            this%jac_slot(n_jac) = ent_slot(p)
+          end if
+          if (ent_in(p) > 0) then
+            n_in = n_in + 1
+            this%in_src(n_in) = this%de_offset(iel) + (k - 1) * this%el_nm(iel) + j - 1
+          end if
+        end do
+      end do
+    end do
+  end subroutine flat_entries
 
   !> Residual r (n_c) of the kinematic equations at this%x and, with `jacobian`, their
   !> Jacobian J_c (into the dense or sparse storage) and the input-coordinate entries.
@@ -157,20 +198,11 @@ contains
     real(wp), intent(out) :: r(:)
     logical, intent(in), optional :: jacobian
     real(wp) :: e(model%max_modes), de(model%max_modes, model%max_dofs), xe(model%max_dofs)
-    integer :: iel, j, k, m, row, col, nm, nd, p, first
+    integer :: iel, j, k, m, row, nm, nd, first
     logical :: with_jac
     with_jac = .false.
     if (present(jacobian)) with_jac = jacobian
     r = 0.0_wp
-    if (with_jac) then
-      if (this%sparse) then
-        this%jac_sp%val = 0.0_wp
-      else
-        this%lu = 0.0_wp
-      end if
-      this%in_val = 0.0_wp
-    end if
-    p = 0
     do iel = 1, model%n_elements
       nm = this%el_nm(iel)
       nd = this%el_nd(iel)
@@ -182,7 +214,7 @@ contains
         end do
         call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
       end associate
-      if (with_jac .and. this%sparse) then
+      if (with_jac) then
         first = this%de_offset(iel) - 1
         do k = 1, nd
           do j = 1, nm
@@ -201,20 +233,25 @@ contains
             if (period > 0) r(row) = modulo(r(row) + period / 2, period) - period / 2
           end associate
         end if
-        if (.not. with_jac) cycle
-        do k = 1, nd
-          p = p + 1
-          col = this%ent_col(p)
-          if (col > 0) then
-            if (this%sparse) then
-              this%jac_sp%val(this%ent_slot(p)) = this%jac_sp%val(this%ent_slot(p)) + de(j, k)
-            else
-              this%lu(row, col) = this%lu(row, col) + de(j, k)
-            end if
-          end if
-          if (this%ent_in(p) > 0) this%in_val(this%ent_in(p)) = de(j, k)
-        end do
       end do
+    end do
+    if (.not. with_jac) return
+    ! The entries in the element order of kin_init: the sums into repeated slots are the same.
+    if (this%sparse) then
+      this%jac_sp%val = 0.0_wp
+      do k = 1, size(this%jac_src)
+        this%jac_sp%val(this%jac_slot(k)) = this%jac_sp%val(this%jac_slot(k)) + &
+          this%de_val(this%jac_src(k))
+      end do
+    else
+      this%lu = 0.0_wp
+      do k = 1, size(this%jac_src)
+        this%lu(this%jac_row(k), this%jac_col(k)) = this%lu(this%jac_row(k), this%jac_col(k)) &
+          + this%de_val(this%jac_src(k))
+      end do
+    end if
+    do k = 1, size(this%in_src)
+      this%in_val(k) = this%de_val(this%in_src(k))
     end do
   end subroutine kin_residual
 
