@@ -72,10 +72,11 @@ module dynamics_system
     real(wp), allocatable :: ctrl_ff(:), ctrl_probe(:)
     real(wp), allocatable :: ctrl_error(:), ctrl_error_rate(:), ctrl_law(:), ctrl_u(:)
     real(wp), allocatable :: ctrl_y(:), ctrl_y_dot(:), ctrl_x_rate(:)
-    !> sigma_dy is linear in (q, qd) with the constant element stiffness: its entries, made
-    !> once (dyn_init), each sigma_dy(st_row) += st_s (q(st_col) + st_beta qd(st_col)).
-    integer, allocatable :: st_row(:), st_col(:)
-    real(wp), allocatable :: st_s(:), st_beta(:)
+    !> The terms of sigma_dy = S (e + beta e_dot) over the elements without elastic modes,
+    !> indexed once (dyn_init): element iel's from st_first(iel) to st_first(iel + 1) - 1,
+    !> each sigma_dy(st_row) += S(st_i, st_j) (q + beta qd)(st_col). S itself is asked of the
+    !> element in every evaluation: a caller may change an element's stiffness after init.
+    integer, allocatable :: st_first(:), st_row(:), st_col(:), st_i(:), st_j(:)
   contains
     procedure :: init => dyn_init
     procedure :: prescribed => dyn_prescribed
@@ -255,19 +256,21 @@ contains
     if (size(this%model%load_motion) > 0) f = f + this%model%loads_at(t) - this%model%force
   end function dyn_loads_at
 
-  !> The entries of sigma_dy = S (e + beta e_dot) over q (dyn_stresses), element by element
+  !> The terms of sigma_dy = S (e + beta e_dot) over q (dyn_stresses), element by element
   !> in the order of S's rows and columns (elements with elastic modes excluded).
   subroutine stress_entries(this)
     class(dynamics_t), intent(inout) :: this
-    real(wp) :: s(this%model%max_modes, this%model%max_modes)
     integer :: iel, i, j, nm, n, pass
     associate (m => this%model)
+      if (allocated(this%st_first)) deallocate(this%st_first, this%st_row, this%st_col, &
+        this%st_i, this%st_j)
+      allocate(this%st_first(m%n_elements + 1))
       do pass = 1, 2
         n = 0
         do iel = 1, m%n_elements
+          this%st_first(iel) = n + 1
           if (m%elastic_element(iel)) cycle
           nm = m%elements(iel)%e%n_modes()
-          call m%elements(iel)%e%stiffness(s(1:nm, 1:nm))
           do i = 1, nm
             associate (row => m%modes(m%mode_first(iel) + i - 1))
               if (row%class /= MODE_DYNAMIC) cycle
@@ -278,33 +281,40 @@ contains
                   if (pass == 1) cycle
                   this%st_row(n) = row%q - m%n_rh
                   this%st_col(n) = col%q
-                  this%st_s(n) = s(i, j)
-                  this%st_beta(n) = m%elements(iel)%e%damping
+                  this%st_i(n) = i
+                  this%st_j(n) = j
                 end associate
               end do
             end associate
           end do
         end do
-        if (pass == 1) then
-          if (allocated(this%st_row)) deallocate(this%st_row, this%st_col, this%st_s, this%st_beta)
-          allocate(this%st_row(n), this%st_col(n), this%st_s(n), this%st_beta(n))
-        end if
+        this%st_first(m%n_elements + 1) = n + 1
+        if (pass == 1) allocate(this%st_row(n), this%st_col(n), this%st_i(n), this%st_j(n))
       end do
     end associate
   end subroutine stress_entries
 
   !> Stress resultants of the dynamic modes, sigma_dy = S (e + beta e_dot), in q_dy order, for
-  !> full q = (q_rh, q_dy), from the entries of stress_entries (elements with elastic modes
+  !> full q = (q_rh, q_dy), from the terms of stress_entries (elements with elastic modes
   !> excluded: their stresses act as nodal forces).
   function dyn_stresses(this, q, qd) result(sigma)
     class(dynamics_t), intent(in) :: this
     real(wp), intent(in) :: q(:), qd(:)
     real(wp) :: sigma(this%model%n_dy)
-    integer :: k
+    real(wp) :: s(this%model%max_modes, this%model%max_modes), beta
+    integer :: iel, k, nm
     sigma = 0.0_wp
-    do k = 1, size(this%st_row)
-      sigma(this%st_row(k)) = sigma(this%st_row(k)) + &
-        this%st_s(k) * (q(this%st_col(k)) + this%st_beta(k) * qd(this%st_col(k)))
+    do iel = 1, this%model%n_elements
+      if (this%st_first(iel + 1) == this%st_first(iel)) cycle
+      associate (el => this%model%elements(iel)%e)
+        nm = el%n_modes()
+        call el%stiffness(s(1:nm, 1:nm))
+        beta = el%damping
+      end associate
+      do k = this%st_first(iel), this%st_first(iel + 1) - 1
+        sigma(this%st_row(k)) = sigma(this%st_row(k)) + &
+          s(this%st_i(k), this%st_j(k)) * (q(this%st_col(k)) + beta * qd(this%st_col(k)))
+      end do
     end do
   end function dyn_stresses
 
