@@ -38,12 +38,13 @@ module dynamics_augmented
     !> Element Jacobians dD/dx of the last factorisation, flat (offset per element)
     integer, allocatable :: de_offset(:)
     real(wp), allocatable :: de_val(:)
-    !> The dynamic modes as a flat list (no class tests or element calls in the projections):
-    !> q_dy index, element, and position of its row of dD/dx in de_val with the stride
-    !> (n_modes) between its entries.
-    integer, allocatable :: dyn_q(:), dyn_el(:), dyn_de(:), dyn_stride(:)
-    !> Element coordinates, flat as in element_mass_t; per dynamic mode its first one there.
-    integer, allocatable :: dof_first(:), dofs(:), dyn_dof(:)
+    !> The dynamic modes' q_dy indices, and J_d entry by entry (dynamic mode, coordinate k of
+    !> its element, in that order) for the products with it without class tests or element
+    !> lookups: q_dy index, position in de_val, coordinate and its unknown (0: none).
+    integer, allocatable :: dyn_q(:)
+    integer, allocatable :: jd_q(:), jd_de(:), jd_coord(:), jd_free(:)
+    !> Element coordinates, flat as in element_mass_t.
+    integer, allocatable :: dof_first(:), dofs(:)
     type(sparse_lu_t) :: lu
     !> The iteration matrix of implicit integrators in the same form, M replaced by
     !> M + D_x^T (c_q S + c_v S_d) D_x over the stressed modes (see aug_factor_newton).
@@ -197,20 +198,34 @@ contains
   subroutine list_dynamic_modes(this, model)
     type(augmented_t), intent(inout) :: this
     type(model_t), intent(in) :: model
-    integer :: iel, j, m, n
+    integer :: iel, j, k, m, n, p, nm, nd
     n = count(model%modes%class == MODE_DYNAMIC)
-    allocate(this%dyn_q(n), this%dyn_el(n), this%dyn_de(n), this%dyn_stride(n), this%dyn_dof(n))
-    n = 0
+    allocate(this%dyn_q(n))
+    p = 0
     do iel = 1, model%n_elements
-      do j = 1, model%elements(iel)%e%n_modes()
+      nm = model%elements(iel)%e%n_modes()
+      p = p + (this%dof_first(iel + 1) - this%dof_first(iel)) * &
+        count(model%modes(model%mode_first(iel):model%mode_first(iel) + nm - 1)%class &
+        == MODE_DYNAMIC)
+    end do
+    allocate(this%jd_q(p), this%jd_de(p), this%jd_coord(p), this%jd_free(p))
+    n = 0
+    p = 0
+    do iel = 1, model%n_elements
+      nm = model%elements(iel)%e%n_modes()
+      nd = this%dof_first(iel + 1) - this%dof_first(iel)
+      do j = 1, nm
         m = model%mode_first(iel) + j - 1
         if (model%modes(m)%class /= MODE_DYNAMIC) cycle
         n = n + 1
         this%dyn_q(n) = model%modes(m)%q - model%n_rh
-        this%dyn_el(n) = iel
-        this%dyn_de(n) = this%de_offset(iel) + j - 1
-        this%dyn_stride(n) = model%elements(iel)%e%n_modes()
-        this%dyn_dof(n) = this%dof_first(iel)
+        do k = 1, nd
+          p = p + 1
+          this%jd_q(p) = this%dyn_q(n)
+          this%jd_de(p) = this%de_offset(iel) + j - 1 + (k - 1) * nm
+          this%jd_coord(p) = this%dofs(this%dof_first(iel) + k - 1)
+          this%jd_free(p) = this%free_index(this%jd_coord(p))
+        end do
       end do
     end do
   end subroutine list_dynamic_modes
@@ -351,16 +366,12 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: g(:, :)
     real(wp) :: f(model%n_x, size(g, 2))
-    integer :: c, d, k, iq, d0, nd
+    integer :: c, p, iq
     do c = 1, size(g, 2)
       f(:, c) = 0.0_wp
-      do d = 1, size(this%dyn_q)
-        d0 = this%dyn_dof(d) - 1
-        nd = this%dof_first(this%dyn_el(d) + 1) - 1 - d0
-        do k = 1, nd
-          f(this%dofs(d0 + k), c) = f(this%dofs(d0 + k), c) + &
-            this%de_val(this%dyn_de(d) + (k - 1) * this%dyn_stride(d)) * g(this%dyn_q(d), c)
-        end do
+      do p = 1, size(this%jd_q)
+        f(this%jd_coord(p), c) = f(this%jd_coord(p), c) + &
+          this%de_val(this%jd_de(p)) * g(this%jd_q(p), c)
       end do
       do iq = model%n_rh + 1, model%n_q
         if (model%q_coord(iq) > 0) f(model%q_coord(iq), c) = f(model%q_coord(iq), c) + &
@@ -378,7 +389,7 @@ contains
     real(wp), intent(out) :: a(:, :)
     logical, intent(in), optional :: newton
     real(wp) :: b(this%n_free + this%n_con, size(f, 2))
-    integer :: i, c, d, k, iq, d0, nd
+    integer :: i, c, p, iq
     do c = 1, size(f, 2)
       b(this%n_free + 1:, c) = 0.0_wp
       do i = 1, model%n_x
@@ -397,15 +408,10 @@ contains
     ! y = DF_dy a is b on the free coordinates (zero elsewhere): read through free_index.
     do c = 1, size(f, 2)
       a(:, c) = 0.0_wp
-      do d = 1, size(this%dyn_q)
-        d0 = this%dyn_dof(d) - 1
-        nd = this%dof_first(this%dyn_el(d) + 1) - 1 - d0
-        do k = 1, nd
-          i = this%free_index(this%dofs(d0 + k))
-          if (i == 0) cycle
-          a(this%dyn_q(d), c) = a(this%dyn_q(d), c) + &
-            this%de_val(this%dyn_de(d) + (k - 1) * this%dyn_stride(d)) * b(i, c)
-        end do
+      do p = 1, size(this%jd_q)
+        if (this%jd_free(p) == 0) cycle
+        a(this%jd_q(p), c) = a(this%jd_q(p), c) + &
+          this%de_val(this%jd_de(p)) * b(this%jd_free(p), c)
       end do
       do iq = model%n_rh + 1, model%n_q
         if (model%q_coord(iq) > 0) then

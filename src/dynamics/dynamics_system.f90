@@ -365,7 +365,7 @@ contains
     real(wp) :: dq(this%model%n_q), pot
     real(wp) :: me_work(this%model%max_dofs, this%model%max_dofs)
     real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
-    real(wp) :: xe(this%model%max_dofs), xde(this%model%max_dofs)
+    real(wp) :: xe(this%model%max_dofs), xde(this%model%max_dofs), ce(this%model%max_dofs)
     integer :: iel, nr, nd, k, l
     logical :: weighted
     real(wp) :: g(3)
@@ -405,6 +405,7 @@ contains
           do k = 1, nd
             xe(k) = this%kin%x(el%dofs(k))
             xde(k) = xd(el%dofs(k))
+            ce(k) = conv(el%dofs(k))
           end do
           call el%inertia(xe(1:nd), xde(1:nd), me, he)
           fe = 0.0_wp
@@ -413,7 +414,7 @@ contains
           ! By hand: the element is small and matmul/reshape here cost more than the product.
           do l = 1, nd
             do k = 1, nd
-              fe(k) = fe(k) - me(k, l) * conv(el%dofs(l))
+              fe(k) = fe(k) - me(k, l) * ce(l)
               this%mass%val(first + (l - 1) * nd + k - 1) = me(k, l)
             end do
           end do
