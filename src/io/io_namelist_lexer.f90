@@ -4,7 +4,8 @@ module io_namelist_lexer
   use core_strings, only: lower_case
   implicit none
   private
-  public :: item_t, token_t, next_token, parse_values, check_name, describe, at, itoa
+  public :: item_t, token_t, next_token, parse_values, check_name, is_name, describe, at, &
+    itoa
   public :: TK_EOF, TK_ERR, TK_AMP, TK_SLASH, TK_EQ, TK_COMMA, TK_WORD, TK_STRING, WHITE
 
   !> One value of a list; `rep` comes from a repeat count such as `3*0.0`.
