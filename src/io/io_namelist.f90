@@ -10,9 +10,8 @@ module io_namelist
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
   use core_strings, only: lower_case
-  use io_namelist_lexer, only: item_t, token_t, next_token, parse_values, check_name, &
-    describe, at, itoa, TK_EOF, TK_ERR, TK_AMP, TK_SLASH, TK_EQ, TK_COMMA, TK_WORD, &
-    TK_STRING, WHITE
+  use io_namelist_lexer, only: item_t, token_t, next_token, parse_values, check_name, describe, &
+    at, itoa, TK_EOF, TK_ERR, TK_AMP, TK_SLASH, TK_EQ, TK_COMMA, TK_WORD, WHITE
   use io_namelist_values, only: to_real, to_int, shown
   implicit none
   private

@@ -57,21 +57,18 @@
 module io_sweep_file
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_null_ptr, c_associated
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
-  use hdf5, only: hid_t, hsize_t, size_t, h5fcreate_f, h5fopen_f, h5fflush_f, h5fclose_f, &
-    h5fis_hdf5_f, H5F_ACC_TRUNC_F, H5F_ACC_EXCL_F, H5F_ACC_RDWR_F, H5F_SCOPE_GLOBAL_F, &
-    h5pcreate_f, H5P_DATASET_CREATE_F, h5pset_layout_f, H5D_CONTIGUOUS_F, h5pset_alloc_time_f, &
-    H5D_ALLOC_TIME_EARLY_F, h5pset_fill_time_f, H5D_FILL_TIME_ALLOC_F, h5pset_fill_value_f, &
-    h5pset_obj_track_times_f, h5dread_f, h5kind_to_type, H5T_IEEE_F64LE, H5T_STD_I32LE, &
-    H5T_INTEGER_F, H5T_FLOAT_F, H5T_STRING_F, H5_REAL_KIND, H5_INTEGER_KIND
+  use hdf5, only: hid_t, hsize_t, h5fcreate_f, h5fflush_f, H5F_ACC_TRUNC_F, H5F_ACC_EXCL_F, &
+    H5F_SCOPE_GLOBAL_F, h5pcreate_f, H5P_DATASET_CREATE_F, h5pset_layout_f, H5D_CONTIGUOUS_F, &
+    h5pset_alloc_time_f, H5D_ALLOC_TIME_EARLY_F, h5pset_fill_time_f, H5D_FILL_TIME_ALLOC_F, &
+    h5pset_fill_value_f, h5pset_obj_track_times_f, h5kind_to_type, H5T_IEEE_F64LE, &
+    H5T_STD_I32LE, H5_REAL_KIND, H5_INTEGER_KIND
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT, ERR_IO, ERR_INTERNAL
   use core_strings, only: int_str
   use io_namelist, only: string_t
-  use io_fs, only: delete_file, sync_file, check_output_path
+  use io_fs, only: delete_file, check_output_path
   use io_h5base, only: h5_init, h5_close, h5_string_type, h5_put_string_attr, h5_put_int_attr, &
-    h5_create_dataset, h5_create_group, h5_check_names, h5_write_element, h5_read_string_attr, &
-    h5_read_int_attr, h5_open_dataset, h5_dataset_shape, h5_member_names, h5_probe_read_only, &
-    H5_OK, H5_MISSING, H5_UNOPENABLE, H5_BAD_TYPE, H5_UNREADABLE
+    h5_create_dataset, h5_create_group, h5_check_names, h5_write_element
   implicit none
   private
   public :: sweep_file_t, sweep_attrs_t, SWEEP_MESSAGE_LEN

@@ -1,6 +1,12 @@
 !> Reopening a sweep result file to resume it: every check that the file is this sweep's,
 !> with a message naming what differs; and the release of the ids both paths hold.
 submodule (io_sweep_file) io_sweep_file_open
+  use hdf5, only: size_t, h5fopen_f, h5fclose_f, h5fis_hdf5_f, h5dread_f, H5F_ACC_RDWR_F, &
+    H5T_FLOAT_F, H5T_INTEGER_F, H5T_STRING_F
+  use io_fs, only: sync_file
+  use io_h5read, only: h5_read_string_attr, h5_read_int_attr, h5_open_dataset, &
+    h5_dataset_shape, h5_member_names, h5_probe_read_only, H5_OK, H5_MISSING, H5_UNOPENABLE, &
+    H5_BAD_TYPE, H5_UNREADABLE
   implicit none
 
 contains

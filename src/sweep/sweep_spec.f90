@@ -6,8 +6,8 @@
 !> same file gets the same cases without any communication. A case is applied to the base
 !> scene as text (`set_raw`), so the scene reader checks every case like a hand-written file.
 module sweep_spec
-  use core_kinds, only: wp, i8
-  use core_error, only: error_t, ERR_INPUT, ERR_INTERNAL
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_INPUT
   use core_strings, only: int_str, real_str, lower_case
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use io_namelist_lexer, only: is_name

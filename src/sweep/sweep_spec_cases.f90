@@ -1,6 +1,8 @@
 !> Generating a sweep's cases (product, zip, random, Latin hypercube) and writing one case
 !> into the base scene.
 submodule (sweep_spec) sweep_spec_cases
+  use core_kinds, only: i8
+  use core_error, only: ERR_INTERNAL
   use sweep_random, only: rng_t, rng_init, uniform, permutation
   implicit none
 
