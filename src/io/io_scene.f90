@@ -15,6 +15,7 @@ module io_scene
   use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
     mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t
   use motion_law, only: table_problem
+  use elements_rotation, only: euler_to_matrix, rotvec_to_euler, cross
   use io_table, only: read_table_csv, relative_to
   implicit none
   private
@@ -333,19 +334,58 @@ contains
     call rd_real(g, 'm', r%m, err)
     call rd_real(g, 'J', r%j, err)
     call rd_fixed_list(g, 'inertia', 6, ' (Jxx, Jyy, Jzz, Jxy, Jxz, Jyz)', r%inertia, err)
-    call rd_fixed_list(g, 'rotation', 4, ' (an axis ax, ay, az and an angle in rad)', &
-      r%rotation, err)
-    if (err%ok() .and. allocated(r%rotation)) then
-      if (.not. norm2(r%rotation(1:3)) > 0) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'': the axis is zero')
-      else if (.not. allocated(r%inertia)) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'' turns the axes of ' // &
-          '''inertia'', which is not given')
-      end if
-    end if
+    call read_body_axes(g, allocated(r%inertia), r%axes, err)
     r%planar_var = first_given(g, [character(len=12) :: 'J'])
-    r%spatial_var = first_given(g, [character(len=12) :: 'inertia', 'rotation'])
+    r%spatial_var = first_given(g, [character(len=12) :: 'inertia', 'rotation', 'axes'])
   end subroutine read_mass
+
+  !> The axes a body's inertia is given in, as a matrix whose columns are the body's x, y, z
+  !> axes in reference coordinates: from `rotation` (an axis and an angle) or from `axes` (the
+  !> body's x axis and a vector in its x-y plane, orthogonalised; z = x cross y).
+  subroutine read_body_axes(g, has_inertia, axes, err)
+    type(nml_group_t), intent(inout) :: g
+    logical, intent(in) :: has_inertia
+    real(wp), allocatable, intent(out) :: axes(:, :)
+    type(error_t), intent(inout) :: err
+    real(wp), allocatable :: rotation(:), two(:)
+    real(wp) :: ex(3), ey(3)
+    character(len=:), allocatable :: name
+    call rd_fixed_list(g, 'rotation', 4, ' (an axis ax, ay, az and an angle in rad)', &
+      rotation, err)
+    call rd_fixed_list(g, 'axes', 6, ' (the body x axis ax, ay, az and a vector bx, by, bz ' &
+      // 'in its x-y plane)', two, err)
+    if (.not. err%ok() .or. .not. (allocated(rotation) .or. allocated(two))) return
+    name = 'axes'
+    if (allocated(rotation)) name = 'rotation'
+    if (allocated(rotation) .and. allocated(two)) then
+      call err%set(ERR_INPUT, g%where() // ': variables ''rotation'' and ''axes'' both give ' &
+        // 'the axes of ''inertia'': give one')
+    else if (.not. has_inertia) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''' // name // ''' turns the axes ' // &
+        'of ''inertia'', which is not given')
+    else if (allocated(rotation)) then
+      if (.not. norm2(rotation(1:3)) > 0) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'': the axis is zero')
+        return
+      end if
+      axes = euler_to_matrix(rotvec_to_euler(rotation(4) * rotation(1:3) / &
+        norm2(rotation(1:3))))
+    else
+      ! A y direction within 1e-6 rad of x would leave z to round-off.
+      ex = two(1:3) / max(norm2(two(1:3)), tiny(1.0_wp))
+      ey = two(4:6) - dot_product(two(4:6), ex) * ex
+      if (.not. norm2(two(1:3)) > 0 .or. .not. norm2(ey) > 1.0e-6_wp * norm2(two(4:6))) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''axes'': the x axis (first 3 ' // &
+          'values) must not be zero and the second vector must not be zero or parallel to it')
+        return
+      end if
+      ey = ey / norm2(ey)
+      allocate(axes(3, 3))
+      axes(:, 1) = ex
+      axes(:, 2) = ey
+      axes(:, 3) = cross(ex, ey)
+    end if
+  end subroutine read_body_axes
 
   subroutine read_force(g, r, err)
     type(nml_group_t), intent(inout) :: g

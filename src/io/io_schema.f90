@@ -255,7 +255,7 @@ module io_schema
     var_spec_t('slider', 'damping', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'stiffness-proportional time constant')]
-  type(var_spec_t), parameter :: MASS_VARS(5) = [ &
+  type(var_spec_t), parameter :: MASS_VARS(6) = [ &
     var_spec_t('mass', 'node', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'node label'), &
@@ -270,7 +270,10 @@ module io_schema
       '', 'inertia tensor Jxx, Jyy, Jzz, Jxy, Jxz, Jyz (spatial)'), &
     var_spec_t('mass', 'rotation', VK_REAL_LIST, 'rad', 'none', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'axes of inertia: axis (3) and angle (spatial)')]
+      '', 'axes of inertia: axis (3) and angle (spatial)'), &
+    var_spec_t('mass', 'axes', VK_REAL_LIST, '', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'axes of inertia: x axis, vector in x-y plane (3D)')]
   type(var_spec_t), parameter :: FORCE_VARS(9) = [ &
     var_spec_t('force', 'node', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -513,7 +516,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(151) = [ &
+  type(var_spec_t), parameter :: SCHEMA(152) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

@@ -10,7 +10,6 @@ submodule (model_build) model_build_spatial
     B3_SINE => BENDING_SINE
   use elements_euler, only: euler_norm_t
   use elements_body3d, only: body3d_t
-  use elements_rotation, only: euler_to_matrix, rotvec_to_euler
   use elements_hinge3d, only: hinge3d_t, hinge3d_set_axis
   use core_linalg, only: sym_gen_eig
   use elements_beam, only: PLANAR_ANGLE => BENDING_ANGLE
@@ -300,7 +299,7 @@ contains
     integer, intent(in) :: ix, ilam
     type(error_t), intent(inout) :: err
     type(body3d_t) :: body
-    real(wp) :: j(3, 3), eye(3, 3), p(3), v(3, 3), tol, q(3, 3)
+    real(wp) :: j(3, 3), eye(3, 3), p(3), v(3, 3), tol
     integer :: info, k, idx
     character(len=:), allocatable :: where
     where = 'group &mass on node ''' // r%node // ''': variable ''inertia'''
@@ -313,12 +312,8 @@ contains
     end if
     j = reshape([r%inertia(1), r%inertia(4), r%inertia(5), r%inertia(4), r%inertia(2), &
       r%inertia(6), r%inertia(5), r%inertia(6), r%inertia(3)], [3, 3])
-    if (allocated(r%rotation)) then
-      ! Given in axes turned by Q from the reference ones: J_ref = Q J Q^T.
-      q = euler_to_matrix(rotvec_to_euler(r%rotation(4) * r%rotation(1:3) / &
-        norm2(r%rotation(1:3))))
-      j = matmul(q, matmul(j, transpose(q)))
-    end if
+    ! Given in axes turned by Q (columns: the body axes) from the reference ones: J_ref = Q J Q^T.
+    if (allocated(r%axes)) j = matmul(r%axes, matmul(j, transpose(r%axes)))
     eye = 0
     do k = 1, 3
       eye(k, k) = 1

@@ -104,9 +104,10 @@ module model_scene
     !> Spatial: inertia tensor about the node in the reference axes, (Jxx, Jyy, Jzz, Jxy,
     !> Jxz, Jyz) [kg m^2]; not allocated: none.
     real(wp), allocatable :: inertia(:)
-    !> Spatial: the axes `inertia` is given in, as a rotation of the reference axes about a
-    !> unit axis (1:3) by an angle (4) [rad]; not allocated: the reference axes.
-    real(wp), allocatable :: rotation(:)
+    !> Spatial: the axes `inertia` is given in, (3, 3) with the body's x, y and z axes as
+    !> columns in reference coordinates (from `rotation` or `axes`); not allocated: the
+    !> reference axes.
+    real(wp), allocatable :: axes(:, :)
     character(len=:), allocatable :: planar_var, spatial_var
   end type mass_rec_t
 
