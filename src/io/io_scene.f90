@@ -155,11 +155,13 @@ contains
     call rd_logical(g, 'fix_z', n%fix_z, err, default=fixed)
     call rd_logical(g, 'fix_rotation', n%fix_rotation, err, default=fixed)
     call read_node_inputs(g, n, err)
-    n%spatial_var = first_given(g, [character(len=12) :: 'z', 'fix_z', 'fix_rotation', &
-      'motion_z'])
-    if (len(n%spatial_var) == 0 .and. n%dynamic(4)) n%spatial_var = 'dynamic'
-    ! A node's rotation as an input is planar only: a free spatial rotation needs Euler
-    ! parameters as degrees of freedom (docs/theory.md 12).
+    call read_node_rotation(g, n, err)
+    n%spatial_var = first_given(g, [character(len=16) :: 'z', 'fix_z', 'fix_rotation', &
+      'motion_z', 'motion_rotation', 'rotation_axis'])
+    if (len(n%spatial_var) == 0 .and. (n%dynamic(4) .or. n%free_rotation)) &
+      n%spatial_var = 'dynamic'
+    ! phi is the planar rotation angle; a spatial node's rotation is an input through
+    ! 'rotation' and motion_rotation (read_node_rotation).
     n%planar_var = first_given(g, [character(len=12) :: 'fix_phi', 'motion_phi'])
     if (len(n%planar_var) == 0 .and. n%dynamic(3)) n%planar_var = 'dynamic'
   end subroutine read_node
@@ -182,6 +184,7 @@ contains
       do k = 1, 4
         if (trim(names(k)) == dyn(i)%s) n%dynamic(k) = .true.
       end do
+      if (dyn(i)%s == 'rotation') n%free_rotation = .true.
     end do
     fixed = [n%fix_x, n%fix_y, n%fix_phi, n%fix_z]
     do k = 1, 4
@@ -197,6 +200,35 @@ contains
       if (.not. err%ok()) return
     end do
   end subroutine read_node_inputs
+
+  !> A spatial node's rotation as an input: free (dynamic = 'rotation') or driven by
+  !> motion_rotation about rotation_axis (both needed together); neither with fix_rotation.
+  subroutine read_node_rotation(g, n, err)
+    type(nml_group_t), intent(inout) :: g
+    type(node_rec_t), intent(inout) :: n
+    type(error_t), intent(inout) :: err
+    if (.not. err%ok()) return
+    call rd_string(g, 'motion_rotation', n%motion_rotation, err)
+    call rd_fixed_list(g, 'rotation_axis', 3, ' (ax, ay, az: the axis fixed in space the ' // &
+      'node turns about)', n%rotation_axis, err)
+    if (.not. err%ok()) return
+    if (n%fix_rotation .and. (n%free_rotation .or. len(n%motion_rotation) > 0)) then
+      call err%set(ERR_INPUT, g%where() // ': the rotation is fixed (fix_rotation, or ' // &
+        'fixed) and cannot also be dynamic or driven (set fix_rotation = .false.)')
+    else if (n%free_rotation .and. len(n%motion_rotation) > 0) then
+      call err%set(ERR_INPUT, g%where() // ': the rotation is both dynamic (dynamic = ' // &
+        '''rotation'') and driven (motion_rotation)')
+    else if (len(n%motion_rotation) > 0 .and. .not. allocated(n%rotation_axis)) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''motion_rotation'' needs ' // &
+        '''rotation_axis'' (3 values: the axis fixed in space the node turns about)')
+    else if (len(n%motion_rotation) == 0 .and. allocated(n%rotation_axis)) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''rotation_axis'' is given without ' // &
+        '''motion_rotation'' (the motion that drives the rotation about it)')
+    else if (allocated(n%rotation_axis)) then
+      if (.not. norm2(n%rotation_axis) > 0) call err%set(ERR_INPUT, g%where() // &
+        ': variable ''rotation_axis'' must not be zero')
+    end if
+  end subroutine read_node_rotation
 
   subroutine read_link(g, r, err)
     type(nml_group_t), intent(inout) :: g

@@ -32,6 +32,12 @@ module model_scene
     !> Spatial scenes: z, its support, and the clamp of the node's rotation.
     real(wp) :: z = 0.0_wp
     logical :: fix_z = .false., fix_rotation = .false.
+    !> Spatial scenes: the node's rotation a degree of freedom (dynamic = 'rotation'), or
+    !> driven by the motion `motion_rotation` ('' none) about the axis `rotation_axis` fixed
+    !> in space (3 values).
+    logical :: free_rotation = .false.
+    character(len=:), allocatable :: motion_rotation
+    real(wp), allocatable :: rotation_axis(:)
     !> The first variable given that only a spatial (planar) scene takes, '' if none: checked
     !> against &scene dimension once every group is read.
     character(len=:), allocatable :: spatial_var, planar_var

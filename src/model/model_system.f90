@@ -9,7 +9,7 @@
 !> condition for solvability. Every model owns all its data: many live in one process.
 module model_system
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_MODEL, ERR_INPUT
+  use core_error, only: error_t, ERR_MODEL, ERR_INPUT, ERR_NUMERIC
   use core_strings, only: int_str
   use elements_base, only: element_t, element_slot_t, MODE_RIGID, MODE_RELEASED, &
     MODE_PRESCRIBED, MODE_DYNAMIC, MODE_ELASTIC
@@ -94,6 +94,8 @@ module model_system
     !> loops reuse instead of allocating per element.
     integer :: max_modes = 0, max_dofs = 0
     real(wp) :: newton_tol = 1.0e-11_wp       !< kinematic residual tolerance [m or rad]
+    !> Elements whose input modes have a limited range (element_t%has_limit): check_limits.
+    integer, allocatable :: limited(:)
     logical :: finalized = .false.
   contains
     procedure :: init => model_init
@@ -115,6 +117,7 @@ module model_system
     procedure :: mode_name => model_mode_name
     procedure :: q_name => model_q_name
     procedure :: mode_values => model_mode_values
+    procedure :: check_limits => model_check_limits
   end type model_t
 
 contains
@@ -132,7 +135,7 @@ contains
     allocate(this%moment(3, 0), this%moment_lambda(0), this%moment_motion(0))
     allocate(this%actuator_element(0), this%actuator_motion(0), this%actuator_value(0), &
       this%actuator_rate(0))
-    allocate(this%controllers(0))
+    allocate(this%controllers(0), this%limited(0))
     this%finalized = .false.
   end subroutine model_init
 
@@ -189,6 +192,8 @@ contains
         period=elem%mode_period(j))
     end do
     this%modes = [this%modes, modes]
+    if (.not. allocated(this%limited)) allocate(this%limited(0))
+    if (elem%has_limit()) this%limited = [this%limited, idx]
   end function model_add_element
 
   !> A moment m (3, global frame) on the node whose Euler parameters start at coordinate
@@ -533,4 +538,27 @@ contains
       if (this%modes(m)%q > 0) e(j) = q(this%modes(m)%q)
     end do
   end subroutine model_mode_values
+
+  !> An error (ERR_NUMERIC: a step that went too far may be retried shorter) when q puts an
+  !> element's input modes beyond their range (a free rotation near a full turn), where its
+  !> coordinates are singular and the kinematics would fail without saying why.
+  subroutine model_check_limits(this, q, err)
+    class(model_t), intent(in) :: this
+    real(wp), intent(in) :: q(:)
+    type(error_t), intent(inout) :: err
+    real(wp) :: e(this%max_modes)
+    integer :: k, nm
+    character(len=:), allocatable :: msg
+    if (.not. allocated(this%limited)) return
+    do k = 1, size(this%limited)
+      associate (el => this%elements(this%limited(k))%e)
+        nm = el%n_modes()
+        call this%mode_values(this%limited(k), q, e(1:nm))
+        msg = el%limit_problem(e(1:nm))
+      end associate
+      if (len(msg) == 0) cycle
+      call err%set(ERR_NUMERIC, msg)
+      return
+    end do
+  end subroutine model_check_limits
 end module model_system
