@@ -29,9 +29,10 @@ module elements_rotvec
   !> eps / u and eps / u^2 (at most 2e-14 at the switch), the series' 24 terms leave u^22.
   real(wp), parameter :: U_SERIES = 0.1_wp
   integer, parameter :: N_SERIES = 24
-  !> Floors of |lambda|^2 and, relative to it, of s2 (only reached at lambda = 0 or exactly at a
-  !> full turn, where the modes are singular anyway): they keep the results finite.
-  real(wp), parameter :: S2_FLOOR = 1.0e-30_wp
+  !> Floors of |lambda|^2 and, relative to it, of s2 (only reached at lambda = 0 or within
+  !> 1e-15 rad of a full turn, where the modes are singular anyway): they keep the results
+  !> finite (f_ss ~ 1 / s2^2.5 stays below 1e130).
+  real(wp), parameter :: R2_FLOOR = 1.0e-20_wp, S2_FLOOR = 1.0e-30_wp
 
   type, extends(element_t) :: rotvec_t
   contains
@@ -52,7 +53,7 @@ contains
     real(wp) :: d(6)
     real(wp) :: r2, s2, u, a(0:2), t
     integer :: k
-    r2 = max(l0**2 + s2_in, tiny(1.0_wp))
+    r2 = max(l0**2 + s2_in, R2_FLOOR)
     s2 = max(s2_in, S2_FLOOR * r2)
     d(2) = -2 / r2
     d(4) = 4 * l0 / r2**2
