@@ -9,7 +9,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import assert_clean_error, run_scene
+from helpers import ROOT, assert_clean_error, run_scene
 from test_spatial_examples import body_motion
 
 J_BODY = (1.0, 2.0, 3.0)
@@ -18,19 +18,10 @@ MASS = 2.0
 PULSE_AREA = 2.0 / 3.0 * 0.1
 
 
-def free_body(moment, t_end, force="fx = 5.0, fz = 2.0", dynamic="'x', 'y', 'z', 'rotation'",
-              inertia=True):
-    """A rigid body on a node without links (principal moments 1, 2, 3 along x, y, z), given
-    a moment and force pulse about fixed axes, then torque-free."""
-    body = ", inertia = 1.0, 2.0, 3.0, 0.0, 0.0, 0.0" if inertia else ""
-    return ("&scene title = 'free body', dimension = 3 /\n"
-            f"&node label = 'body', x = 0.0, y = 0.0, z = 0.0, dynamic = {dynamic} /\n"
-            f"&mass node = 'body', m = {MASS}{body} /\n"
-            "&motion label = 'pulse', law = 'table', times = 0.0, 0.05, 0.1, "
-            "values = 0.0, 1.0, 0.0 /\n"
-            f"&force node = 'body', {moment}, {force}, time_law = 'pulse' /\n"
-            f"&dynamic t_end = {t_end}, output_dt = 0.001, integrator = 'bdf', rtol = 1.0e-10, "
-            "atol = 1.0e-12 /\n")
+def free_body():
+    """input/free_body.nml: a rigid body on a node without links (principal moments 1, 2, 3
+    along x, y, z, mass 2), given a moment and force pulse about fixed axes, then torque-free."""
+    return (ROOT / "input" / "free_body.nml").read_text()
 
 
 def run_ok(tmp_path, text, name):
@@ -56,10 +47,10 @@ def cosh_rate(t, signal, d):
 
 @pytest.mark.parametrize("axis", ["intermediate", "major"])
 def test_free_rigid_body(tmp_path, axis):
-    """A free rigid body (node without links, dynamic x, y, z and rotation) spun up by a moment
-    pulse about y (intermediate) or z (major), with 1e-4 of it about x to start a wobble, runs
-    torque-free until just before its rotation-vector coordinates reach their full-turn limit
-    (4.3 s at 4/3 rad/s):
+    """input/free_body.nml, a free rigid body (node without links, dynamic x, y, z and
+    rotation) spun up by a moment pulse about y (intermediate; or z, major), with 1e-4 of it
+    about x to start a wobble, runs torque-free until just before its rotation-vector
+    coordinates reach their full-turn limit (4.3 s at 4/3 rad/s):
     - the kinetic energy is constant (observed 2e-11 relative; bound 1e-9, ten times the
       rtol of the run);
     - the angular momentum R J omega (omega from central differences of the 1 ms output) is
@@ -76,11 +67,13 @@ def test_free_rigid_body(tmp_path, axis):
     - the centre moves at the force's impulse / m (observed 8e-12 relative, the integration
       of the pulse; bound 1e-8, a hundred times the rtol), constant after the pulse (observed
       1.2e-13 m/s; bound 1e-8)."""
+    text = free_body()
     if axis == "intermediate":
         moment, spin, j_spin = np.array([0.004, 40.0, 0.0]), 1, 2.0
     else:
         moment, spin, j_spin = np.array([0.004, 0.0, 60.0]), 2, 3.0
-    text = free_body(f"mx = {moment[0]}, my = {moment[1]}, mz = {moment[2]}", 4.3)
+        text = text.replace("my = 40.0", "mz = 60.0")
+    assert "mx = 0.004, my = 40.0" in free_body()
     out = run_ok(tmp_path, text, axis)
     t, omega, rot, kinetic = body_motion(out)
     free = t >= 0.2
@@ -122,7 +115,8 @@ def test_free_rotation_stops_before_a_full_turn(tmp_path):
     a run to 6 s stops there with an error naming the node and the limit, for each family of
     integrators (never a NaN or a kinematic failure without reason)."""
     for integrator in ("bdf", "galpha_adaptive"):
-        text = free_body("mx = 1.0e-4, my = 40.0", 6.0).replace("'bdf'", f"'{integrator}'")
+        text = free_body().replace("t_end = 4.3", "t_end = 6.0").replace("'bdf'",
+                                                                          f"'{integrator}'")
         proc, out = run_scene(tmp_path, text, name=integrator)
         assert_clean_error(proc, out, "node 'body' rotation", "5.97 rad", "full turn", "1.9 pi")
 
@@ -130,7 +124,8 @@ def test_free_rotation_stops_before_a_full_turn(tmp_path):
 def test_free_rotation_needs_inertia(tmp_path):
     """A free rotation that nothing gives inertia: the singular mass matrix names it, as for a
     planar dynamic phi without J."""
-    proc, out = run_scene(tmp_path, free_body("mx = 1.0", 1.0, inertia=False))
+    text = free_body().replace(", inertia = 1.0, 2.0, 3.0, 0.0, 0.0, 0.0", "")
+    proc, out = run_scene(tmp_path, text)
     assert_clean_error(proc, out, "mass matrix is singular", "node 'body' rotation",
                        "no inertia")
 
