@@ -12,6 +12,10 @@ contains
     integer :: i
     do i = 1, size(scene%nodes)
       associate (n => scene%nodes(i))
+        if (err%ok() .and. scene%dimension == 3 .and. len(n%planar_var) > 0) call err%set( &
+          ERR_INPUT, 'group &node ''' // n%label // ''': variable ''' // n%planar_var // &
+          ''' is planar only: a spatial node''s rotation is an input through dynamic = ' // &
+          '''rotation'' or motion_rotation (fix_rotation clamps it)')
         call mismatch('node', n%label, n%spatial_var, n%planar_var, scene%dimension, err)
       end associate
     end do

@@ -212,6 +212,8 @@ def spatial(node_extra, extra=""):
 
 @pytest.mark.parametrize("text,fragments", [
     (planar(", dynamic = 'rotation'"), ["&node 'b'", "'dynamic'", "dimension = 3"]),
+    (spatial(", motion_phi = 'turn'"), ["&node 'b'", "'motion_phi'", "planar only",
+                                        "dynamic = 'rotation'"]),
     (planar(", motion_rotation = 'turn', rotation_axis = 0, 0, 1"),
      ["&node 'b'", "'motion_rotation'", "dimension = 3"]),
     (spatial(", motion_rotation = 'turn'"),
