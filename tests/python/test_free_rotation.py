@@ -247,3 +247,23 @@ def test_unused_motion_warning_knows_motion_rotation(tmp_path):
     assert proc.returncode == 0, proc.stderr
     said = proc.stdout + proc.stderr
     assert "'spare'" in said and "'turn'" not in said
+
+
+def test_python_reads_node_rotation_models(tmp_path):
+    """flexmor.model reads results with the hidden elements of node rotations (rotvec,
+    hinge3d from a clamped frame) and draws them: the mesh points at the last output are the
+    nodes' positions (exactly: the same numbers)."""
+    from flexmor.model import read_model
+    texts = {"free": free_body().replace("t_end = 4.3", "t_end = 0.5"),
+             "driven": driven("0, 0, 1", "law = 'constant', start = 0.5",
+                              "&static n_steps = 1 /\n")}
+    for name, text in texts.items():
+        out = run_ok(tmp_path, text, name)
+        with h5py.File(out) as f:
+            model = read_model(f)
+            x = f["x"][-1] if "x" in f else f["static/x"][-1]
+            node = "body" if name == "free" else "tip"
+            pos = (f["nodes"] if "x" in f else f["static/nodes"])[node]["position"][-1]
+        assert ("rotvec" if name == "free" else "hinge3d") in model.element_types
+        points = model.mesh().points(x)
+        assert np.array_equal(points[model.node_labels.index(node)], pos)
