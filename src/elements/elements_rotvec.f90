@@ -7,7 +7,7 @@
 !> scale-free (degree 0 in lambda), so the rigid normalisation (elements_euler) fixes |lambda|
 !> and these modes the rest. psi covers every orientation once in the open ball |psi| < 2 pi
 !> (l0 > 0 inside |psi| < pi); the map is singular only on the sphere |psi| = 2 pi, a full
-!> turn, where lambda = -(1, 0, 0, 0) and the axis is undefined (docs/theory.md 2.6).
+!> turn, where lambda = -(1, 0, 0, 0) and the axis is undefined (docs/theory.md 2.7).
 !>
 !> f and its partial derivatives in (l0, s2 = |lv|^2) are in closed form, those in l0 free of
 !> any cancellation (f_0 = -2 / |lambda|^2); near lv = 0 (with l0 > 0) the ones in s2 lose
