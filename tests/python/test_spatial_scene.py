@@ -484,8 +484,9 @@ def test_inertia_in_rotated_axes(tmp_path):
 def test_inertia_in_axes_given_by_two_vectors(tmp_path):
     """&mass axes: the body x axis along (1, 1, 0) and the x-y plane through (0, 2, 0) (y
     orthogonalised to (-1, 1, 0)/sqrt 2) is the turn by 45 degrees about z; the same
-    frequencies as `rotation = 0, 0, 1, pi/4` (round-off of the two constructions, 1e-12
-    relative)."""
+    frequencies as `rotation = 0, 0, 1, pi/4` (the two constructions differ by round-off,
+    which the eigensolver turns into 1.5e-12 relative in Debug, observed on the highest
+    modes; bound 1e-10)."""
     freqs = []
     for axes in (f"rotation = 0, 0, 1, {math.pi / 4!r}", "axes = 1, 1, 0, 0, 2, 0"):
         text = cantilever(f"&mass node = 'tip', inertia = 0.02, 0.01, 0.03, 0.001, 0, 0, "
@@ -494,7 +495,7 @@ def test_inertia_in_axes_given_by_two_vectors(tmp_path):
         assert proc.returncode == 0, proc.stderr
         with h5py.File(out) as f:
             freqs.append(f["modal/frequency_hz"][:])
-    assert np.allclose(freqs[0], freqs[1], rtol=1e-12, atol=0)
+    assert np.allclose(freqs[0], freqs[1], rtol=1e-10, atol=0)
 
 
 @pytest.mark.parametrize("axes,fragments", [
