@@ -19,8 +19,7 @@ program test_rotvec
   use core_strings, only: real_str
   use testing, only: suite_t
   use fd_helpers, only: lcg_t, relerr, flat, random_rotvec
-  use element_fd, only: modes, jacobian, second, fd_jacobian, fd_second, fd_hessian, &
-    polar_hessian
+  use element_fd, only: modes, jacobian, second, expect_derivatives
   use elements_base, only: MODE_DYNAMIC
   use elements_rotation, only: rotvec_to_euler, euler_to_matrix
   use elements_rotvec, only: rotvec_t, ROTVEC_LIMIT
@@ -142,31 +141,10 @@ contains
     call ts%expect('series and closed form agree across u = 0.1', err, 1.0e-10_wp, C_SW)
   end subroutine series_switch
 
-  !> The modes are smooth on the scale zs = min(1, |lambda| sin(|psi|/2)) beyond half a turn
-  !> (the distance to the full-turn singularity, lv = 0 with l0 < 0), 1 before, so steps are
-  !> multiples of zs. Central differences of psi at h = 1e-6 zs: truncation ~ (h / zs)^2 =
-  !> 1e-12, round-off ~ 10 eps |psi| / h <= 1.4e-8 zs |de|; bound 1e-7 relative to
-  !> max(|de|, 1). 5-point rule at s = 1e-2 along v (|v| <= 0.3 zs): truncation ~ 1e-12,
-  !> round-off 50 eps |psi| / s^2 <= 7e-9; bound 1e-7 relative to max(|d2|, |v|^2). FD
-  !> Hessian from de at h = 1e-5 zs: truncation ~ 1e-10, round-off 10 eps |de| / h; bound 1e-7.
-  subroutine check_derivatives(x, v, zs, what)
-    real(wp), intent(in) :: x(4), v(4), zs
-    character(len=*), intent(in) :: what
-    real(wp) :: err
-    integer :: m
-    call ts%expect(what // ' de', relerr(flat(jacobian(rv, x)), &
-      flat(fd_jacobian(rv, x, 1.0e-6_wp * zs)), 1.0_wp), 1.0e-7_wp, C_DE)
-    call ts%expect(what // ' second vs FD d2/ds2', relerr(second(rv, x, v), &
-      fd_second(rv, x, v, 1.0e-2_wp), dot_product(v, v)), 1.0e-7_wp, C_D2)
-    err = 0.0_wp
-    do m = 1, 3
-      err = max(err, relerr(flat(polar_hessian(rv, x, m)), flat(fd_hessian(rv, x, m, &
-        1.0e-5_wp * zs)), 1.0_wp))
-    end do
-    call ts%expect(what // ' Hessian (polarised second) vs FD, all modes', err, 1.0e-7_wp, &
-      C_POL)
-  end subroutine check_derivatives
 
+  !> The modes are smooth on the scale zs = min(1, |lambda| sin(|psi|/2)) beyond half a turn
+  !> (the distance to the full-turn singularity, lv = 0 with l0 < 0), 1 before, so the steps
+  !> of expect_derivatives are multiples of zs; there |psi| <= 2 pi bounds the round-off.
   subroutine derivative_tests()
     real(wp), parameter :: angles(10) = [0.0_wp, 1.0e-8_wp, 1.0e-3_wp, 0.6_wp, 0.63_wp, &
       1.0_wp, 170 * DEG, 300 * DEG, -300 * DEG, 1.85_wp * PI]
@@ -189,7 +167,8 @@ contains
       zs = 1.0_wp
       if (abs(a) > PI) zs = norm2(x) * abs(sin(a / 2))
       v = 0.3_wp * zs * rng%uniform_vec(4, -1.0_wp, 1.0_wp)
-      call check_derivatives(x, v, zs, trim(what))
+      call expect_derivatives(ts, rv, x, v, zs, trim(what), &
+        C_DE, C_D2, C_POL)
     end do
   end subroutine derivative_tests
 

@@ -5,9 +5,7 @@ submodule (analysis_run) analysis_run_dynamic
 
 contains
 
-  module subroutine run_dynamic(this, err)
-    type(run_t), intent(inout), target :: this
-    type(error_t), intent(out) :: err
+  module procedure run_dynamic
     type(integrator_options_t) :: opts
     real(wp), allocatable :: breaks(:), v0(:), q_aug(:), v_aug(:)
     integer :: i
@@ -52,7 +50,7 @@ contains
     if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a,i0,a)') 'dynamic: ', &
       this%stats%n_steps, ' steps, ', this%stats%n_rhs_evals, ' evaluations, ', &
       this%stats%n_jac_evals, ' Jacobians'
-  end subroutine run_dynamic
+  end procedure run_dynamic
 
   !> integrator = 'auto' below rtol 1e-6: BDF unless the model is stiff (model_scene's
   !> auto_by_stiffness); omega_max < 0: not known, taken as stiff. The choice and its reason

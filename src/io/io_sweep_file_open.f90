@@ -14,13 +14,7 @@ contains
   ! ---------------------------------------------------------------------------------------------
   ! open_existing
 
-  module subroutine sf_open_existing(this, path, sweep_input_text, err, base_input_text, sync)
-    class(sweep_file_t), intent(inout) :: this
-    character(len=*), intent(in) :: path
-    character(len=*), intent(in) :: sweep_input_text
-    type(error_t), intent(out) :: err
-    character(len=*), intent(in), optional :: base_input_text
-    logical, intent(in), optional :: sync
+  module procedure sf_open_existing
     character(len=*), parameter :: not_sweep = ' (remove it or choose another -o)'
     character(len=:), allocatable :: text
     integer(hid_t) :: fid
@@ -132,11 +126,9 @@ contains
       call move_alloc(st, this%case_status)
     end block work
     if (.not. err%ok()) call release(this)
-  end subroutine sf_open_existing
+  end procedure sf_open_existing
 
-  module subroutine release(this, hdferr_out)
-    class(sweep_file_t), intent(inout) :: this
-    integer, intent(out), optional :: hdferr_out
+  module procedure release
     integer :: hdferr, j
     if (present(hdferr_out)) hdferr_out = 0
     if (allocated(this%metric_ids)) then
@@ -158,15 +150,13 @@ contains
     this%ncases = 0
     if (allocated(this%metric_list)) deallocate(this%metric_list)
     if (allocated(this%case_status)) deallocate(this%case_status)
-  end subroutine release
+  end procedure release
 
-  module subroutine sync_or_fail(this, err)
-    class(sweep_file_t), intent(inout) :: this
-    type(error_t), intent(inout) :: err
+  module procedure sync_or_fail
     type(error_t) :: e
     call sync_file(this%path, e)
     if (.not. e%ok()) call err%set(e%code, this%path // ': ' // e%message)
-  end subroutine sync_or_fail
+  end procedure sync_or_fail
 
   !> A file to resume that is not (or no longer) a sweep file of this sweep: an input error that
   !> names the file and says what to do.

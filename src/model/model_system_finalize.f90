@@ -53,11 +53,7 @@ contains
     end do
   end subroutine check_consistency
 
-  !> Number the calculable coordinates, kinematic rows and generalised coordinates, and check
-  !> that there are as many kinematic equations as calculable coordinates.
-  module subroutine model_finalize(this, err)
-    class(model_t), intent(inout) :: this
-    type(error_t), intent(out) :: err
+  module procedure model_finalize
     integer :: i, m, n_rows, iq_rh, iq_dy
     logical :: calculable(this%n_x)
     if (.not. allocated(this%modes)) allocate(this%modes(0), this%mode_first(0))
@@ -145,14 +141,10 @@ contains
         this%elements(i)%e%n_modes() - 1)%class == MODE_ELASTIC)
     end do
     this%finalized = .true.
-  end subroutine model_finalize
+  end procedure model_finalize
 
-  !> Why the classes do not solve and what to change: the counting condition of
-  !> docs/input.md, with the numbers of each class.
-  module function model_count_message(this, n_rows) result(msg)
-    class(model_t), intent(in) :: this
-    integer, intent(in) :: n_rows
-    character(len=:), allocatable :: msg
+  !> The counting condition of docs/input.md, with the numbers of each class.
+  module procedure model_count_message
     character(len=400) :: buf
     integer :: n_rh_modes, n_dy_modes
     n_rh_modes = count(this%modes%class == MODE_PRESCRIBED)
@@ -172,5 +164,5 @@ contains
         'release modes, or free coordinates'
     end if
     msg = msg // trim(buf)
-  end function model_count_message
+  end procedure model_count_message
 end submodule model_system_finalize

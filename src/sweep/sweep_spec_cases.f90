@@ -19,9 +19,7 @@ contains
   ! ---------------------------------------------------------------- generating the cases
 
   !> Cartesian product, the first parameter varying slowest.
-  module subroutine gen_product(this, err)
-    type(sweep_spec_t), intent(inout) :: this
-    type(error_t), intent(inout) :: err
+  module procedure gen_product
     integer(i8) :: n
     integer :: i, j, r, k, m
 
@@ -47,11 +45,9 @@ contains
         end associate
       end do
     end do
-  end subroutine gen_product
+  end procedure gen_product
 
-  module subroutine gen_zip(this, err)
-    type(sweep_spec_t), intent(inout) :: this
-    type(error_t), intent(inout) :: err
+  module procedure gen_zip
     character(len=:), allocatable :: lengths
     integer :: j, n
 
@@ -72,14 +68,12 @@ contains
     do j = 1, size(this%params)
       this%values(:, j) = this%params(j)%list
     end do
-  end subroutine gen_zip
+  end procedure gen_zip
 
   !> Mode 'random': independent uniform samples; mode 'lhs': in each parameter, one sample in
   !> each of the n_samples equal strata, the strata in a random order. Each parameter draws from
   !> a stream of its own, so adding a parameter leaves the earlier parameters' values unchanged.
-  module subroutine gen_sampled(this, err)
-    type(sweep_spec_t), intent(inout) :: this
-    type(error_t), intent(inout) :: err
+  module procedure gen_sampled
     type(rng_t) :: rng
     integer, allocatable :: perm(:)
     integer :: i, j, n
@@ -98,7 +92,7 @@ contains
         this%values(i, j) = sample_at(this%params(j), u)
       end do
     end do
-  end subroutine gen_sampled
+  end procedure gen_sampled
 
   !> The value at u in [0, 1) of the parameter's (log-)uniform distribution; integers rounded.
   pure function sample_at(p, u) result(x)
@@ -134,12 +128,7 @@ contains
 
   !> scene_file = base with case icase's values written into it. Errors name the sweep file,
   !> the &parameter and the base scene.
-  module subroutine apply_case(spec, base, icase, scene_file, err)
-    type(sweep_spec_t), intent(in) :: spec
-    type(nml_file_t), intent(in) :: base
-    integer, intent(in) :: icase
-    type(nml_file_t), intent(out) :: scene_file
-    type(error_t), intent(out) :: err
+  module procedure apply_case
     integer :: j, k
 
     if (.not. allocated(spec%values)) then
@@ -159,7 +148,7 @@ contains
       end do
       if (.not. err%ok()) return
     end do
-  end subroutine apply_case
+  end procedure apply_case
 
   subroutine set_value(p, x, scene_file, err)
     type(param_t), intent(in) :: p
