@@ -65,6 +65,20 @@ contains
     if (dimension == 2 .and. len(spatial_var) > 0) call err%set(ERR_INPUT, who // &
       ': variable ''' // spatial_var // ''' needs a spatial scene (&scene dimension = 3)')
     if (dimension == 3 .and. len(planar_var) > 0) call err%set(ERR_INPUT, who // &
-      ': variable ''' // planar_var // ''' is planar only (not in spatial scenes yet)')
+      ': variable ''' // planar_var // ''' is planar only' // spatial_counterpart(planar_var))
   end subroutine mismatch
+
+  !> What a spatial scene takes instead of a planar-only variable.
+  function spatial_counterpart(planar_var) result(hint)
+    character(len=*), intent(in) :: planar_var
+    character(len=:), allocatable :: hint
+    select case (planar_var)
+    case ('J')
+      hint = ': in a spatial scene a body''s rotary inertia is the tensor ''inertia'''
+    case ('moment')
+      hint = ': in a spatial scene a moment is ''mx'', ''my'', ''mz'' (global axes)'
+    case default
+      hint = ''
+    end select
+  end function spatial_counterpart
 end submodule io_scene_dimension
