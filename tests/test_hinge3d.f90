@@ -19,8 +19,7 @@ program test_hinge3d
   use core_strings, only: real_str
   use testing, only: suite_t
   use fd_helpers, only: lcg_t, relerr, flat, random_rotvec
-  use element_fd, only: modes, jacobian, second, fd_jacobian, fd_second, fd_hessian, &
-    polar_hessian
+  use element_fd, only: modes, jacobian, second, expect_derivatives
   use elements_base, only: MODE_DYNAMIC, MODE_RIGID
   use elements_rotation, only: rotvec_to_euler, euler_to_matrix, euler_product, cross
   use elements_hinge3d, only: hinge3d_t, hinge3d_set_axis
@@ -264,32 +263,10 @@ contains
 
   ! ------------------------------------------------------------------ derivatives
 
-  !> The modes are smooth on the scale zs = cos(beta/2) (the distance to their singularity at
-  !> a bending angle of pi), so every step is a multiple of zs and the errors are relative.
-  !> Central differences of e at h = 1e-6 zs: truncation (h / zs)^2 ~ 1e-12, round-off
-  !> ~ 10 eps |e| / h <= 1.4e-8 zs |de| for |e| <= 2 pi; bound 1e-7 relative to max(|de|, 1).
-  !> 5-point rule at s = 1e-2 along v (|v| ~ 0.3 zs): truncation (s |v| / zs)^4 / 90 ~ 1e-12,
-  !> round-off 5 * 10 eps |e| / s^2 <= 7e-9; bound 1e-7 relative to max(|d2e|, |v|^2).
-  !> FD Hessian from de at h = 1e-5 zs: truncation (h / zs)^2 ~ 1e-10 times the constants of
-  !> the rational modes (~10), round-off 10 eps |de| / h ~ 2e-10 |H|; bound 1e-7.
-  subroutine check_derivatives(x, v, zs, what)
-    real(wp), intent(in) :: x(8), v(8), zs
-    character(len=*), intent(in) :: what
-    real(wp) :: err
-    integer :: m
-    call ts%expect(what // ' de', relerr(flat(jacobian(hg, x)), &
-      flat(fd_jacobian(hg, x, 1.0e-6_wp * zs)), 1.0_wp), 1.0e-7_wp, C_DE)
-    call ts%expect(what // ' second vs FD d2/ds2', relerr(second(hg, x, v), &
-      fd_second(hg, x, v, 1.0e-2_wp), dot_product(v, v)), 1.0e-7_wp, C_D2)
-    err = 0.0_wp
-    do m = 1, 3
-      err = max(err, relerr(flat(polar_hessian(hg, x, m)), flat(fd_hessian(hg, x, m, &
-        1.0e-5_wp * zs)), 1.0_wp))
-    end do
-    call ts%expect(what // ' Hessian (polarised second) vs FD, all modes', err, 1.0e-7_wp, &
-      C_POL)
-  end subroutine check_derivatives
 
+  !> The modes are smooth on the scale zs = cos(beta/2) (the distance to their singularity at
+  !> a bending angle of pi), so the steps of expect_derivatives are multiples of zs and the
+  !> errors relative; |e| <= 2 pi bounds the round-off.
   subroutine derivative_tests()
     real(wp) :: x(8), v(8), rel(3), z
     character(len=48) :: what
@@ -310,7 +287,8 @@ contains
       z = 1 / sqrt(1 + sum(expected_modes(hg, x) ** 2 * [0.0_wp, 0.25_wp, 0.25_wp]))
       z = max(z, 0.05_wp)
       v = 0.3_wp * z * rng%uniform_vec(8, -1.0_wp, 1.0_wp)
-      call check_derivatives(x, v, z, trim(what))
+      call expect_derivatives(ts, hg, x, v, z, trim(what), &
+        C_DE, C_D2, C_POL)
     end do
   end subroutine derivative_tests
 

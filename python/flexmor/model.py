@@ -184,9 +184,15 @@ _SPATIAL_KINDS = {
     + [KIND_EULER] * 4,
     "euler": [KIND_EULER] * 4,
     "body3d": [KIND_X, KIND_Y, KIND_Z] + [KIND_EULER] * 4,
+    # A free node rotation's rotation vector, and a hinge between two sets of Euler parameters
+    # (a driven node rotation's, from its clamped frame).
+    "rotvec": [KIND_EULER] * 4,
+    "hinge3d": [KIND_EULER] * 8,
 }
 _SPATIAL_ENDS = {"beam3d": ([0, 1, 2, 3], [7, 8, 9, 10]), "body3d": ([0, 1, 2, 3],) * 2,
-                 "euler": ()}
+                 "euler": (), "rotvec": (), "hinge3d": ()}
+#: Spatial element types on Euler parameters only (blocks of four, no translations).
+_EULER_ONLY = ("euler", "rotvec", "hinge3d")
 
 
 def _check_spatial(model: Model) -> None:
@@ -210,7 +216,7 @@ def _check_spatial(model: Model) -> None:
     for e, (label, etype) in enumerate(zip(model.element_labels, model.element_types)):
         if etype not in _SPATIAL_KINDS:
             raise ValueError(f"/model/elements/type: element '{label}' has type '{etype}', "
-                             f"not one of a spatial model (beam3d, euler, body3d)")
+                             f"not one of a spatial model ({', '.join(_SPATIAL_KINDS)})")
         pattern = _SPATIAL_KINDS[etype]
         coords = model.element_coordinates[e]
         if len(coords) < len(pattern) or (coords[:len(pattern)] < 0).any():
@@ -218,8 +224,9 @@ def _check_spatial(model: Model) -> None:
         if (kind[coords[:len(pattern)]] != pattern).any():
             raise ValueError(f"/model/elements/coordinates: {etype} '{label}' has coordinates "
                              f"of the wrong kinds (expected kinds {pattern})")
-        for block in range(0, len(pattern), 7 if etype != "euler" else 4):
-            first = block + (3 if etype != "euler" else 0)
+        euler_only = etype in _EULER_ONLY
+        for block in range(0, len(pattern), 4 if euler_only else 7):
+            first = block + (0 if euler_only else 3)
             if not np.array_equal(coords[first:first + 4], coords[first] + np.arange(4)):
                 raise ValueError(f"/model/elements/coordinates: {etype} '{label}' has Euler "
                                  f"parameters that are not four consecutive coordinates")

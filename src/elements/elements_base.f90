@@ -37,6 +37,8 @@ module elements_base
     procedure :: inertia => element_zero_inertia
     procedure :: weight => element_zero_weight
     procedure :: lumped_mass => element_no_lumped_mass
+    procedure :: has_limit => element_no_limit
+    procedure :: limit_problem => element_no_limit_problem
   end type element_t
 
   !> Container so that a model holds elements of different types in one array.
@@ -119,6 +121,22 @@ contains
     real(wp), intent(out) :: diag(:)
     diag = 0.0_wp
   end subroutine element_no_lumped_mass
+
+  !> True when the element's modes (as inputs, from q) have a range beyond which its
+  !> coordinates are singular: the model then checks them (limit_problem) before each
+  !> kinematic solve.
+  pure logical function element_no_limit(this)
+    class(element_t), intent(in) :: this
+    element_no_limit = .false.
+  end function element_no_limit
+
+  !> Why the mode values e are beyond the element's range, naming the element ('' if not).
+  pure function element_no_limit_problem(this, e) result(msg)
+    class(element_t), intent(in) :: this
+    real(wp), intent(in) :: e(:)
+    character(len=:), allocatable :: msg
+    msg = ''
+  end function element_no_limit_problem
 
   pure function mode_class_name(c) result(name)
     integer, intent(in) :: c

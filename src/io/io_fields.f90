@@ -11,7 +11,7 @@ module io_fields
   implicit none
   private
   public :: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, rd_classes, rd_label, &
-    only_with, rd_fixed_list, rd_labels
+    only_with, rd_fixed_list, rd_labels, first_given
 
 contains
 
@@ -301,4 +301,18 @@ contains
       labels(i)%s = values(i)%s
     end do
   end function as_labels
+  !> The first of `names` the group gives, '' if none.
+  function first_given(g, names) result(name)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: names(:)
+    character(len=:), allocatable :: name
+    integer :: i
+    name = ''
+    do i = 1, size(names)
+      if (g%has(trim(names(i)))) then
+        name = trim(names(i))
+        return
+      end if
+    end do
+  end function first_given
 end module io_fields

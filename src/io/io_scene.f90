@@ -9,13 +9,13 @@ module io_scene
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, &
-    rd_classes, rd_label, only_with, rd_fixed_list
+    rd_classes, rd_label, only_with, rd_fixed_list, first_given
   use io_scene_analyses, only: read_static, read_modal, read_buckling, read_controller, &
     read_linear, read_dynamic, read_reduction, read_output
-  use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, &
-    mass_rec_t, force_rec_t, motion_rec_t, slider_rec_t
-  use motion_law, only: table_problem
-  use io_table, only: read_table_csv, relative_to
+  use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
+    force_rec_t, slider_rec_t
+  use elements_rotation, only: euler_to_matrix, rotvec_to_euler, cross
+  use io_scene_motion, only: read_motion
   implicit none
   private
   public :: read_scene, load_scene, SCENE_GROUPS
@@ -154,11 +154,13 @@ contains
     call rd_logical(g, 'fix_z', n%fix_z, err, default=fixed)
     call rd_logical(g, 'fix_rotation', n%fix_rotation, err, default=fixed)
     call read_node_inputs(g, n, err)
-    n%spatial_var = first_given(g, [character(len=12) :: 'z', 'fix_z', 'fix_rotation', &
-      'motion_z'])
-    if (len(n%spatial_var) == 0 .and. n%dynamic(4)) n%spatial_var = 'dynamic'
-    ! A node's rotation as an input is planar only: a free spatial rotation needs Euler
-    ! parameters as degrees of freedom (docs/theory.md 12).
+    call read_node_rotation(g, n, err)
+    n%spatial_var = first_given(g, [character(len=16) :: 'z', 'fix_z', 'fix_rotation', &
+      'motion_z', 'motion_rotation', 'rotation_axis'])
+    if (len(n%spatial_var) == 0 .and. (n%dynamic(4) .or. n%free_rotation)) &
+      n%spatial_var = 'dynamic'
+    ! phi is the planar rotation angle; a spatial node's rotation is an input through
+    ! 'rotation' and motion_rotation (read_node_rotation).
     n%planar_var = first_given(g, [character(len=12) :: 'fix_phi', 'motion_phi'])
     if (len(n%planar_var) == 0 .and. n%dynamic(3)) n%planar_var = 'dynamic'
   end subroutine read_node
@@ -181,6 +183,7 @@ contains
       do k = 1, 4
         if (trim(names(k)) == dyn(i)%s) n%dynamic(k) = .true.
       end do
+      if (dyn(i)%s == 'rotation') n%free_rotation = .true.
     end do
     fixed = [n%fix_x, n%fix_y, n%fix_phi, n%fix_z]
     do k = 1, 4
@@ -196,6 +199,35 @@ contains
       if (.not. err%ok()) return
     end do
   end subroutine read_node_inputs
+
+  !> A spatial node's rotation as an input: free (dynamic = 'rotation') or driven by
+  !> motion_rotation about rotation_axis (both needed together); neither with fix_rotation.
+  subroutine read_node_rotation(g, n, err)
+    type(nml_group_t), intent(inout) :: g
+    type(node_rec_t), intent(inout) :: n
+    type(error_t), intent(inout) :: err
+    if (.not. err%ok()) return
+    call rd_string(g, 'motion_rotation', n%motion_rotation, err)
+    call rd_fixed_list(g, 'rotation_axis', 3, ' (ax, ay, az: the axis fixed in space the ' // &
+      'node turns about)', n%rotation_axis, err)
+    if (.not. err%ok()) return
+    if (n%fix_rotation .and. (n%free_rotation .or. len(n%motion_rotation) > 0)) then
+      call err%set(ERR_INPUT, g%where() // ': the rotation is fixed (fix_rotation, or ' // &
+        'fixed) and cannot also be dynamic or driven (set fix_rotation = .false.)')
+    else if (n%free_rotation .and. len(n%motion_rotation) > 0) then
+      call err%set(ERR_INPUT, g%where() // ': the rotation is both dynamic (dynamic = ' // &
+        '''rotation'') and driven (motion_rotation)')
+    else if (len(n%motion_rotation) > 0 .and. .not. allocated(n%rotation_axis)) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''motion_rotation'' needs ' // &
+        '''rotation_axis'' (3 values: the axis fixed in space the node turns about)')
+    else if (len(n%motion_rotation) == 0 .and. allocated(n%rotation_axis)) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''rotation_axis'' is given without ' // &
+        '''motion_rotation'' (the motion that drives the rotation about it)')
+    else if (allocated(n%rotation_axis)) then
+      if (.not. norm2(n%rotation_axis) > 0) call err%set(ERR_INPUT, g%where() // &
+        ': variable ''rotation_axis'' must not be zero')
+    end if
+  end subroutine read_node_rotation
 
   subroutine read_link(g, r, err)
     type(nml_group_t), intent(inout) :: g
@@ -333,19 +365,58 @@ contains
     call rd_real(g, 'm', r%m, err)
     call rd_real(g, 'J', r%j, err)
     call rd_fixed_list(g, 'inertia', 6, ' (Jxx, Jyy, Jzz, Jxy, Jxz, Jyz)', r%inertia, err)
-    call rd_fixed_list(g, 'rotation', 4, ' (an axis ax, ay, az and an angle in rad)', &
-      r%rotation, err)
-    if (err%ok() .and. allocated(r%rotation)) then
-      if (.not. norm2(r%rotation(1:3)) > 0) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'': the axis is zero')
-      else if (.not. allocated(r%inertia)) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'' turns the axes of ' // &
-          '''inertia'', which is not given')
-      end if
-    end if
+    call read_body_axes(g, allocated(r%inertia), r%axes, err)
     r%planar_var = first_given(g, [character(len=12) :: 'J'])
-    r%spatial_var = first_given(g, [character(len=12) :: 'inertia', 'rotation'])
+    r%spatial_var = first_given(g, [character(len=12) :: 'inertia', 'rotation', 'axes'])
   end subroutine read_mass
+
+  !> The axes a body's inertia is given in, as a matrix whose columns are the body's x, y, z
+  !> axes in reference coordinates: from `rotation` (an axis and an angle) or from `axes` (the
+  !> body's x axis and a vector in its x-y plane, orthogonalised; z = x cross y).
+  subroutine read_body_axes(g, has_inertia, axes, err)
+    type(nml_group_t), intent(inout) :: g
+    logical, intent(in) :: has_inertia
+    real(wp), allocatable, intent(out) :: axes(:, :)
+    type(error_t), intent(inout) :: err
+    real(wp), allocatable :: rotation(:), two(:)
+    real(wp) :: ex(3), ey(3)
+    character(len=:), allocatable :: name
+    call rd_fixed_list(g, 'rotation', 4, ' (an axis ax, ay, az and an angle in rad)', &
+      rotation, err)
+    call rd_fixed_list(g, 'axes', 6, ' (the body x axis ax, ay, az and a vector bx, by, bz ' &
+      // 'in its x-y plane)', two, err)
+    if (.not. err%ok() .or. .not. (allocated(rotation) .or. allocated(two))) return
+    name = 'axes'
+    if (allocated(rotation)) name = 'rotation'
+    if (allocated(rotation) .and. allocated(two)) then
+      call err%set(ERR_INPUT, g%where() // ': variables ''rotation'' and ''axes'' both give ' &
+        // 'the axes of ''inertia'': give one')
+    else if (.not. has_inertia) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''' // name // ''' turns the axes ' // &
+        'of ''inertia'', which is not given')
+    else if (allocated(rotation)) then
+      if (.not. norm2(rotation(1:3)) > 0) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''rotation'': the axis is zero')
+        return
+      end if
+      axes = euler_to_matrix(rotvec_to_euler(rotation(4) * rotation(1:3) / &
+        norm2(rotation(1:3))))
+    else
+      ! A y direction within 1e-6 rad of x would leave z to round-off.
+      ex = two(1:3) / max(norm2(two(1:3)), tiny(1.0_wp))
+      ey = two(4:6) - dot_product(two(4:6), ex) * ex
+      if (.not. norm2(two(1:3)) > 0 .or. .not. norm2(ey) > 1.0e-6_wp * norm2(two(4:6))) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''axes'': the x axis (first 3 ' // &
+          'values) must not be zero and the second vector must not be zero or parallel to it')
+        return
+      end if
+      ey = ey / norm2(ey)
+      allocate(axes(3, 3))
+      axes(:, 1) = ex
+      axes(:, 2) = ey
+      axes(:, 3) = cross(ex, ey)
+    end if
+  end subroutine read_body_axes
 
   subroutine read_force(g, r, err)
     type(nml_group_t), intent(inout) :: g
@@ -363,126 +434,4 @@ contains
     r%spatial_var = first_given(g, [character(len=12) :: 'fz', 'mx', 'my', 'mz'])
     r%planar_var = first_given(g, [character(len=12) :: 'moment'])
   end subroutine read_force
-
-  !> The first of `names` the group gives, '' if none.
-  function first_given(g, names) result(name)
-    type(nml_group_t), intent(inout) :: g
-    character(len=*), intent(in) :: names(:)
-    character(len=:), allocatable :: name
-    integer :: i
-    name = ''
-    do i = 1, size(names)
-      if (g%has(trim(names(i)))) then
-        name = trim(names(i))
-        return
-      end if
-    end do
-  end function first_given
-
-  subroutine read_motion(g, r, err)
-    type(nml_group_t), intent(inout) :: g
-    type(motion_rec_t), intent(out) :: r
-    type(error_t), intent(inout) :: err
-    character(len=*), parameter :: REST = 'with law = ''constant'', ''cubic'', ''quintic'' or ' &
-      // '''cycloidal'''
-    type(string_t), allocatable :: terms(:)
-    type(error_t) :: e
-    logical :: rest_to_rest
-    integer :: i
-    call rd_label(g, r%label, err)
-    call rd_choice(g, 'law', r%law, err)
-    if (.not. err%ok()) return
-    ! Each law reads only its own variables: another law's would be ignored without a word.
-    rest_to_rest = any(r%law == [character(len=9) :: 'constant', 'cubic', 'quintic', 'cycloidal'])
-    call only_with(g, ['end'], rest_to_rest, REST, err)
-    call only_with(g, ['duration'], rest_to_rest .or. r%law == 'spin_up', REST // &
-      ' or ''spin_up''', err)
-    call only_with(g, ['start', 't0   '], r%law /= 'sum' .and. r%law /= 'table', &
-      'with laws other than ''sum'' and ''table''', err)
-    call only_with(g, ['rate'], r%law == 'ramp' .or. r%law == 'spin_up', &
-      'with law = ''ramp'' or ''spin_up''', err)
-    call only_with(g, ['amplitude', 'frequency', 'phase    '], r%law == 'harmonic', &
-      'with law = ''harmonic''', err)
-    call only_with(g, ['terms'], r%law == 'sum', 'with law = ''sum''', err)
-    call only_with(g, ['times ', 'values', 'file  '], r%law == 'table', 'with law = ''table''', err)
-    call rd_real(g, 'start', r%start, err)
-    call rd_real(g, 't0', r%t0, err)
-    select case (r%law)
-    case ('constant')
-      call rd_real(g, 'end', r%end, err, default=r%start)
-      ! A constant law ignores its duration; one given must still make sense.
-      if (g%has('duration')) call rd_real(g, 'duration', r%duration, err)
-    case ('ramp')
-      call rd_real(g, 'rate', r%rate, err)
-    case ('spin_up')
-      call rd_real(g, 'rate', r%rate, err)
-      call rd_real(g, 'duration', r%duration, err)
-    case ('harmonic')
-      call rd_real(g, 'amplitude', r%amplitude, err)
-      call rd_real(g, 'frequency', r%frequency, err)
-      call rd_real(g, 'phase', r%phase, err)
-    case ('sum')
-      if (.not. err%ok()) return
-      call g%get_string_array('terms', terms, e)
-      if (.not. e%ok()) then
-        err = e
-      else if (size(terms) == 0) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''terms'' needs at least one label')
-      else
-        allocate(r%terms(size(terms)))
-        do i = 1, size(terms)
-          r%terms(i)%s = terms(i)%s
-        end do
-      end if
-    case ('table')
-      call read_motion_table(g, r, err)
-    case default
-      call rd_real(g, 'end', r%end, err)
-      call rd_real(g, 'duration', r%duration, err)
-    end select
-  end subroutine read_motion
-
-  !> A table's points, inline (`times`, `values`) or from `file` (relative to the scene file).
-  subroutine read_motion_table(g, r, err)
-    type(nml_group_t), intent(inout) :: g
-    type(motion_rec_t), intent(inout) :: r
-    type(error_t), intent(inout) :: err
-    character(len=:), allocatable :: path, var, msg
-    type(error_t) :: e
-    if (.not. err%ok()) return
-    if (g%has('file')) then
-      var = 'file'
-      if (g%has('times') .or. g%has('values')) then
-        call err%set(ERR_INPUT, g%where() // ': give either ''file'' or ''times'' and ' // &
-          '''values'', not both')
-        return
-      end if
-      call rd_string(g, 'file', path, err)
-      if (.not. err%ok()) return
-      call read_table_csv(relative_to(g%path, path), r%times, r%values, e)
-      if (.not. e%ok()) e%message = g%where() // ': variable ''file'': ' // e%message
-    else
-      var = 'times'', ''values'
-      call g%get_real_array('times', r%times, e)
-      if (e%ok()) call g%get_real_array('values', r%values, e)
-    end if
-    if (.not. e%ok()) then
-      err = e
-      return
-    end if
-    msg = table_problem(r%times, r%values)
-    if (var /= 'file' .and. size(r%times) == size(r%values)) var = 'times'
-    if (len(msg) > 0) call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''': ' // msg)
-  end subroutine read_motion_table
-
-
-
-
-
-
-
-
-
-
-
 end module io_scene

@@ -12,6 +12,10 @@ contains
     integer :: i
     do i = 1, size(scene%nodes)
       associate (n => scene%nodes(i))
+        if (err%ok() .and. scene%dimension == 3 .and. len(n%planar_var) > 0) call err%set( &
+          ERR_INPUT, 'group &node ''' // n%label // ''': variable ''' // n%planar_var // &
+          ''' is planar only: a spatial node''s rotation is an input through dynamic = ' // &
+          '''rotation'' or motion_rotation (fix_rotation clamps it)')
         call mismatch('node', n%label, n%spatial_var, n%planar_var, scene%dimension, err)
       end associate
     end do
@@ -61,6 +65,20 @@ contains
     if (dimension == 2 .and. len(spatial_var) > 0) call err%set(ERR_INPUT, who // &
       ': variable ''' // spatial_var // ''' needs a spatial scene (&scene dimension = 3)')
     if (dimension == 3 .and. len(planar_var) > 0) call err%set(ERR_INPUT, who // &
-      ': variable ''' // planar_var // ''' is planar only (not in spatial scenes yet)')
+      ': variable ''' // planar_var // ''' is planar only' // spatial_counterpart(planar_var))
   end subroutine mismatch
+
+  !> What a spatial scene takes instead of a planar-only variable.
+  function spatial_counterpart(planar_var) result(hint)
+    character(len=*), intent(in) :: planar_var
+    character(len=:), allocatable :: hint
+    select case (planar_var)
+    case ('J')
+      hint = ': in a spatial scene a body''s rotary inertia is the tensor ''inertia'''
+    case ('moment')
+      hint = ': in a spatial scene a moment is ''mx'', ''my'', ''mz'' (global axes)'
+    case default
+      hint = ''
+    end select
+  end function spatial_counterpart
 end submodule io_scene_dimension

@@ -55,7 +55,7 @@ module io_schema
     var_spec_t('scene', 'dimension', VK_INT, '', '2', .false., &
       2.0_wp, .false., 3.0_wp, .false., &
       '', 'planar (2) or spatial (3)')]
-  type(var_spec_t), parameter :: NODE_VARS(15) = [ &
+  type(var_spec_t), parameter :: NODE_VARS(17) = [ &
     var_spec_t('node', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'unique name'), &
@@ -79,7 +79,7 @@ module io_schema
       '', 'hold that coordinate'), &
     var_spec_t('node', 'dynamic', VK_CHOICE_LIST, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      'x|y|phi|z', 'coordinates that are degrees of freedom'), &
+      'x|y|phi|z|rotation', 'coordinates that are degrees of freedom'), &
     var_spec_t('node', 'motion_x', VK_STRING, '', '', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'motion prescribing that coordinate'), &
@@ -100,7 +100,13 @@ module io_schema
       '', 'support (spatial scenes)'), &
     var_spec_t('node', 'fix_rotation', VK_LOGICAL, '', 'fixed', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'clamp the rotation (spatial scenes)')]
+      '', 'clamp the rotation (spatial scenes)'), &
+    var_spec_t('node', 'motion_rotation', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion driving the rotation angle (spatial)'), &
+    var_spec_t('node', 'rotation_axis', VK_REAL_LIST, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'axis of motion_rotation, fixed in space')]
   type(var_spec_t), parameter :: LINK_VARS(19) = [ &
     var_spec_t('link', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -255,7 +261,7 @@ module io_schema
     var_spec_t('slider', 'damping', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'stiffness-proportional time constant')]
-  type(var_spec_t), parameter :: MASS_VARS(5) = [ &
+  type(var_spec_t), parameter :: MASS_VARS(6) = [ &
     var_spec_t('mass', 'node', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'node label'), &
@@ -270,7 +276,10 @@ module io_schema
       '', 'inertia tensor Jxx, Jyy, Jzz, Jxy, Jxz, Jyz (spatial)'), &
     var_spec_t('mass', 'rotation', VK_REAL_LIST, 'rad', 'none', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'axes of inertia: axis (3) and angle (spatial)')]
+      '', 'axes of inertia: axis (3) and angle (spatial)'), &
+    var_spec_t('mass', 'axes', VK_REAL_LIST, '', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'axes of inertia: x axis, vector in x-y plane (3D)')]
   type(var_spec_t), parameter :: FORCE_VARS(9) = [ &
     var_spec_t('force', 'node', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -513,7 +522,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(151) = [ &
+  type(var_spec_t), parameter :: SCHEMA(154) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

@@ -286,6 +286,8 @@ contains
       do h = 1, size(scene%nodes)
         used(i) = used(i) .or. any([(node_motion(scene%nodes(h), k) == scene%motions(i)%label, &
           k = 1, 4)])
+        if (allocated(scene%nodes(h)%motion_rotation)) used(i) = used(i) .or. &
+          scene%nodes(h)%motion_rotation == scene%motions(i)%label
       end do
       do h = 1, size(scene%forces)
         if (allocated(scene%forces(h)%time_law)) used(i) = used(i) .or. &

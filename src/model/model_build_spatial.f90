@@ -3,15 +3,15 @@
 !> unless the rotation is clamped; links meshed into spatial beams; point masses; forces and
 !> moments fixed in space, constant or following time laws; hinges (elements_hinge3d: the
 !> hinged link end gets four Euler parameters of its own); trusses; sliders; translations
-!> as node inputs (rotations are planar only so far)
-!> (io_scene refuses them in a spatial scene).
+!> as node inputs; node rotations as inputs, free (a hidden rotation-vector element) or driven
+!> about a fixed axis (a hidden revolute hinge).
 submodule (model_build) model_build_spatial
   use elements_beam3d, only: beam3d_t, beam3d_set_geometry, B3_ANGLE => BENDING_ANGLE, &
     B3_SINE => BENDING_SINE
   use elements_euler, only: euler_norm_t
   use elements_body3d, only: body3d_t
-  use elements_rotation, only: euler_to_matrix, rotvec_to_euler
   use elements_hinge3d, only: hinge3d_t, hinge3d_set_axis
+  use elements_rotvec, only: rotvec_t
   use core_linalg, only: sym_gen_eig
   use elements_beam, only: PLANAR_ANGLE => BENDING_ANGLE
   use model_system, only: COORD_Z, COORD_EULER
@@ -40,6 +40,7 @@ contains
     hinge_lam = 0
     call add_spatial_links(scene, model, node_x, node_lam, hinge_lam, err)
     if (err%ok()) call add_spatial_hinges(scene, model, node_lam, hinge_lam, err)
+    if (err%ok()) call add_node_rotations(scene, model, node_lam, err)
     if (err%ok()) call add_trusses(scene, model, node_x, 3, err)
     if (err%ok()) call add_sliders(scene, model, node_x, 3, err)
     if (err%ok()) call add_spatial_loads(scene, model, node_x, node_lam, err)
@@ -208,6 +209,48 @@ contains
     end do
   end subroutine add_spatial_hinges
 
+  !> Node rotations that are inputs, on the node's Euler parameters (created here for a node
+  !> without links). Free (dynamic = 'rotation'): a hidden rotvec_t whose three dynamic modes
+  !> are the rotation vector from the reference orientation. Driven (motion_rotation): a
+  !> revolute hinge3d from a clamped hidden frame, its angle about rotation_axis (fixed in
+  !> space, as the frame is) prescribed and the two rotations normal to it rigid; its angle
+  !> is periodic, so the node can turn on without bound.
+  subroutine add_node_rotations(scene, model, node_lam, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(inout) :: model
+    integer, intent(inout) :: node_lam(:)
+    type(error_t), intent(inout) :: err
+    type(rotvec_t) :: free
+    type(hinge3d_t) :: driven
+    integer :: i, im, frame, idx, m
+    do i = 1, size(scene%nodes)
+      associate (n => scene%nodes(i), where => 'group &node ''' // scene%nodes(i)%label // '''')
+        call motion_named(scene, n%motion_rotation, where, 'motion_rotation', im, err)
+        if (.not. err%ok()) return
+        if (.not. n%free_rotation .and. im == 0) cycle
+        if (node_lam(i) == 0) node_lam(i) = euler_coords(model, 'node ''' // n%label // &
+          '''', .false.)
+        if (n%free_rotation) then
+          free%label = 'node ''' // n%label // ''' rotation'
+          free%dofs = [(node_lam(i) + m, m = 0, 3)]
+          free%mode_class = [MODE_DYNAMIC, MODE_DYNAMIC, MODE_DYNAMIC]
+          idx = model%add_element(free, [0, 0, 0])
+          cycle
+        end if
+        call hinge3d_set_axis(driven, n%rotation_axis, err)
+        if (.not. err%ok()) then
+          call err%prefix(where // ': variable ''rotation_axis'': ')
+          return
+        end if
+        frame = euler_coords(model, 'node ''' // n%label // ''' frame', .true.)
+        driven%label = 'node ''' // n%label // ''' rotation'
+        driven%dofs = [(frame + m, m = 0, 3), (node_lam(i) + m, m = 0, 3)]
+        driven%mode_class = [MODE_PRESCRIBED, MODE_RIGID, MODE_RIGID]
+        idx = model%add_element(driven, [im, 0, 0])
+      end associate
+    end do
+  end subroutine add_node_rotations
+
   !> Section properties: I about the section z axis (bending in the x-y plane, as in the
   !> plane), Iy about y (default I), torsion G J, rotary inertia rho (Iy + I) about the axis;
   !> G > 0 makes the bending shear-flexible as in the plane.
@@ -282,7 +325,7 @@ contains
         if (any(r%m_xyz /= 0)) then
           if (node_lam(in) == 0) then
             call err%set(ERR_INPUT, where // ': a moment needs a node with a rotation (the ' &
-              // 'end of a link)')
+              // 'end of a link, or dynamic = ''rotation'')')
             return
           end if
           call model%add_moment(node_lam(in), r%m_xyz, im)
@@ -300,25 +343,19 @@ contains
     integer, intent(in) :: ix, ilam
     type(error_t), intent(inout) :: err
     type(body3d_t) :: body
-    real(wp) :: j(3, 3), eye(3, 3), p(3), v(3, 3), tol, q(3, 3)
+    real(wp) :: j(3, 3), eye(3, 3), p(3), v(3, 3), tol
     integer :: info, k, idx
     character(len=:), allocatable :: where
     where = 'group &mass on node ''' // r%node // ''': variable ''inertia'''
     if (ilam == 0) then
-      ! A free node's rotation would need Euler parameters as dynamic coordinates, whose
-      ! partition is singular at half a turn (docs/theory.md 12).
-      call err%set(ERR_INPUT, where // ': the node has no rotation (no link ends there); a ' &
-        // 'free rigid body is not in spatial scenes yet')
+      call err%set(ERR_INPUT, where // ': the node has no rotation (no link ends there); ' &
+        // 'give it one with &node dynamic = ''rotation'' (a free rigid body)')
       return
     end if
     j = reshape([r%inertia(1), r%inertia(4), r%inertia(5), r%inertia(4), r%inertia(2), &
       r%inertia(6), r%inertia(5), r%inertia(6), r%inertia(3)], [3, 3])
-    if (allocated(r%rotation)) then
-      ! Given in axes turned by Q from the reference ones: J_ref = Q J Q^T.
-      q = euler_to_matrix(rotvec_to_euler(r%rotation(4) * r%rotation(1:3) / &
-        norm2(r%rotation(1:3))))
-      j = matmul(q, matmul(j, transpose(q)))
-    end if
+    ! Given in axes turned by Q (columns: the body axes) from the reference ones: J_ref = Q J Q^T.
+    if (allocated(r%axes)) j = matmul(r%axes, matmul(j, transpose(r%axes)))
     eye = 0
     do k = 1, 3
       eye(k, k) = 1

@@ -351,6 +351,8 @@ contains
     integer :: it, info, worst
     logical :: stale
     character(len=200) :: msg
+    call model%check_limits(q, err)
+    if (.not. err%ok()) return
     this%n_solves = this%n_solves + 1
     ! The factors of the previous solution serve for the predictor and for one chord step:
     ! close to it they contract nearly as well as fresh ones, and the solution then needs one

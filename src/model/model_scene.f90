@@ -32,6 +32,12 @@ module model_scene
     !> Spatial scenes: z, its support, and the clamp of the node's rotation.
     real(wp) :: z = 0.0_wp
     logical :: fix_z = .false., fix_rotation = .false.
+    !> Spatial scenes: the node's rotation a degree of freedom (dynamic = 'rotation'), or
+    !> driven by the motion `motion_rotation` ('' none) about the axis `rotation_axis` fixed
+    !> in space (3 values).
+    logical :: free_rotation = .false.
+    character(len=:), allocatable :: motion_rotation
+    real(wp), allocatable :: rotation_axis(:)
     !> The first variable given that only a spatial (planar) scene takes, '' if none: checked
     !> against &scene dimension once every group is read.
     character(len=:), allocatable :: spatial_var, planar_var
@@ -104,9 +110,10 @@ module model_scene
     !> Spatial: inertia tensor about the node in the reference axes, (Jxx, Jyy, Jzz, Jxy,
     !> Jxz, Jyz) [kg m^2]; not allocated: none.
     real(wp), allocatable :: inertia(:)
-    !> Spatial: the axes `inertia` is given in, as a rotation of the reference axes about a
-    !> unit axis (1:3) by an angle (4) [rad]; not allocated: the reference axes.
-    real(wp), allocatable :: rotation(:)
+    !> Spatial: the axes `inertia` is given in, (3, 3) with the body's x, y and z axes as
+    !> columns in reference coordinates (from `rotation` or `axes`); not allocated: the
+    !> reference axes.
+    real(wp), allocatable :: axes(:, :)
     character(len=:), allocatable :: planar_var, spatial_var
   end type mass_rec_t
 

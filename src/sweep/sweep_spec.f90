@@ -6,10 +6,11 @@
 !> same file gets the same cases without any communication. A case is applied to the base
 !> scene as text (`set_raw`), so the scene reader checks every case like a hand-written file.
 module sweep_spec
-  use core_kinds, only: wp, i8
-  use core_error, only: error_t, ERR_INPUT, ERR_INTERNAL
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_INPUT
   use core_strings, only: int_str, real_str, lower_case
   use io_namelist, only: nml_file_t, nml_group_t, string_t
+  use io_namelist_lexer, only: is_name
   use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS, SCHEMA, find_spec, kind_name, VK_REAL, &
     VK_INT
   implicit none
@@ -51,15 +52,37 @@ module sweep_spec
   !> spacing of integers carries round-off.
   real(wp), parameter :: INT_TOL = 1.0e-9_wp
 
-  ! splitmix64 (Steele, Lea and Flood 2014) constants, as the bit patterns of int64.
-  integer(i8), parameter :: SM_GAMMA = int(z'9E3779B97F4A7C15', i8)
-  integer(i8), parameter :: SM_MUL1 = int(z'BF58476D1CE4E5B9', i8)
-  integer(i8), parameter :: SM_MUL2 = int(z'94D049BB133111EB', i8)
-  integer(i8), parameter :: MASK16 = 65535_i8, MASK32 = 4294967295_i8
+  interface
+    !> The variable that names a group of a repeating kind (in sweep_spec_cases, which uses it
+    !> too: gfortran does not export a private procedure of the parent).
+    pure module function key_var(group) result(v)
+      character(len=*), intent(in) :: group
+      character(len=:), allocatable :: v
+    end function key_var
+    module subroutine gen_product(this, err)
+      type(sweep_spec_t), intent(inout) :: this
+      type(error_t), intent(inout) :: err
+    end subroutine gen_product
+    module subroutine gen_zip(this, err)
+      type(sweep_spec_t), intent(inout) :: this
+      type(error_t), intent(inout) :: err
+    end subroutine gen_zip
+    !> Mode 'random' or 'lhs' (docs/sweep.md).
+    module subroutine gen_sampled(this, err)
+      type(sweep_spec_t), intent(inout) :: this
+      type(error_t), intent(inout) :: err
+    end subroutine gen_sampled
+    !> scene_file = base with case icase's values written into it. Errors name the sweep
+    !> file, the &parameter and the base scene.
+    module subroutine apply_case(spec, base, icase, scene_file, err)
+      type(sweep_spec_t), intent(in) :: spec
+      type(nml_file_t), intent(in) :: base
+      integer, intent(in) :: icase
+      type(nml_file_t), intent(out) :: scene_file
+      type(error_t), intent(out) :: err
+    end subroutine apply_case
+  end interface
 
-  type :: rng_t
-    integer(i8) :: state = 0
-  end type rng_t
 
 contains
 
@@ -469,240 +492,10 @@ contains
     p%is_int = SCHEMA(k)%kind == VK_INT
   end subroutine split_name
 
-  !> The variable that names a group of a repeating kind.
-  pure function key_var(group) result(v)
-    character(len=*), intent(in) :: group
-    character(len=:), allocatable :: v
-    if (group == 'mass' .or. group == 'force') then
-      v = 'node'
-    else
-      v = 'label'
-    end if
-  end function key_var
-
   pure logical function same_target(a, b)
     type(param_t), intent(in) :: a, b
     same_target = a%group == b%group .and. a%key == b%key .and. a%var == b%var
   end function same_target
-
-  ! ---------------------------------------------------------------- generating the cases
-
-  !> Cartesian product, the first parameter varying slowest.
-  subroutine gen_product(this, err)
-    type(sweep_spec_t), intent(inout) :: this
-    type(error_t), intent(inout) :: err
-    integer(i8) :: n
-    integer :: i, j, r, k, m
-
-    m = size(this%params)
-    n = 1
-    do j = 1, m
-      n = n * size(this%params(j)%list, kind=i8)
-      if (n > huge(0)) then
-        call err%set(ERR_INPUT, this%path // ': the product of the value lists has more than ' &
-          // int_str(huge(0)) // ' cases')
-        return
-      end if
-    end do
-    call alloc_values(this, int(n), err)
-    if (.not. err%ok()) return
-    do i = 1, int(n)
-      r = i - 1
-      do j = m, 1, -1
-        associate (list => this%params(j)%list)
-          k = mod(r, size(list))
-          r = r / size(list)
-          this%values(i, j) = list(k + 1)
-        end associate
-      end do
-    end do
-  end subroutine gen_product
-
-  subroutine gen_zip(this, err)
-    type(sweep_spec_t), intent(inout) :: this
-    type(error_t), intent(inout) :: err
-    character(len=:), allocatable :: lengths
-    integer :: j, n
-
-    n = size(this%params(1)%list)
-    if (any([(size(this%params(j)%list), j = 1, size(this%params))] /= n)) then
-      lengths = ''
-      do j = 1, size(this%params)
-        if (j > 1) lengths = lengths // ', '
-        lengths = lengths // "'" // this%params(j)%name // "' " // &
-          int_str(size(this%params(j)%list))
-      end do
-      call err%set(ERR_INPUT, this%path // ": mode 'zip' needs value lists of equal length, " &
-        // 'got ' // lengths)
-      return
-    end if
-    call alloc_values(this, n, err)
-    if (.not. err%ok()) return
-    do j = 1, size(this%params)
-      this%values(:, j) = this%params(j)%list
-    end do
-  end subroutine gen_zip
-
-  !> Mode 'random': independent uniform samples; mode 'lhs': in each parameter, one sample in
-  !> each of the n_samples equal strata, the strata in a random order. Each parameter draws from
-  !> a stream of its own, so adding a parameter leaves the earlier parameters' values unchanged.
-  subroutine gen_sampled(this, err)
-    type(sweep_spec_t), intent(inout) :: this
-    type(error_t), intent(inout) :: err
-    type(rng_t) :: rng
-    integer, allocatable :: perm(:)
-    integer :: i, j, n
-    real(wp) :: u
-
-    n = this%n_samples
-    call alloc_values(this, n, err)
-    if (.not. err%ok()) return
-    if (this%mode == 'lhs') allocate(perm(n))
-    do j = 1, size(this%params)
-      call rng_init(rng, this%seed, j)
-      if (this%mode == 'lhs') call permutation(rng, perm)
-      do i = 1, n
-        u = uniform(rng)
-        if (this%mode == 'lhs') u = (real(perm(i) - 1, wp) + u) / n
-        this%values(i, j) = sample_at(this%params(j), u)
-      end do
-    end do
-  end subroutine gen_sampled
-
-  !> The value at u in [0, 1) of the parameter's (log-)uniform distribution; integers rounded.
-  pure function sample_at(p, u) result(x)
-    type(param_t), intent(in) :: p
-    real(wp), intent(in) :: u
-    real(wp) :: x, a, b
-    a = p%lo
-    b = p%hi
-    if (p%is_int) then
-      a = a - 0.5_wp
-      b = b + 0.5_wp
-    end if
-    if (p%log) then
-      x = exp(log(a) + u * (log(b) - log(a)))
-    else
-      x = a + u * (b - a)
-    end if
-    x = min(max(x, a), b)   ! exp(log(b)) may round just beyond b
-    if (p%is_int) x = min(max(real(floor(x + 0.5_wp), wp), p%lo), p%hi)
-  end function sample_at
-
-  subroutine alloc_values(this, n, err)
-    type(sweep_spec_t), intent(inout) :: this
-    integer, intent(in) :: n
-    type(error_t), intent(inout) :: err
-    integer :: stat
-    allocate(this%values(n, size(this%params)), stat=stat)
-    if (stat /= 0) call err%set(ERR_INPUT, this%path // ': no memory for ' // int_str(n) // &
-      ' cases')
-  end subroutine alloc_values
-
-  ! ---------------------------------------------------------------- one case
-
-  !> scene_file = base with case icase's values written into it. Errors name the sweep file,
-  !> the &parameter and the base scene.
-  subroutine apply_case(spec, base, icase, scene_file, err)
-    type(sweep_spec_t), intent(in) :: spec
-    type(nml_file_t), intent(in) :: base
-    integer, intent(in) :: icase
-    type(nml_file_t), intent(out) :: scene_file
-    type(error_t), intent(out) :: err
-    integer :: j, k
-
-    if (.not. allocated(spec%values)) then
-      call err%set(ERR_INTERNAL, 'apply_case: the sweep specification is not loaded')
-      return
-    else if (icase < 1 .or. icase > spec%n_cases()) then
-      call err%set(ERR_INTERNAL, 'apply_case: case ' // int_str(icase) // ' is not in 1..' // &
-        int_str(spec%n_cases()))
-      return
-    end if
-    scene_file = base
-    do j = 1, size(spec%params)
-      call set_value(spec%params(j), spec%values(icase, j), scene_file, err)
-      do k = 1, size(spec%params(j)%tied)
-        if (err%ok()) call set_value(spec%params(j)%tied(k), spec%values(icase, j), &
-          scene_file, err)
-      end do
-      if (.not. err%ok()) return
-    end do
-  end subroutine apply_case
-
-  subroutine set_value(p, x, scene_file, err)
-    type(param_t), intent(in) :: p
-    real(wp), intent(in) :: x
-    type(nml_file_t), intent(inout) :: scene_file
-    type(error_t), intent(inout) :: err
-    integer :: ig
-    call find_group(p, scene_file, ig, err)
-    if (.not. err%ok()) return
-    call scene_file%groups(ig)%set_raw(p%var, value_text(x, p%is_int), err)
-    if (.not. err%ok()) call err%prefix(p%origin // ': ')
-  end subroutine set_value
-
-  !> Index in `file%groups` of the group the parameter names.
-  subroutine find_group(p, file, ig, err)
-    type(param_t), intent(in) :: p
-    type(nml_file_t), intent(in) :: file
-    integer, intent(out) :: ig
-    type(error_t), intent(inout) :: err
-    type(nml_group_t) :: g
-    type(error_t) :: e
-    character(len=:), allocatable :: key, keys, kv
-    integer :: k, idx, n_match
-
-    ig = 0
-    if (file%count(p%group) == 0) then
-      call err%set(ERR_INPUT, p%origin // ": the base scene '" // file%path // "' has no &" // &
-        p%group // ' group')
-      return
-    end if
-    if (any(SINGLE_GROUPS == p%group)) then
-      ig = file%group_index(p%group, 1)
-      return
-    end if
-    kv = key_var(p%group)
-    keys = ''
-    n_match = 0
-    do k = 1, file%count(p%group)
-      idx = file%group_index(p%group, k)
-      g = file%groups(idx)   ! a copy: reading the key must not mark it used in the scene
-      call g%get_string(kv, key, e)
-      if (.not. e%ok()) cycle   ! the scene reader reports it
-      if (len(keys) > 0) keys = keys // ', '
-      keys = keys // "'" // key // "'"
-      if (key == p%key) then
-        n_match = n_match + 1
-        if (n_match == 1) ig = idx
-      end if
-    end do
-    if (n_match == 0) then
-      call err%set(ERR_INPUT, p%origin // ': no &' // p%group // " group of the base scene '" &
-        // file%path // "' has " // kv // " '" // p%key // "' (" // kv // 's: ' // keys // ')')
-      ig = 0
-    else if (n_match > 1) then
-      call err%set(ERR_INPUT, p%origin // ': ' // int_str(n_match) // ' &' // p%group // &
-        " groups of the base scene '" // file%path // "' have " // kv // " '" // p%key // &
-        "': the name must pick one")
-      ig = 0
-    end if
-  end subroutine find_group
-
-  !> A value as namelist text: integers as such, reals to full precision.
-  function value_text(x, is_int) result(s)
-    real(wp), intent(in) :: x
-    logical, intent(in) :: is_int
-    character(len=:), allocatable :: s
-    character(len=32) :: buf
-    if (is_int) then
-      write(buf, '(i0)') nint(x)
-    else
-      write(buf, '(es24.16e3)') x
-    end if
-    s = trim(adjustl(buf))
-  end function value_text
 
   ! ---------------------------------------------------------------- sizes
 
@@ -718,82 +511,6 @@ contains
     if (allocated(this%names)) n = size(this%names)
   end function spec_n_parameters
 
-  ! ---------------------------------------------------------------- random numbers
-  !
-  ! splitmix64 written with bit operations and 16/32-bit limbs: Fortran integers are signed and
-  ! their overflow is undefined, so the mod-2**64 sums and products are built from pieces that
-  ! cannot overflow. The stream is then the same with every compiler and option.
-
-  !> Stream `stream` of seed `seed`: the seed and stream number are hashed into the state.
-  pure subroutine rng_init(rng, seed, stream)
-    type(rng_t), intent(out) :: rng
-    integer, intent(in) :: seed, stream
-    rng%state = mix64(add64(mix64(int(seed, i8)), int(stream, i8)))
-  end subroutine rng_init
-
-  integer(i8) function next64(rng) result(z)
-    type(rng_t), intent(inout) :: rng
-    rng%state = add64(rng%state, SM_GAMMA)
-    z = mix64(rng%state)
-  end function next64
-
-  !> Uniform in [0, 1): the top 53 bits, exactly representable.
-  real(wp) function uniform(rng) result(u)
-    type(rng_t), intent(inout) :: rng
-    u = real(ishft(next64(rng), -11), wp) * 2.0_wp**(-53)
-  end function uniform
-
-  !> A uniformly random permutation of 1..n (Fisher-Yates).
-  subroutine permutation(rng, perm)
-    type(rng_t), intent(inout) :: rng
-    integer, intent(out) :: perm(:)
-    integer :: i, k, tmp
-    perm = [(i, i = 1, size(perm))]
-    do i = size(perm), 2, -1
-      k = min(int(uniform(rng) * i) + 1, i)
-      tmp = perm(i)
-      perm(i) = perm(k)
-      perm(k) = tmp
-    end do
-  end subroutine permutation
-
-  pure integer(i8) function mix64(x) result(z)
-    integer(i8), intent(in) :: x
-    z = mul64(ieor(x, ishft(x, -30)), SM_MUL1)
-    z = mul64(ieor(z, ishft(z, -27)), SM_MUL2)
-    z = ieor(z, ishft(z, -31))
-  end function mix64
-
-  !> a + b mod 2**64 on the bit patterns.
-  pure integer(i8) function add64(a, b) result(r)
-    integer(i8), intent(in) :: a, b
-    integer(i8) :: lo, hi
-    lo = iand(a, MASK32) + iand(b, MASK32)
-    hi = ishft(a, -32) + ishft(b, -32) + ishft(lo, -32)
-    r = ior(iand(lo, MASK32), ishft(iand(hi, MASK32), 32))
-  end function add64
-
-  !> a * b mod 2**64 on the bit patterns, by 16-bit limbs (every partial product < 2**32).
-  pure integer(i8) function mul64(a, b) result(r)
-    integer(i8), intent(in) :: a, b
-    integer(i8) :: al(0:3), bl(0:3), acc, carry
-    integer :: i, k
-    do i = 0, 3
-      al(i) = iand(ishft(a, -16 * i), MASK16)
-      bl(i) = iand(ishft(b, -16 * i), MASK16)
-    end do
-    r = 0
-    carry = 0
-    do k = 0, 3
-      acc = carry
-      do i = 0, k
-        acc = acc + al(i) * bl(k - i)
-      end do
-      r = ior(r, ishft(iand(acc, MASK16), 16 * k))
-      carry = ishft(acc, -16)
-    end do
-  end function mul64
-
   ! ---------------------------------------------------------------- text helpers
 
   function join(items) result(s)
@@ -806,13 +523,4 @@ contains
       s = s // trim(items(i))
     end do
   end function join
-
-  pure logical function is_name(s)
-    character(len=*), intent(in) :: s
-    character(len=*), parameter :: LETTERS = 'abcdefghijklmnopqrstuvwxyz'
-    is_name = .false.
-    if (len(s) == 0) return
-    is_name = index(LETTERS, s(1:1)) > 0 .and. verify(s, LETTERS // '0123456789_') == 0
-  end function is_name
-
 end module sweep_spec

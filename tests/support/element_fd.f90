@@ -6,10 +6,12 @@
 module element_fd
   use core_kinds, only: wp
   use elements_base, only: element_t
+  use testing, only: suite_t
+  use fd_helpers, only: relerr, flat
   implicit none
   private
   public :: evaluate, modes, jacobian, second, fd_jacobian, fd_second, fd_hessian, &
-    polar_hessian, fd_weight_force
+    polar_hessian, fd_weight_force, expect_derivatives
 
 contains
 
@@ -125,4 +127,32 @@ contains
       f(k) = -(potp - potm) / (2 * h)
     end do
   end function fd_weight_force
+  !> The three derivative checks of a rotation element at x along v, with steps scaled by zs,
+  !> the distance of x to the element's singularity (each test says why): de against central
+  !> differences at h = 1e-6 zs (truncation (h / zs)^2 ~ 1e-12, round-off ~ 10 eps |e| / h),
+  !> bound 1e-7 relative to max(|de|, 1); second against the 5-point rule at s = 1e-2
+  !> (|v| ~ 0.3 zs: truncation ~ 1e-12, round-off ~ 50 eps |e| / s^2 <= 7e-9), bound 1e-7
+  !> relative to max(|d2e|, |v|^2); the polarised Hessian of each mode against differences of
+  !> de at h = 1e-5 zs (truncation ~ 1e-10, round-off 10 eps |de| / h), bound 1e-7. The
+  !> results go to the suite's categories c_de, c_d2 and c_pol.
+  subroutine expect_derivatives(ts, el, x, v, zs, what, c_de, c_d2, c_pol)
+    type(suite_t), intent(inout) :: ts
+    class(element_t), intent(in) :: el
+    real(wp), intent(in) :: x(:), v(:), zs
+    character(len=*), intent(in) :: what
+    integer, intent(in) :: c_de, c_d2, c_pol
+    real(wp) :: err
+    integer :: m
+    call ts%expect(what // ' de', relerr(flat(jacobian(el, x)), &
+      flat(fd_jacobian(el, x, 1.0e-6_wp * zs)), 1.0_wp), 1.0e-7_wp, c_de)
+    call ts%expect(what // ' second vs FD d2/ds2', relerr(second(el, x, v), &
+      fd_second(el, x, v, 1.0e-2_wp), dot_product(v, v)), 1.0e-7_wp, c_d2)
+    err = 0.0_wp
+    do m = 1, el%n_modes()
+      err = max(err, relerr(flat(polar_hessian(el, x, m)), flat(fd_hessian(el, x, m, &
+        1.0e-5_wp * zs)), 1.0_wp))
+    end do
+    call ts%expect(what // ' Hessian (polarised second) vs FD, all modes', err, 1.0e-7_wp, &
+      c_pol)
+  end subroutine expect_derivatives
 end module element_fd

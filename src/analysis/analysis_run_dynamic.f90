@@ -1,0 +1,218 @@
+!> The dynamic analysis of a run: the integrator and its options, the full or reduced model,
+!> the controllers' sampling times and feedforward.
+submodule (analysis_run) analysis_run_dynamic
+  implicit none
+
+contains
+
+  module procedure run_dynamic
+    type(integrator_options_t) :: opts
+    real(wp), allocatable :: breaks(:), v0(:), q_aug(:), v_aug(:)
+    integer :: i
+    this%time = output_times(this%scene%dynamic)
+    opts = integrator_options(this%scene%dynamic)
+    opts%progress => this%progress
+    call this%progress%start(merge('reduced', 'dynamic', this%scene%reduction%active), &
+      this%time(1), this%time(size(this%time)))
+    this%dyn%jacobian_kind = this%scene%dynamic%jacobian
+    allocate(breaks(0))
+    do i = 1, this%dyn%model%n_motions
+      breaks = [breaks, this%dyn%model%motions(i)%breakpoints()]
+    end do
+    breaks = [breaks, sample_times(this%dyn%model, this%time(1), this%time(size(this%time)))]
+    this%dyn%controls_on = size(this%dyn%model%controllers) > 0
+    if (this%scene%reduction%active) then
+      call run_reduced(this, opts, breaks, err)
+    else
+      if (opts%method == 'auto') call choose_integrator(this, opts, full_omega_max(this))
+      call this%dyn%allocate_history(size(this%time))
+      allocate(v0(this%dyn%model%n_dy))
+      v0 = 0.0_wp
+      if (this%dyn%controls_on) then
+        call this%control%init(this%dyn, this%dyn, this%dyn%model%n_dy, this%time(1))
+        call this%control%allocate_history(size(this%time))
+        call add_feedforward(this, err)
+        if (.not. err%ok()) return
+        call this%control%state(this%q_static, v0, q_aug, v_aug)
+        call this%control%check_sampling(this%time(1), q_aug, v_aug)
+        call integrate(this%control, opts, this%time, q_aug, v_aug, breaks, this%stats, err)
+      else
+        call integrate(this%dyn, opts, this%time, this%q_static, v0, breaks, this%stats, err)
+      end if
+    end if
+    this%dyn%controls_on = .false.
+    if (.not. err%ok() .and. allocated(this%dyn%last_error%message)) &
+      err%message = err%message // ' (' // this%dyn%last_error%message // ')'
+    if (.not. err%ok() .and. allocated(this%control%hint)) then
+      if (len(this%control%hint) > 0) err%message = err%message // '. A sampled ' // &
+        'controller may be unstable: ' // this%control%hint(3:)
+    end if
+    if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a,i0,a)') 'dynamic: ', &
+      this%stats%n_steps, ' steps, ', this%stats%n_rhs_evals, ' evaluations, ', &
+      this%stats%n_jac_evals, ' Jacobians'
+  end procedure run_dynamic
+
+  !> integrator = 'auto' below rtol 1e-6: BDF unless the model is stiff (model_scene's
+  !> auto_by_stiffness); omega_max < 0: not known, taken as stiff. The choice and its reason
+  !> go to the result (attributes integrator, integrator_choice) and the summary.
+  subroutine choose_integrator(this, opts, omega_max)
+    type(run_t), intent(inout) :: this
+    type(integrator_options_t), intent(inout) :: opts
+    real(wp), intent(in) :: omega_max
+    real(wp) :: span
+    span = this%time(size(this%time)) - this%time(1)
+    if (omega_max < 0.0_wp) then
+      opts%method = 'galpha_adaptive'
+      this%integrator_choice = 'auto: the fastest mode is not computed for models of more ' // &
+        'than ' // int_str(AUTO_MODAL_MAX) // ' dynamic coordinates; taken as stiff'
+    else
+      opts%method = auto_by_stiffness(omega_max, span)
+      this%integrator_choice = 'auto: the fastest mode (' // approx_str(omega_max / TWO_PI) // &
+        ' Hz) turns through ' // approx_str(omega_max * span) // ' rad over the run, ' // &
+        trim(merge('stiff    ', 'not stiff', opts%method == 'galpha_adaptive')) // &
+        ' (limit 1000 rad)'
+    end if
+    this%scene%dynamic%integrator = trim(opts%method)
+    if (this%verbose) write(*, '(a)') 'integrator: ' // trim(opts%method) // ' (' // &
+      this%integrator_choice // ')'
+  end subroutine choose_integrator
+
+  !> The fastest natural frequency [rad/s] of the full model at the start (joints locked), or
+  !> -1 when the model is too large for all its modes or they cannot be computed (a singular
+  !> mass matrix): then it is taken as stiff, which a large model is.
+  real(wp) function full_omega_max(this) result(omega)
+    type(run_t), intent(inout) :: this
+    type(modal_result_t) :: modes
+    type(error_t) :: err
+    omega = -1.0_wp
+    if (this%dyn%model%n_dy > AUTO_MODAL_MAX) return
+    call modal_analysis(this%dyn, this%time(1), this%q_static, 0, modes, err, 'lapack')
+    if (err%ok()) omega = sqrt(max(maxval(modes%omega2), 0.0_wp))
+  end function full_omega_max
+
+  !> Output every output_dt, and at t_end exactly (once, even when t_end is not a multiple).
+  function output_times(d) result(time)
+    type(dynamic_rec_t), intent(in) :: d
+    real(wp), allocatable :: time(:)
+    integer :: nt, k
+    nt = floor(d%t_end / d%output_dt * (1 + 1.0e-12_wp)) + 1
+    time = [((k - 1) * d%output_dt, k=1, nt)]
+    if (d%t_end - time(nt) > 1.0e-9_wp * d%output_dt) then
+      time = [time, d%t_end]
+    else
+      time(nt) = d%t_end
+    end if
+  end function output_times
+
+  function integrator_options(d) result(opts)
+    type(dynamic_rec_t), intent(in) :: d
+    type(integrator_options_t) :: opts
+    opts%method = d%integrator
+    opts%rtol = d%rtol
+    opts%atol = d%atol
+    opts%max_step = d%max_step
+    opts%max_order = d%max_order
+    opts%erk_order = d%erk_order
+    opts%jacobian = 'system'
+    if (d%jacobian == 'internal') opts%jacobian = 'internal'
+    opts%dt = d%dt
+    opts%rho_inf = d%rho_inf
+  end function integrator_options
+
+  !> The reduced dynamic analysis: basis at the configuration the input names, then the
+  !> integration in eta. The full model's histories end up in this%dyn as for a full run.
+  subroutine run_reduced(this, opts, breaks, err)
+    type(run_t), intent(inout) :: this
+    type(integrator_options_t), intent(in) :: opts
+    real(wp), intent(in) :: breaks(:)
+    type(error_t), intent(out) :: err
+    type(update_spec_t) :: update
+    type(integrator_options_t) :: run_opts
+    associate (r => this%scene%reduction)
+      update%mode = r%update
+      update%interval = r%update_interval
+      update%mac_threshold = r%mac_threshold
+      update%eigensolver = r%eigensolver
+      if (r%joints == 'held') call held_joints(this%dyn%model, update%held, err)
+      if (.not. err%ok()) return
+      if (allocated(this%red)) deallocate(this%red)
+      allocate(this%red)
+      this%red%dyn = this%dyn
+      ! The basis is the open-loop plant's; the controllers act in the integration.
+      this%red%dyn%controls_on = .false.
+      this%red%static_correction = r%static_correction
+      ! &linear times linearises at the basis each sample was computed in.
+      this%red%keep_bases = this%scene%linear%active .and. allocated(this%scene%linear%times)
+      call reduction_basis(this, this%red%dyn, this%red%basis, err)
+      if (.not. err%ok()) return
+      if (r%static_correction .and. .not. allocated(this%red%basis%k_chol)) then
+        call err%set(ERR_INPUT, 'group &reduction: static_correction needs a positive ' // &
+          'definite stiffness at the basis configuration (a dynamic mode has no stiffness)')
+        return
+      end if
+    end associate
+    this%initial_basis = this%red%basis
+    run_opts = opts
+    if (run_opts%method == 'auto') call choose_integrator(this, run_opts, &
+      TWO_PI * maxval(this%red%basis%frequency_hz))
+    if (this%verbose) write(*, '(a,i0,a,*(f0.3,:,", "))') 'reduction: ', &
+      this%red%basis%k(), ' modes (' // this%red%basis%reason // '), [Hz]: ', &
+      this%red%basis%frequency_hz
+    flush(output_unit)
+    call this%red%allocate_history(size(this%time))
+    this%red%dyn%controls_on = this%dyn%controls_on
+    if (this%red%dyn%controls_on) then
+      call this%control%init(this%red, this%red%dyn, this%red%basis%k(), this%time(1))
+      call this%control%allocate_history(size(this%time))
+      call add_feedforward(this, err)
+      if (.not. err%ok()) return
+      block
+        real(wp), allocatable :: eta(:), eta_dot(:)
+        call this%control%state(0.0_wp * this%red%basis%v(1, :), &
+          0.0_wp * this%red%basis%v(1, :), eta, eta_dot)
+        call this%control%check_sampling(this%time(1), eta, eta_dot)
+      end block
+      call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
+        this%updates, err, this%control)
+    else
+      call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
+        this%updates, err)
+    end if
+    ! What follows (&linear along the run) analyses the open loop.
+    this%red%dyn%controls_on = .false.
+    this%dyn = this%red%dyn
+    if (this%verbose .and. err%ok() .and. update%mode /= 'none') write(*, '(a,i0,a,i0,a)') &
+      'reduction: ', this%updates%n_updates, ' basis updates in ', size(this%updates%time), &
+      ' checks'
+  end subroutine run_reduced
+
+  !> The rigid-body model for the controllers' feedforward, when one asks for it.
+  subroutine add_feedforward(this, err)
+    type(run_t), intent(inout) :: this
+    type(error_t), intent(inout) :: err
+    type(model_t) :: rigid
+    integer, allocatable :: ff_q(:)
+    if (.not. any(this%dyn%model%controllers%feedforward)) return
+    call build_rigid_model(this%scene, this%dyn%model, rigid, ff_q, err)
+    if (err%ok()) call this%control%set_feedforward(rigid, ff_q, err)
+    if (.not. err%ok()) call err%prefix('group &controller: ')
+  end subroutine add_feedforward
+
+  !> The sampling times of the sampled controllers within (t0, t_end], t0 + i T: breakpoints
+  !> where the integrator restarts with the new held outputs.
+  function sample_times(model, t0, t_end) result(times)
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: t0, t_end
+    real(wp), allocatable :: times(:)
+    integer :: k, i, n
+    allocate(times(0))
+    do k = 1, size(model%controllers)
+      associate (c => model%controllers(k))
+        if (.not. c%sampled()) cycle
+        n = floor((t_end - t0) / c%period)
+        times = [times, [(t0 + i * c%period, i = 1, n)]]
+      end associate
+    end do
+  end function sample_times
+
+end submodule analysis_run_dynamic
