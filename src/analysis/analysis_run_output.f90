@@ -35,6 +35,7 @@ contains
     if (err%ok()) call h5%write_string_attr('/', 'title', this%scene%title, err)
     if (err%ok()) call h5%write_string_attr('/', 'status', 'ok', err)
     if (err%ok()) call h5%write_real_attr('/', 'wall_time_s', this%wall_time_s, err)
+    if (err%ok()) call h5%write_real_attr('/', 'cpu_time_s', this%cpu_time_s, err)
     if (err%ok()) call h5%write_int_attr('/', 'n_dynamic_coordinates', this%dyn%model%n_dy, err)
     if (err%ok()) call h5%write_int_attr('/', 'n_elements', this%dyn%model%n_elements, err)
     if (err%ok()) call h5%write_int_attr('/', 'n_kinematic_solves', this%dyn%kin%n_solves, err)
