@@ -173,6 +173,98 @@ module dynamics_system
     end subroutine dyn_error_norm
   end interface
 
+  interface
+    !> Stresses of the elements with elastic modes, from e = D(x) and e_dot = D_x x_dot at the
+    !> last kinematic solution, subtracted from the nodal forces f as -D_x^T sigma.
+    module subroutine dyn_elastic_forces(this, xd, f)
+      class(dynamics_t), intent(in) :: this
+      real(wp), intent(in) :: xd(:)
+      real(wp), intent(inout) :: f(:)
+    end subroutine dyn_elastic_forces
+    !> Structural stiffness and damping on the dynamic coordinates, K0 and D0, at the last
+    !> evaluation: the constant part of the dynamic modes plus DF_e^T S DF_e (and its damping)
+    !> of the elastic elements (the K0 part; their geometric part sigma D2F is left to the
+    !> difference tangent of statics). Assembled here, for the Jacobians that ask for it, not
+    !> in every evaluation.
+    module subroutine dyn_structural_stiffness(this, k0, d0)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(out) :: k0(:, :), d0(:, :)
+    end subroutine dyn_structural_stiffness
+    !> K0 v and D0 v for a few vectors v (n_dy, k) whose nodal shapes w = DF_dy v are given
+    !> (n_x, k), without forming K0: the dynamic modes element by element, the elastic elements
+    !> as nodal forces D_x^T S D_x w projected by DF_dy^T (k transposed solves). O(n k).
+    module subroutine dyn_structural_action(this, v, w, kv, dv)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: v(:, :), w(:, :)
+      real(wp), intent(out) :: kv(:, :), dv(:, :)
+    end subroutine dyn_structural_action
+  end interface
+
+  interface
+    module subroutine dyn_allocate_history(this, nt)
+      class(dynamics_t), intent(inout) :: this
+      integer, intent(in) :: nt
+    end subroutine dyn_allocate_history
+    module subroutine dyn_record(this, k, t, q, v, status)
+      class(dynamics_t), intent(inout) :: this
+      integer, intent(in) :: k
+      real(wp), intent(in) :: t, q(:), v(:)
+      integer, intent(out) :: status
+    end subroutine dyn_record
+    !> Output k from the last kinematic solution, which must belong to (t, q).
+    module subroutine dyn_store(this, k, t, q, v)
+      class(dynamics_t), intent(inout) :: this
+      integer, intent(in) :: k
+      real(wp), intent(in) :: t, q(:), v(:)
+    end subroutine dyn_store
+    !> Kinetic and potential energy (elastic, loads and gravity) at the last kinematic solution,
+    !> which must belong to (t, q_dy).
+    module function dyn_energy(this, t, q_dy, v_dy) result(en)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: t, q_dy(:), v_dy(:)
+      real(wp) :: en(2)
+    end function dyn_energy
+    !> Kinetic and potential energy at (t, q_dy) with nodal positions x and velocities xd.
+    module function dyn_energy_at(this, t, q_dy, x, xd) result(en)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: t, q_dy(:), x(:), xd(:)
+      real(wp) :: en(2)
+    end function dyn_energy_at
+  end interface
+
+  interface
+    !> Kinematics and nodal forces at a state: solves x, x_dot = DF qd, the convective part
+    !> conv = D2F qd qd + DF_rh qdd_rh of the accelerations, the element mass matrices and
+    !> nodal_force = f - M conv - h (+ weight, - elastic stresses); q_now, qd_now, xd_now and
+    !> sigma_now. Everything by solves with the factors of J_c: no dense DF. With dq_dy, also
+    !> w = DF_dy dq_dy at the new solution, in the same solve as x_dot (the Newton correction's
+    !> product: a second right-hand side costs less than a second solve).
+    module subroutine dyn_prepare(this, t, q_dy, v_dy, err, dq_dy, w)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: t, q_dy(:), v_dy(:)
+      type(error_t), intent(out) :: err
+      real(wp), intent(in), optional :: dq_dy(:)
+      real(wp), intent(out), optional :: w(:)
+    end subroutine dyn_prepare
+    !> The generalised force g = DF_dy^T f - sigma_dy at a state (the right-hand side of eq. (1),
+    !> also left in gen_force) by one transposed solve: O(n) on the sparse path, no Mbar. Statics
+    !> differences it for the tangent stiffness.
+    module subroutine dyn_generalised_force(this, t, q_dy, v_dy, g, err)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: t, q_dy(:), v_dy(:)
+      real(wp), intent(out) :: g(:)
+      type(error_t), intent(out) :: err
+    end subroutine dyn_generalised_force
+    !> Mass matrix mbar and generalised force gen_force (the right-hand side) at a state:
+    !>   mbar a = gen_force, with the dense DF (O(n^2) memory, O(n^3) work: for statics, modal
+    !> analysis and small models).
+    module subroutine dyn_assemble(this, t, q_dy, v_dy, err)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: t, q_dy(:), v_dy(:)
+      type(error_t), intent(out) :: err
+    end subroutine dyn_assemble
+  end interface
+
 contains
 
   !> Take ownership of a finalised model and solve the kinematics in its initial state, which
@@ -348,266 +440,6 @@ contains
     end associate
   end subroutine dyn_mode_stiffness
 
-  !> Kinematics and nodal forces at a state: solves x, x_dot = DF qd, the convective part
-  !> conv = D2F qd qd + DF_rh qdd_rh of the accelerations, the element mass matrices and
-  !> nodal_force = f - M conv - h (+ weight, - elastic stresses); q_now, qd_now, xd_now and
-  !> sigma_now. Everything by solves with the factors of J_c: no dense DF. With dq_dy, also
-  !> w = DF_dy dq_dy at the new solution, in the same solve as x_dot (the Newton correction's
-  !> product: a second right-hand side costs less than a second solve).
-  subroutine dyn_prepare(this, t, q_dy, v_dy, err, dq_dy, w)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q_dy(:), v_dy(:)
-    type(error_t), intent(out) :: err
-    real(wp), intent(in), optional :: dq_dy(:)
-    real(wp), intent(out), optional :: w(:)
-    real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
-    real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
-    real(wp) :: dq(this%model%n_q), pot
-    real(wp) :: me_work(this%model%max_dofs, this%model%max_dofs)
-    real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
-    real(wp) :: xe(this%model%max_dofs), xde(this%model%max_dofs), ce(this%model%max_dofs)
-    integer :: iel, nr, nd, k, l
-    logical :: weighted
-    real(wp) :: g(3)
-    this%n_evals = this%n_evals + 1
-    associate (m => this%model)
-      nr = m%n_rh
-      call this%prescribed(t, q(1:nr), qd(1:nr), pdd)
-      q(nr + 1:) = q_dy
-      qd(nr + 1:) = v_dy
-      call this%kin%solve(m, q, err)
-      if (.not. err%ok()) return
-      if (present(dq_dy) .and. present(w)) then
-        block
-          real(wp) :: dq2(m%n_q, 2), xw(m%n_x, 2)
-          dq2(:, 1) = qd
-          dq2(1:nr, 2) = 0.0_wp
-          dq2(nr + 1:, 2) = dq_dy
-          call this%kin%apply_df_many(m, dq2, xw)
-          xd = xw(:, 1)
-          w = xw(:, 2)
-        end block
-      else
-        call this%kin%apply_df(m, qd, xd)
-      end if
-      dq = 0.0_wp
-      dq(1:nr) = pdd
-      call this%kin%second(m, qd, conv, xd, dq)
-      rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
-      weighted = any(m%gravity /= 0)
-      g = this%load_factor * m%gravity
-      do iel = 1, m%n_elements
-        if (this%mass%offset(iel) == 0) cycle
-        nd = size(m%elements(iel)%e%dofs)
-        associate (el => m%elements(iel)%e, me => me_work(1:nd, 1:nd), he => he_work(1:nd), &
-                   fe => fe_work(1:nd), first => this%mass%offset(iel))
-          ! Gathered: vector-subscripted actual arguments would be temporaries per element.
-          do k = 1, nd
-            xe(k) = this%kin%x(el%dofs(k))
-            xde(k) = xd(el%dofs(k))
-            ce(k) = conv(el%dofs(k))
-          end do
-          call el%inertia(xe(1:nd), xde(1:nd), me, he)
-          fe = 0.0_wp
-          if (weighted) call el%weight(xe(1:nd), g(1:m%dim), fe, pot)
-          fe = fe - he
-          ! By hand: the element is small and matmul/reshape here cost more than the product.
-          do l = 1, nd
-            do k = 1, nd
-              fe(k) = fe(k) - me(k, l) * ce(l)
-              this%mass%val(first + (l - 1) * nd + k - 1) = me(k, l)
-            end do
-          end do
-          do k = 1, nd
-            rhs(el%dofs(k)) = rhs(el%dofs(k)) + fe(k)
-          end do
-        end associate
-      end do
-      this%xd_now = xd
-      if (size(m%moment_lambda) > 0) call add_moments(m, t, this%kin%x, this%load_factor, rhs)
-      if (m%n_elastic > 0) call this%elastic_forces(xd, rhs)
-      this%nodal_force = rhs
-      this%q_now = q
-      this%qd_now = qd
-      this%sigma_now = this%stresses(q, qd)
-      ! An actuator's torque works on its mode like a stress of the opposite sign.
-      if (size(m%actuator_element) > 0) this%sigma_now = this%sigma_now - &
-        this%load_factor * m%actuator_forces(t)
-      if (this%controls_on) call this%apply_controllers(t, err)
-    end associate
-  end subroutine dyn_prepare
-
-  !> Nodal forces of the moments on spatial nodes: M . omega_global = M . 2 E(lambda) lambda'
-  !> gives 2 E^T M on the Euler parameters, E = [-lv, l0 I + [lv x]]. A moment fixed in space
-  !> is not conservative under large 3D rotations: it has no potential in the energy output.
-  pure subroutine add_moments(model, t, x, factor, f)
-    type(model_t), intent(in) :: model
-    real(wp), intent(in) :: t, x(:), factor
-    real(wp), intent(inout) :: f(:)
-    real(wp) :: e(3, 4)
-    integer :: k, i
-    do k = 1, size(model%moment_lambda)
-      i = model%moment_lambda(k)
-      e = euler_e(x(i:i + 3))
-      f(i:i + 3) = f(i:i + 3) + 2 * factor * matmul(transpose(e), model%moment_at(k, t))
-    end do
-  end subroutine add_moments
-
-  !> The generalised force g = DF_dy^T f - sigma_dy at a state (the right-hand side of eq. (1),
-  !> also left in gen_force) by one transposed solve: O(n) on the sparse path, no Mbar. Statics
-  !> differences it for the tangent stiffness.
-  subroutine dyn_generalised_force(this, t, q_dy, v_dy, g, err)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q_dy(:), v_dy(:)
-    real(wp), intent(out) :: g(:)
-    type(error_t), intent(out) :: err
-    real(wp) :: g_q(this%model%n_q)
-    call this%prepare(t, q_dy, v_dy, err)
-    if (.not. err%ok()) return
-    call this%kin%apply_dft(this%model, this%nodal_force, g_q)
-    g = g_q(this%model%n_rh + 1:) - this%sigma_now
-    this%gen_force = g
-  end subroutine dyn_generalised_force
-
-  !> Mass matrix mbar and generalised force gen_force (the right-hand side) at a state:
-  !>   mbar a = gen_force, with the dense DF (O(n^2) memory, O(n^3) work: for statics, modal
-  !> analysis and small models).
-  subroutine dyn_assemble(this, t, q_dy, v_dy, err)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q_dy(:), v_dy(:)
-    type(error_t), intent(out) :: err
-    integer :: nr
-    call this%prepare(t, q_dy, v_dy, err)
-    if (.not. err%ok()) return
-    call this%kin%transfer(this%model)
-    nr = this%model%n_rh
-    associate (dfd => this%kin%df(:, nr + 1:))
-      this%mbar = matmul(transpose(dfd), this%mass%times(this%model, dfd))
-      this%gen_force = matmul(this%nodal_force, dfd) - this%sigma_now
-    end associate
-  end subroutine dyn_assemble
-
-  !> Stresses of the elements with elastic modes, from e = D(x) and e_dot = D_x x_dot at the
-  !> last kinematic solution, subtracted from the nodal forces f as -D_x^T sigma.
-  subroutine dyn_elastic_forces(this, xd, f)
-    class(dynamics_t), intent(in) :: this
-    real(wp), intent(in) :: xd(:)
-    real(wp), intent(inout) :: f(:)
-    real(wp), allocatable :: e(:), de(:, :), s(:, :), sigma(:)
-    integer :: iel, nm
-    associate (m => this%model)
-      do iel = 1, m%n_elements
-        if (.not. m%elastic_element(iel)) cycle
-        associate (el => m%elements(iel)%e)
-          nm = el%n_modes()
-          allocate(e(nm), de(nm, size(el%dofs)), s(nm, nm))
-          call el%evaluate(this%kin%x(el%dofs), e, de)
-          call el%stiffness(s)
-          sigma = matmul(s, e + el%damping * matmul(de, xd(el%dofs)))
-          where (.not. stressed_modes(m, iel)) sigma = 0.0_wp
-          f(el%dofs) = f(el%dofs) - matmul(sigma, de)
-          deallocate(e, de, s)
-        end associate
-      end do
-    end associate
-  end subroutine dyn_elastic_forces
-
-  !> Which modes of element iel carry a stress (dynamic and elastic ones).
-  pure function stressed_modes(m, iel) result(stressed)
-    type(model_t), intent(in) :: m
-    integer, intent(in) :: iel
-    logical :: stressed(m%elements(iel)%e%n_modes())
-    stressed = mode_has_stress(m%modes(m%mode_first(iel):m%mode_first(iel) + &
-      size(stressed) - 1)%class)
-  end function stressed_modes
-
-  !> Structural stiffness and damping on the dynamic coordinates, K0 and D0, at the last
-  !> evaluation: the constant part of the dynamic modes plus DF_e^T S DF_e (and its damping)
-  !> of the elastic elements (the K0 part; their geometric part sigma D2F is left to the
-  !> difference tangent of statics). Assembled here, for the Jacobians that ask for it, not
-  !> in every evaluation.
-  subroutine dyn_structural_stiffness(this, k0, d0)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(out) :: k0(:, :), d0(:, :)
-    real(wp), allocatable :: e(:), de(:, :), s(:, :), dfe(:, :), sdfe(:, :)
-    logical, allocatable :: stressed(:)
-    integer :: iel, nm
-    call this%mode_stiffness(k0, d0)
-    if (this%model%n_elastic > 0 .and. .not. this%kin%has_df) call this%kin%transfer(this%model)
-    associate (m => this%model)
-      do iel = 1, m%n_elements
-        if (.not. m%elastic_element(iel)) cycle
-        associate (el => m%elements(iel)%e)
-          nm = el%n_modes()
-          allocate(e(nm), de(nm, size(el%dofs)), s(nm, nm))
-          call el%evaluate(this%kin%x(el%dofs), e, de)
-          call el%stiffness(s)
-          stressed = stressed_modes(m, iel)
-          dfe = matmul(de, this%kin%df(el%dofs, m%n_rh + 1:))
-          where (spread(.not. stressed, 2, size(dfe, 2))) dfe = 0.0_wp
-          sdfe = matmul(transpose(dfe), matmul(s, dfe))
-          k0 = k0 + sdfe
-          d0 = d0 + el%damping * sdfe
-          deallocate(e, de, s)
-        end associate
-      end do
-    end associate
-  end subroutine dyn_structural_stiffness
-
-  !> K0 v and D0 v for a few vectors v (n_dy, k) whose nodal shapes w = DF_dy v are given
-  !> (n_x, k), without forming K0: the dynamic modes element by element, the elastic elements
-  !> as nodal forces D_x^T S D_x w projected by DF_dy^T (k transposed solves). O(n k).
-  subroutine dyn_structural_action(this, v, w, kv, dv)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: v(:, :), w(:, :)
-    real(wp), intent(out) :: kv(:, :), dv(:, :)
-    real(wp), allocatable :: e(:), de(:, :), s(:, :), sdfe(:, :)
-    real(wp) :: gk(this%model%n_x, size(v, 2)), gd(this%model%n_x, size(v, 2))
-    real(wp) :: proj(this%model%n_q)
-    integer :: iel, i, j, nm, qi, qj
-    kv = 0.0_wp
-    dv = 0.0_wp
-    gk = 0.0_wp
-    gd = 0.0_wp
-    associate (m => this%model)
-      do iel = 1, m%n_elements
-        associate (el => m%elements(iel)%e)
-          nm = el%n_modes()
-          allocate(s(nm, nm))
-          call el%stiffness(s)
-          if (m%elastic_element(iel)) then
-            allocate(e(nm), de(nm, size(el%dofs)))
-            call el%evaluate(this%kin%x(el%dofs), e, de)
-            where (.not. spread(stressed_modes(m, iel), 2, size(el%dofs))) de = 0.0_wp
-            sdfe = matmul(transpose(de), matmul(s, matmul(de, w(el%dofs, :))))
-            gk(el%dofs, :) = gk(el%dofs, :) + sdfe
-            gd(el%dofs, :) = gd(el%dofs, :) + el%damping * sdfe
-            deallocate(e, de)
-          else
-            do j = 1, nm
-              if (m%modes(m%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
-              qj = m%modes(m%mode_first(iel) + j - 1)%q - m%n_rh
-              do i = 1, nm
-                if (m%modes(m%mode_first(iel) + i - 1)%class /= MODE_DYNAMIC) cycle
-                qi = m%modes(m%mode_first(iel) + i - 1)%q - m%n_rh
-                kv(qi, :) = kv(qi, :) + s(i, j) * v(qj, :)
-                dv(qi, :) = dv(qi, :) + el%damping * s(i, j) * v(qj, :)
-              end do
-            end do
-          end if
-          deallocate(s)
-        end associate
-      end do
-      if (m%n_elastic == 0) return
-      do j = 1, size(v, 2)
-        call this%kin%apply_dft(m, gk(:, j), proj)
-        kv(:, j) = kv(:, j) + proj(m%n_rh + 1:)
-        call this%kin%apply_dft(m, gd(:, j), proj)
-        dv(:, j) = dv(:, j) + proj(m%n_rh + 1:)
-      end do
-    end associate
-  end subroutine dyn_structural_action
-
   !> Accelerations of the dynamic coordinates, by the sparse or the dense path.
   subroutine dyn_evaluate(this, t, q_dy, v_dy, a, err)
     class(dynamics_t), intent(inout) :: this
@@ -700,91 +532,4 @@ contains
   end subroutine dyn_report
 
 
-  subroutine dyn_allocate_history(this, nt)
-    class(dynamics_t), intent(inout) :: this
-    integer, intent(in) :: nt
-    if (allocated(this%x_hist)) deallocate(this%x_hist, this%q_hist, this%v_hist, this%energy_hist)
-    allocate(this%x_hist(this%model%n_x, nt), this%q_hist(this%model%n_dy, nt))
-    allocate(this%v_hist(this%model%n_dy, nt), this%energy_hist(2, nt))
-  end subroutine dyn_allocate_history
-
-  subroutine dyn_record(this, k, t, q, v, status)
-    class(dynamics_t), intent(inout) :: this
-    integer, intent(in) :: k
-    real(wp), intent(in) :: t, q(:), v(:)
-    integer, intent(out) :: status
-    type(error_t) :: err
-    ! An output needs the configuration only (the energy takes the velocities through DF):
-    ! a kinematic solution, not a whole evaluation of the equations of motion.
-    call this%kin%solve(this%model, this%full_q(t, q), err)
-    call this%report(err, status)
-    if (status == 0) call this%store(k, t, q, v)
-  end subroutine dyn_record
-
-  !> Output k from the last kinematic solution, which must belong to (t, q).
-  subroutine dyn_store(this, k, t, q, v)
-    class(dynamics_t), intent(inout) :: this
-    integer, intent(in) :: k
-    real(wp), intent(in) :: t, q(:), v(:)
-    this%x_hist(:, k) = this%kin%x
-    this%q_hist(:, k) = q
-    this%v_hist(:, k) = v
-    this%energy_hist(:, k) = this%energy(t, q, v)
-  end subroutine dyn_store
-
-  !> Kinetic and potential energy (elastic, loads and gravity) at the last kinematic solution,
-  !> which must belong to (t, q_dy).
-  function dyn_energy(this, t, q_dy, v_dy) result(en)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q_dy(:), v_dy(:)
-    real(wp) :: en(2)
-    real(wp) :: qd(this%model%n_q), pdd(this%model%n_rh), xd(this%model%n_x)
-    real(wp) :: q_rh(this%model%n_rh)
-    associate (m => this%model)
-      call this%prescribed(t, q_rh, qd(1:m%n_rh), pdd)
-      qd(m%n_rh + 1:) = v_dy
-      call this%kin%apply_df(m, qd, xd)
-      en = this%energy_at(t, q_dy, this%kin%x, xd)
-    end associate
-  end function dyn_energy
-
-  !> Kinetic and potential energy at (t, q_dy) with nodal positions x and velocities xd.
-  function dyn_energy_at(this, t, q_dy, x, xd) result(en)
-    class(dynamics_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q_dy(:), x(:), xd(:)
-    real(wp) :: en(2)
-    real(wp) :: q(this%model%n_q), qd_rh(this%model%n_rh), pdd(this%model%n_rh), pot
-    real(wp) :: me(this%model%max_dofs, this%model%max_dofs), he(this%model%max_dofs)
-    real(wp) :: fe(this%model%max_dofs), g(3)
-    real(wp) :: e(this%model%max_modes), s(this%model%max_modes, this%model%max_modes)
-    real(wp) :: de(this%model%max_modes, this%model%max_dofs)
-    integer :: iel, nm, nd
-    associate (m => this%model)
-      call this%prescribed(t, q(1:m%n_rh), qd_rh, pdd)
-      q(m%n_rh + 1:) = q_dy
-      en(1) = 0.5_wp * sum(m%lumped * xd**2)
-      en(2) = -this%load_factor * dot_product(this%loads_at(t), x)
-      g = this%load_factor * m%gravity
-      do iel = 1, m%n_elements
-        associate (el => m%elements(iel)%e)
-          nm = el%n_modes()
-          nd = size(el%dofs)
-          if (m%elastic_element(iel)) then
-            call el%evaluate(x(el%dofs), e(:nm), de(:nm, :nd))
-            where (.not. mode_has_stress(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1) &
-                   %class)) e(:nm) = 0.0_wp
-          else
-            call m%mode_values(iel, q, e(:nm))
-          end if
-          call el%stiffness(s(:nm, :nm))
-          en(2) = en(2) + 0.5_wp * dot_product(e(:nm), matmul(s(:nm, :nm), e(:nm)))
-          if (.not. el%has_inertia()) cycle
-          call el%inertia(x(el%dofs), xd(el%dofs), me(:nd, :nd), he(:nd))
-          call el%weight(x(el%dofs), g(1:m%dim), fe(:nd), pot)
-          en(1) = en(1) + 0.5_wp * dot_product(xd(el%dofs), matmul(me(:nd, :nd), xd(el%dofs)))
-          en(2) = en(2) + pot
-        end associate
-      end do
-    end associate
-  end function dyn_energy_at
 end module dynamics_system

@@ -1,0 +1,123 @@
+!> One evaluation of the model at a state: the kinematics, velocities and second-order terms,
+!> the element inertia, loads and stresses as nodal forces (prepare), and what statics and the
+!> dense path take from it.
+submodule (dynamics_system) dynamics_system_prepare
+  implicit none
+
+contains
+
+  module procedure dyn_prepare
+    real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
+    real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
+    real(wp) :: dq(this%model%n_q), pot
+    real(wp) :: me_work(this%model%max_dofs, this%model%max_dofs)
+    real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
+    real(wp) :: xe(this%model%max_dofs), xde(this%model%max_dofs), ce(this%model%max_dofs)
+    integer :: iel, nr, nd, k, l
+    logical :: weighted
+    real(wp) :: g(3)
+    this%n_evals = this%n_evals + 1
+    associate (m => this%model)
+      nr = m%n_rh
+      call this%prescribed(t, q(1:nr), qd(1:nr), pdd)
+      q(nr + 1:) = q_dy
+      qd(nr + 1:) = v_dy
+      call this%kin%solve(m, q, err)
+      if (.not. err%ok()) return
+      if (present(dq_dy) .and. present(w)) then
+        block
+          real(wp) :: dq2(m%n_q, 2), xw(m%n_x, 2)
+          dq2(:, 1) = qd
+          dq2(1:nr, 2) = 0.0_wp
+          dq2(nr + 1:, 2) = dq_dy
+          call this%kin%apply_df_many(m, dq2, xw)
+          xd = xw(:, 1)
+          w = xw(:, 2)
+        end block
+      else
+        call this%kin%apply_df(m, qd, xd)
+      end if
+      dq = 0.0_wp
+      dq(1:nr) = pdd
+      call this%kin%second(m, qd, conv, xd, dq)
+      rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
+      weighted = any(m%gravity /= 0)
+      g = this%load_factor * m%gravity
+      do iel = 1, m%n_elements
+        if (this%mass%offset(iel) == 0) cycle
+        nd = size(m%elements(iel)%e%dofs)
+        associate (el => m%elements(iel)%e, me => me_work(1:nd, 1:nd), he => he_work(1:nd), &
+                   fe => fe_work(1:nd), first => this%mass%offset(iel))
+          ! Gathered: vector-subscripted actual arguments would be temporaries per element.
+          do k = 1, nd
+            xe(k) = this%kin%x(el%dofs(k))
+            xde(k) = xd(el%dofs(k))
+            ce(k) = conv(el%dofs(k))
+          end do
+          call el%inertia(xe(1:nd), xde(1:nd), me, he)
+          fe = 0.0_wp
+          if (weighted) call el%weight(xe(1:nd), g(1:m%dim), fe, pot)
+          fe = fe - he
+          ! By hand: the element is small and matmul/reshape here cost more than the product.
+          do l = 1, nd
+            do k = 1, nd
+              fe(k) = fe(k) - me(k, l) * ce(l)
+              this%mass%val(first + (l - 1) * nd + k - 1) = me(k, l)
+            end do
+          end do
+          do k = 1, nd
+            rhs(el%dofs(k)) = rhs(el%dofs(k)) + fe(k)
+          end do
+        end associate
+      end do
+      this%xd_now = xd
+      if (size(m%moment_lambda) > 0) call add_moments(m, t, this%kin%x, this%load_factor, rhs)
+      if (m%n_elastic > 0) call this%elastic_forces(xd, rhs)
+      this%nodal_force = rhs
+      this%q_now = q
+      this%qd_now = qd
+      this%sigma_now = this%stresses(q, qd)
+      ! An actuator's torque works on its mode like a stress of the opposite sign.
+      if (size(m%actuator_element) > 0) this%sigma_now = this%sigma_now - &
+        this%load_factor * m%actuator_forces(t)
+      if (this%controls_on) call this%apply_controllers(t, err)
+    end associate
+  end procedure dyn_prepare
+
+  !> Nodal forces of the moments on spatial nodes: M . omega_global = M . 2 E(lambda) lambda'
+  !> gives 2 E^T M on the Euler parameters, E = [-lv, l0 I + [lv x]]. A moment fixed in space
+  !> is not conservative under large 3D rotations: it has no potential in the energy output.
+  pure subroutine add_moments(model, t, x, factor, f)
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: t, x(:), factor
+    real(wp), intent(inout) :: f(:)
+    real(wp) :: e(3, 4)
+    integer :: k, i
+    do k = 1, size(model%moment_lambda)
+      i = model%moment_lambda(k)
+      e = euler_e(x(i:i + 3))
+      f(i:i + 3) = f(i:i + 3) + 2 * factor * matmul(transpose(e), model%moment_at(k, t))
+    end do
+  end subroutine add_moments
+
+  module procedure dyn_generalised_force
+    real(wp) :: g_q(this%model%n_q)
+    call this%prepare(t, q_dy, v_dy, err)
+    if (.not. err%ok()) return
+    call this%kin%apply_dft(this%model, this%nodal_force, g_q)
+    g = g_q(this%model%n_rh + 1:) - this%sigma_now
+    this%gen_force = g
+  end procedure dyn_generalised_force
+
+  module procedure dyn_assemble
+    integer :: nr
+    call this%prepare(t, q_dy, v_dy, err)
+    if (.not. err%ok()) return
+    call this%kin%transfer(this%model)
+    nr = this%model%n_rh
+    associate (dfd => this%kin%df(:, nr + 1:))
+      this%mbar = matmul(transpose(dfd), this%mass%times(this%model, dfd))
+      this%gen_force = matmul(this%nodal_force, dfd) - this%sigma_now
+    end associate
+  end procedure dyn_assemble
+end submodule dynamics_system_prepare
