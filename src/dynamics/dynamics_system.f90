@@ -415,29 +415,24 @@ contains
   subroutine dyn_mode_stiffness(this, k0, d0)
     class(dynamics_t), intent(in) :: this
     real(wp), intent(out) :: k0(:, :), d0(:, :)
-    real(wp), allocatable :: s(:, :)
-    integer :: iel, i, j, nm, qi, qj
+    real(wp) :: s(this%model%max_modes, this%model%max_modes)
+    integer :: iel, k, nm, nr
+    ! The dynamic-dynamic terms of stress_entries' list (a prescribed column has q <= n_rh).
     k0 = 0.0_wp
     d0 = 0.0_wp
-    associate (m => this%model)
-      do iel = 1, m%n_elements
-        if (m%elastic_element(iel)) cycle
-        nm = m%elements(iel)%e%n_modes()
-        allocate(s(nm, nm))
-        call m%elements(iel)%e%stiffness(s)
-        do j = 1, nm
-          qj = m%modes(m%mode_first(iel) + j - 1)%q - m%n_rh
-          if (m%modes(m%mode_first(iel) + j - 1)%class /= MODE_DYNAMIC) cycle
-          do i = 1, nm
-            qi = m%modes(m%mode_first(iel) + i - 1)%q - m%n_rh
-            if (m%modes(m%mode_first(iel) + i - 1)%class /= MODE_DYNAMIC) cycle
-            k0(qi, qj) = s(i, j)
-            d0(qi, qj) = m%elements(iel)%e%damping * s(i, j)
-          end do
+    nr = this%model%n_rh
+    do iel = 1, this%model%n_elements
+      if (this%st_first(iel + 1) == this%st_first(iel)) cycle
+      associate (el => this%model%elements(iel)%e)
+        nm = el%n_modes()
+        call el%stiffness(s(1:nm, 1:nm))
+        do k = this%st_first(iel), this%st_first(iel + 1) - 1
+          if (this%st_col(k) <= nr) cycle
+          k0(this%st_row(k), this%st_col(k) - nr) = s(this%st_i(k), this%st_j(k))
+          d0(this%st_row(k), this%st_col(k) - nr) = el%damping * s(this%st_i(k), this%st_j(k))
         end do
-        deallocate(s)
-      end do
-    end associate
+      end associate
+    end do
   end subroutine dyn_mode_stiffness
 
   !> Accelerations of the dynamic coordinates, by the sparse or the dense path.
