@@ -32,7 +32,7 @@ module elements_beam3d
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
   use elements_base, only: element_t
-  use elements_rotation, only: rot_apply, rot_apply_jac, rot_apply_second
+  use elements_rotation, only: rot_apply, rot_apply_jac, rot_apply_second, orthonormal_frame
   use elements_sd, only: sd_t, sd_lin, sd_scale, sd_mul, sd_atan2, sd_sqrt, N_X
   implicit none
   private
@@ -42,9 +42,6 @@ module elements_beam3d
   integer, parameter :: BENDING_SINE = 2
   !> First coordinate of the position and of the Euler parameters of node p (1), q (2).
   integer, parameter :: IPOS(2) = [1, 8], ILAM(2) = [4, 11]
-  !> An orientation vector within this sine of the chord is rejected: ey0 would carry a
-  !> relative rounding error of eps / PARALLEL_TOL and follow noise rather than the user.
-  real(wp), parameter :: PARALLEL_TOL = 1.0e-6_wp
   !> Floor of the squared in-plane norm of c in the angle form: only reached at a bending
   !> angle of pi (tangent opposite to the chord), where the angle form is singular anyway,
   !> or for a collapsed chord or lambda = 0; it keeps those results finite.
@@ -113,25 +110,23 @@ contains
     class(beam3d_t), intent(inout) :: this
     real(wp), intent(in) :: xp(3), xq(3), orient(3)
     type(error_t), intent(out) :: err
-    real(wp) :: lv(3), y(3), no
+    real(wp) :: lv(3), frame(3, 3)
+    logical :: ok
     lv = xq - xp
     this%l0 = norm2(lv)
-    no = norm2(orient)
     if (.not. this%l0 > 0) then
       call err%set(ERR_INPUT, 'beam3d: the two nodes coincide in the reference state')
       return
     end if
-    this%ex0 = lv / this%l0
-    y = orient - dot_product(orient, this%ex0) * this%ex0
-    if (.not. norm2(y) > PARALLEL_TOL * no) then
+    call orthonormal_frame(lv / this%l0, orient, frame, ok)
+    if (.not. ok) then
       call err%set(ERR_INPUT, 'beam3d: the orientation vector is zero or (nearly) parallel '// &
         'to the beam axis')
       return
     end if
-    this%ey0 = y / norm2(y)
-    this%ez0 = [this%ex0(2) * this%ey0(3) - this%ex0(3) * this%ey0(2), &
-                this%ex0(3) * this%ey0(1) - this%ex0(1) * this%ey0(3), &
-                this%ex0(1) * this%ey0(2) - this%ex0(2) * this%ey0(1)]
+    this%ex0 = frame(:, 1)
+    this%ey0 = frame(:, 2)
+    this%ez0 = frame(:, 3)
   end subroutine beam3d_set_geometry
 
   pure function geometry(this, x, v) result(gm)

@@ -25,7 +25,7 @@ module elements_hinge3d
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
   use elements_base, only: element_t
-  use elements_rotation, only: euler_product, cross, unit_normal
+  use elements_rotation, only: euler_product, cross, unit_normal, orthonormal_frame
   implicit none
   private
   public :: hinge3d_t, hinge3d_set_axis
@@ -33,8 +33,6 @@ module elements_hinge3d
   !> Floor of |z|^2 relative to |mu|^2 = cos^2(beta/2): only reached within ~1e-15 rad of a
   !> bending angle of pi (or at lambda = 0), where the modes are singular anyway.
   real(wp), parameter :: Z2_FLOOR = 1.0e-30_wp
-  !> An orientation vector within this sine of the axis is rejected (rounding error eps / tol).
-  real(wp), parameter :: PARALLEL_TOL = 1.0e-6_wp
 
   type, extends(element_t) :: hinge3d_t
     real(wp) :: axis(3) = [0.0_wp, 0.0_wp, 1.0_wp]   !< hinge axis n (unit, reference frame)
@@ -60,26 +58,25 @@ contains
     real(wp), intent(in) :: axis(3)
     type(error_t), intent(out) :: err
     real(wp), intent(in), optional :: perp(3)
-    real(wp) :: n(3), t(3), a
+    real(wp) :: n(3), t(3), a, frame(3, 3)
+    logical :: ok
     a = norm2(axis)
     if (.not. a > 0) then
       call err%set(ERR_INPUT, 'hinge3d: the hinge axis has zero length')
       return
     end if
     n = axis / a
-    if (present(perp)) then
-      t = perp - dot_product(perp, n) * n
-      if (.not. norm2(t) > PARALLEL_TOL * norm2(perp)) then
-        call err%set(ERR_INPUT, 'hinge3d: the perpendicular vector is zero or (nearly) '// &
-          'parallel to the hinge axis')
-        return
-      end if
-    else
-      t = unit_normal(n)
+    t = unit_normal(n)
+    if (present(perp)) t = perp
+    call orthonormal_frame(n, t, frame, ok)
+    if (.not. ok) then
+      call err%set(ERR_INPUT, 'hinge3d: the perpendicular vector is zero or (nearly) '// &
+        'parallel to the hinge axis')
+      return
     end if
-    h%axis = n
-    h%perp1 = t / norm2(t)
-    h%perp2 = cross(n, h%perp1)
+    h%axis = frame(:, 1)
+    h%perp1 = frame(:, 2)
+    h%perp2 = frame(:, 3)
   end subroutine hinge3d_set_axis
 
   pure function conj(l) result(c)

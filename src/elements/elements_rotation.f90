@@ -13,7 +13,7 @@ module elements_rotation
   private
   public :: rot_matrix, rot_apply, rot_apply_jac, rot_apply_second
   public :: rotvec_to_euler, euler_to_matrix, matrix_to_euler, euler_product, skew
-  public :: euler_g, euler_e, cross, unit_normal
+  public :: euler_g, euler_e, cross, unit_normal, orthonormal_frame
 
   !> Below this angle sin(theta/2)/theta is summed as its series: the closed form loses
   !> accuracy as theta^2 / theta^2 and is 0/0 at theta = 0.
@@ -51,6 +51,26 @@ contains
     real(wp) :: c(3)
     c = [a(2) * b(3) - a(3) * b(2), a(3) * b(1) - a(1) * b(3), a(1) * b(2) - a(2) * b(1)]
   end function cross
+
+  !> The right-handed orthonormal frame (columns e1, e2, e3) with e1 along the unit vector e1
+  !> and b in the e1-e2 plane (b orthogonalised against e1). ok is .false. when b is zero or
+  !> within a sine of 1e-6 of e1: e2 would then carry a relative rounding error of eps / 1e-6
+  !> and follow noise rather than the user (a beam's orientation vector, a hinge's
+  !> perpendicular, a body's axes).
+  pure subroutine orthonormal_frame(e1, b, frame, ok)
+    real(wp), intent(in) :: e1(3), b(3)
+    real(wp), intent(out) :: frame(3, 3)
+    logical, intent(out) :: ok
+    real(wp), parameter :: PARALLEL_TOL = 1.0e-6_wp
+    real(wp) :: y(3)
+    y = b - dot_product(b, e1) * e1
+    ok = norm2(y) > PARALLEL_TOL * norm2(b)
+    frame = 0.0_wp
+    if (.not. ok) return
+    frame(:, 1) = e1
+    frame(:, 2) = y / norm2(y)
+    frame(:, 3) = cross(e1, frame(:, 2))
+  end subroutine orthonormal_frame
 
   !> A unit vector normal to the unit vector n, orthogonalised from the coordinate axis least
   !> aligned with n (the first of equals): a deterministic frame for a hinge axis or a guide.

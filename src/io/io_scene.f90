@@ -14,7 +14,7 @@ module io_scene
     read_linear, read_dynamic, read_reduction, read_output
   use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
     force_rec_t, slider_rec_t
-  use elements_rotation, only: euler_to_matrix, rotvec_to_euler, cross
+  use elements_rotation, only: euler_to_matrix, rotvec_to_euler, orthonormal_frame
   use io_scene_motion, only: read_motion
   implicit none
   private
@@ -379,7 +379,7 @@ contains
     real(wp), allocatable, intent(out) :: axes(:, :)
     type(error_t), intent(inout) :: err
     real(wp), allocatable :: rotation(:), two(:)
-    real(wp) :: ex(3), ey(3)
+    logical :: ok
     character(len=:), allocatable :: name
     call rd_fixed_list(g, 'rotation', 4, ' (an axis ax, ay, az and an angle in rad)', &
       rotation, err)
@@ -402,19 +402,12 @@ contains
       axes = euler_to_matrix(rotvec_to_euler(rotation(4) * rotation(1:3) / &
         norm2(rotation(1:3))))
     else
-      ! A y direction within 1e-6 rad of x would leave z to round-off.
-      ex = two(1:3) / max(norm2(two(1:3)), tiny(1.0_wp))
-      ey = two(4:6) - dot_product(two(4:6), ex) * ex
-      if (.not. norm2(two(1:3)) > 0 .or. .not. norm2(ey) > 1.0e-6_wp * norm2(two(4:6))) then
-        call err%set(ERR_INPUT, g%where() // ': variable ''axes'': the x axis (first 3 ' // &
-          'values) must not be zero and the second vector must not be zero or parallel to it')
-        return
-      end if
-      ey = ey / norm2(ey)
       allocate(axes(3, 3))
-      axes(:, 1) = ex
-      axes(:, 2) = ey
-      axes(:, 3) = cross(ex, ey)
+      ok = norm2(two(1:3)) > 0
+      if (ok) call orthonormal_frame(two(1:3) / norm2(two(1:3)), two(4:6), axes, ok)
+      if (.not. ok) call err%set(ERR_INPUT, g%where() // ': variable ''axes'': the x axis ' // &
+        '(first 3 values) must not be zero and the second vector must not be zero or ' // &
+        'parallel to it')
     end if
   end subroutine read_body_axes
 
