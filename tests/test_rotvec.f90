@@ -21,17 +21,18 @@ program test_rotvec
   use fd_helpers, only: lcg_t, relerr, flat, random_rotvec
   use element_fd, only: modes, jacobian, second, expect_derivatives
   use elements_base, only: MODE_DYNAMIC
-  use elements_rotation, only: rotvec_to_euler, euler_to_matrix
-  use elements_rotvec, only: rotvec_t, ROTVEC_LIMIT
+  use elements_rotation, only: rotvec_to_euler, euler_to_matrix, euler_product
+  use elements_rotvec, only: rotvec_t, ROTVEC_LIMIT, RECENTRE_ABOVE
   implicit none
 
   real(wp), parameter :: PI = 3.14159265358979323846_wp, EPS = epsilon(1.0_wp)
   real(wp), parameter :: DEG = PI / 180
-  integer, parameter :: C_E = 1, C_INV = 2, C_SW = 3, C_DE = 4, C_D2 = 5, C_POL = 6, N_CAT = 6
+  integer, parameter :: C_E = 1, C_INV = 2, C_SW = 3, C_DE = 4, C_D2 = 5, C_POL = 6, &
+    C_CH = 7, N_CAT = 7
   character(len=44), parameter :: CAT_NAME(N_CAT) = [character(len=44) :: &
     'psi vs closed forms', 'invariance of psi', 'series vs closed form at the switch', &
     'de vs central FD of psi', 'second vs 5-point FD d2/ds2 psi(x+sv)', &
-    'Hessian by polarisation vs FD Hessian']
+    'Hessian by polarisation vs FD Hessian', 'moved chart vs relative rotation']
   type(lcg_t) :: rng = lcg_t(seed=20261126)
   type(suite_t) :: ts
   type(rotvec_t) :: rv
@@ -46,6 +47,7 @@ program test_rotvec
   call series_switch()
   call derivative_tests()
   call full_turn()
+  call moving_chart()
   call ts%print_worst(CAT_NAME)
   call ts%finish()
 
@@ -194,4 +196,55 @@ contains
     call ts%check(index(msg, 'node ''n'' rotation') == 1 .and. index(msg, 'full turn') > 0, &
       'limit: just above 1.9 pi, a message naming the element and the full turn')
   end subroutine full_turn
+  !> A chart moved to a reference r: psi is the rotation vector of conj(r) lambda (the same
+  !> closed forms' round-off, bound 1e-14 + 20 eps |a| as there), its derivatives pass the
+  !> same difference checks, recentre moves only beyond RECENTRE_ABOVE and then gives psi = 0
+  !> at x, and chart/set_chart restore a chart exactly.
+  subroutine moving_chart()
+    type(rotvec_t) :: moved
+    real(wp) :: r(4), n(3), x(4), v(4), a, err, psi(3)
+    real(wp), allocatable :: saved(:)
+    logical :: did
+    integer :: k
+    moved = rv
+    err = 0.0_wp
+    do k = 1, 12
+      r = rotvec_to_euler(random_rotvec(rng, 3.0_wp))
+      call moved%set_chart(r)
+      n = random_rotvec(rng, 1.0_wp)
+      n = n / norm2(n)
+      a = rng%uniform(0.0_wp, ROTVEC_LIMIT)
+      x = rng%uniform(0.6_wp, 1.4_wp) * euler_product(r, rotvec_to_euler(a * n))
+      err = max(err, maxval(abs(modes(moved, x) - a * n)) / (1.0e-14_wp + 20 * EPS * a))
+      if (k <= 4) then
+        v = 0.3_wp * rng%uniform_vec(4, -1.0_wp, 1.0_wp)
+        ! The same scale as derivative_tests: the distance to the full-turn singularity.
+        if (a > PI) v = v * norm2(x) * abs(sin(a / 2))
+        call expect_derivatives(ts, moved, x, v, merge(norm2(x) * abs(sin(a / 2)), 1.0_wp, &
+          a > PI), 'moved chart', C_DE, C_D2, C_POL)
+      end if
+    end do
+    call ts%expect('psi in a moved chart = rotation vector of conj(r) lambda', err, 1.0_wp, &
+      C_CH)
+    x = 1.3_wp * rotvec_to_euler([0.0_wp, 0.9_wp * RECENTRE_ABOVE, 0.0_wp])
+    call moved%set_chart([1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp])
+    call moved%recentre(x, modes(moved, x), did)
+    call ts%check(.not. did .and. all(moved%chart() == [1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]), &
+      'recentre: below the threshold the chart stays')
+    x = 1.3_wp * rotvec_to_euler([0.0_wp, 1.1_wp * RECENTRE_ABOVE, 0.0_wp])
+    call moved%recentre(x, modes(moved, x), did)
+    ! conj(x / |x|) x = (|x|, 0): psi is exactly zero up to the rounding of the product.
+    call ts%expect('recentre beyond the threshold: psi = 0 at x', &
+      maxval(abs(modes(moved, x))), 1.0e-15_wp, C_CH)
+    call ts%check(did, 'recentre: beyond the threshold the chart moves')
+    saved = moved%chart()
+    x = rotvec_to_euler([0.4_wp, -0.5_wp, 0.6_wp])
+    psi = modes(moved, x)
+    call moved%set_chart(rotvec_to_euler([0.1_wp, 0.2_wp, 0.3_wp]))
+    call ts%check(any(modes(moved, x) /= psi), 'another chart, other psi')
+    call moved%set_chart(saved)
+    call ts%check(all(moved%chart() == saved), 'chart / set_chart restore the chart')
+    call ts%check(all(modes(moved, x) == psi), 'the restored chart gives the same psi')
+    call ts%check(size(rv%chart()) == 4, 'the chart of a free rotation: 4 numbers')
+  end subroutine moving_chart
 end program test_rotvec

@@ -89,6 +89,8 @@ contains
     type(linear_model_t), intent(out) :: lin
     type(error_t), intent(out) :: err
     if (.not. allocated(this%red)) then
+      ! q_hist(:, k) is in the charts of its time (a free rotation's moves along the run).
+      call this%dyn%use_charts(this%dyn%chart_hist(:, k))
       call linearise(this%dyn, this%time(k), this%dyn%q_hist(:, k), inputs, outputs, &
         .true., lin, err, this%dyn%v_hist(:, k))
       return

@@ -65,6 +65,7 @@ module dynamics_control
     procedure :: error_norm => control_error_norm
     procedure :: jacobian => control_jacobian
     procedure :: at_breakpoint => control_at_breakpoint
+    procedure :: rechart => control_rechart
     procedure :: state => control_state
     procedure :: check_sampling => control_check_sampling
     procedure :: allocate_history => control_allocate_history
@@ -282,6 +283,16 @@ contains
     this%last_i = v(this%n + 1:)
     call this%plant%record(k, t, q(1:this%n), v(1:this%n), status)
   end subroutine control_record
+
+  !> The plant moves its charts; the controllers' states are not coordinates of a chart.
+  subroutine control_rechart(this, t, q, v, changed, status)
+    class(controlled_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(inout) :: q(:), v(:)
+    logical, intent(out) :: changed
+    integer, intent(out) :: status
+    call this%plant%rechart(t, q(1:this%n), v(1:this%n), changed, status)
+  end subroutine control_rechart
 
   !> da/dq and da/dv of the closed loop: the plant's own Jacobian (its linearised structural
   !> part, as without controllers) plus what the PID controllers add through their outputs,

@@ -56,6 +56,8 @@ module dynamics_system
     integer(i8) :: n_evals = 0                !< evaluations of the equations of motion
     ! History at the output times (filled by record):
     real(wp), allocatable :: x_hist(:, :), q_hist(:, :), v_hist(:, :), energy_hist(:, :)
+    !> The elements' charts (dynamics_system_chart) at the output times: q_hist's meaning.
+    real(wp), allocatable :: chart_hist(:, :)
     type(error_t) :: last_error               !< why the last callback returned non-zero
     !> Feedback controllers (model%controllers) act only where a run switches them on (dynamic
     !> runs); statics, modal analysis and &linear see the open-loop plant.
@@ -106,6 +108,9 @@ module dynamics_system
     procedure :: allocate_history => dyn_allocate_history
     procedure :: apply_controllers => dyn_apply_controllers
     procedure :: user_law => dyn_user_law
+    procedure :: rechart => dyn_rechart
+    procedure :: charts => dyn_charts
+    procedure :: use_charts => dyn_use_charts
   end type dynamics_t
 
   interface
@@ -198,6 +203,28 @@ module dynamics_system
       real(wp), intent(in) :: v(:, :), w(:, :)
       real(wp), intent(out) :: kv(:, :), dv(:, :)
     end subroutine dyn_structural_action
+  end interface
+
+  interface
+    !> Move the charts of limited elements near their limit to the state (t, q, v), changing
+    !> q and v to the same state's coordinates in the new charts (ode2_system_t%rechart).
+    module subroutine dyn_rechart(this, t, q, v, changed, status)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: t
+      real(wp), intent(inout) :: q(:), v(:)
+      logical, intent(out) :: changed
+      integer, intent(out) :: status
+    end subroutine dyn_rechart
+    !> The limited elements' charts, one after the other (empty without any).
+    module function dyn_charts(this) result(c)
+      class(dynamics_t), intent(in) :: this
+      real(wp), allocatable :: c(:)
+    end function dyn_charts
+    !> Restore charts given by `charts` (e.g. chart_hist(:, k), to read q_hist(:, k)).
+    module subroutine dyn_use_charts(this, c)
+      class(dynamics_t), intent(inout) :: this
+      real(wp), intent(in) :: c(:)
+    end subroutine dyn_use_charts
   end interface
 
   interface

@@ -1,13 +1,15 @@
-!> The run's history (q, v, x at the output times) and the energy at a state.
+!> The run's history (q, v, x and the charts at the output times) and the energy at a state.
 submodule (dynamics_system) dynamics_system_history
   implicit none
 
 contains
 
   module procedure dyn_allocate_history
-    if (allocated(this%x_hist)) deallocate(this%x_hist, this%q_hist, this%v_hist, this%energy_hist)
+    if (allocated(this%x_hist)) deallocate(this%x_hist, this%q_hist, this%v_hist, &
+      this%energy_hist, this%chart_hist)
     allocate(this%x_hist(this%model%n_x, nt), this%q_hist(this%model%n_dy, nt))
     allocate(this%v_hist(this%model%n_dy, nt), this%energy_hist(2, nt))
+    allocate(this%chart_hist(size(this%charts()), nt))
   end procedure dyn_allocate_history
 
   module procedure dyn_record
@@ -24,6 +26,7 @@ contains
     this%q_hist(:, k) = q
     this%v_hist(:, k) = v
     this%energy_hist(:, k) = this%energy(t, q, v)
+    this%chart_hist(:, k) = this%charts()
   end procedure dyn_store
 
   module procedure dyn_energy

@@ -39,6 +39,9 @@ module elements_base
     procedure :: lumped_mass => element_no_lumped_mass
     procedure :: has_limit => element_no_limit
     procedure :: limit_problem => element_no_limit_problem
+    procedure :: recentre => element_no_recentre
+    procedure :: chart => element_no_chart
+    procedure :: set_chart => element_set_no_chart
   end type element_t
 
   !> Container so that a model holds elements of different types in one array.
@@ -137,6 +140,30 @@ contains
     character(len=:), allocatable :: msg
     msg = ''
   end function element_no_limit_problem
+
+  !> An element with limited modes may move the origin of its modes' chart (a free
+  !> rotation's reference orientation) to x when their values e come near the limit; then
+  !> `moved`, and the modes are to be re-evaluated at x (the caller's q changes, x does not).
+  !> Default: no chart to move.
+  pure subroutine element_no_recentre(this, x, e, moved)
+    class(element_t), intent(inout) :: this
+    real(wp), intent(in) :: x(:), e(:)
+    logical, intent(out) :: moved
+    moved = .false.
+  end subroutine element_no_recentre
+
+  !> The parameters of the element's chart (what recentre changes), to be kept with results
+  !> that hold mode values and restored with set_chart. Default: none.
+  pure function element_no_chart(this) result(c)
+    class(element_t), intent(in) :: this
+    real(wp), allocatable :: c(:)
+    allocate(c(0))
+  end function element_no_chart
+
+  pure subroutine element_set_no_chart(this, c)
+    class(element_t), intent(inout) :: this
+    real(wp), intent(in) :: c(:)
+  end subroutine element_set_no_chart
 
   pure function mode_class_name(c) result(name)
     integer, intent(in) :: c

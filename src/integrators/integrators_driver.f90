@@ -73,7 +73,8 @@ contains
     real(wp), intent(inout) :: q(:), v(:)
     type(error_t), intent(inout) :: err
     real(wp) :: t, t_end
-    integer :: k, ib
+    integer :: k, ib, status
+    logical :: changed
 
     t = t_out(1)
     t_end = t_out(size(t_out))
@@ -102,6 +103,19 @@ contains
         t = t_out(k)
       end if
       call record_output(sys, k, t, q, v, err)
+      if (.not. err%ok()) return
+      if (k == size(t_out)) exit
+      call sys%rechart(t, q, v, changed, status)
+      if (status /= 0) then
+        call err%set(ERR_NUMERIC, 'integrate: the system failed to move its coordinates ' // &
+          'at t = ' // real_str(t) // ' (status ' // int_str(status) // ')')
+        return
+      end if
+      ! Same state, other coordinates: the method's history (past steps, its acceleration
+      ! variable) is in the old ones. The right-hand side is continuous here, so the restart
+      ! evaluates just right of t as after a breakpoint.
+      if (changed) call stepper%restart(sys, t, q, v, segment_end(bps, ib, t_end), &
+        nearest(t, 1.0_wp), eval_limit(bps, ib), err)
       if (.not. err%ok()) return
     end do
   end subroutine run_segments

@@ -39,6 +39,11 @@ module integrators_system
     !> (re)starts there: a system whose equations change at given times (a sampled
     !> controller's hold) updates itself. Status as for accel. The default does nothing.
     procedure :: at_breakpoint => system_at_breakpoint
+    !> Called by the driver after every output but the first: a system whose coordinates are
+    !> a chart that must move with the motion (a free rotation's rotation vector) may change
+    !> q and v there to other coordinates of the same state, and says so (`changed`); the
+    !> driver then restarts the method from them. Status as for accel. Default: no change.
+    procedure :: rechart => system_no_rechart
   end type ode2_system_t
 
   abstract interface
@@ -132,6 +137,16 @@ contains
     integer, intent(out) :: status
     status = 0
   end subroutine system_at_breakpoint
+
+  subroutine system_no_rechart(this, t, q, v, changed, status)
+    class(ode2_system_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(inout) :: q(:), v(:)
+    logical, intent(out) :: changed
+    integer, intent(out) :: status
+    changed = .false.
+    status = 0
+  end subroutine system_no_rechart
 
   subroutine system_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
     class(ode2_system_t), intent(inout) :: this
