@@ -315,8 +315,9 @@ contains
     type(run_t), intent(inout) :: this
     type(error_t), intent(out) :: err
     real(wp), allocatable :: q_steps(:, :)
-    integer :: k, n
+    integer :: k, n, products
     logical :: arc
+    products = 0
     associate (s => this%scene%static)
       arc = s%method == 'arc_length'
       allocate(this%x_static(this%dyn%model%n_x, s%n_steps), this%static_stable(s%n_steps))
@@ -335,18 +336,27 @@ contains
         this%static_load_factor = [(real(k, wp) / s%n_steps, k = 1, s%n_steps)]
         call static_solve(this%dyn, 0.0_wp, s%n_steps, s%tol, s%max_iter, this%q_static, &
           this%x_static, this%static_iterations, err, this%static_stable, this%progress, &
-          q_steps)
+          q_steps, s%solver, products)
       end if
     end associate
     ! Reactions and compliances are planar (x, y, phi) so far: a spatial scene has none.
     if (err%ok()) call static_responses(this, q_steps, .not. arc, &
       err)
     if (.not. err%ok()) return
-    if (this%verbose) write(*, '(a,i0,a,a,i0,a)') 'static: ', size(this%static_load_factor), &
+    if (this%verbose) write(*, '(a,i0,a,a,i0,a,a)') 'static: ', size(this%static_load_factor), &
       trim(merge(' arc-length steps', ' load steps      ', arc)), ', ', this%static_iterations, &
-      ' Newton iterations'
+      ' Newton iterations', trim(krylov_note(products))
     call warn_unstable(this)
   end subroutine run_static
+
+  !> ' (Newton-Krylov: n products with the tangent)' when there were any, else ''.
+  pure function krylov_note(products) result(note)
+    integer, intent(in) :: products
+    character(len=:), allocatable :: note
+    note = ''
+    if (products > 0) note = ' (Newton-Krylov: ' // int_str(products) // &
+      ' products with the tangent)'
+  end function krylov_note
 
   !> Reactions and compliances at each converged static step, from the tangent there (the
   !> prescribed coordinates stepped with the load when `ramped`, as static_solve has them;

@@ -242,7 +242,7 @@ contains
     real(wp), allocatable :: de(:, :)
     real(wp) :: rcond
     integer :: iel, k, l, next
-    call start_assembly(this, model, this%lu, next)
+    call start_assembly(this, model, this%lu, next, 1.0_wp)
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
         if (el%has_inertia()) then
@@ -270,18 +270,25 @@ contains
   !> K0 = DF_dy^T K_x DF_dy with the element stiffness K_x = D_x^T S D_x over the stressed modes
   !> (the dynamic ones; dynamic and elastic ones of elements with elastic modes), because
   !> D_x DF_dy is the unit row on a dynamic mode. The element Jacobians and masses are those of
-  !> the last aug_factor.
-  subroutine aug_factor_newton(this, model, mass, c_q, c_v, info)
+  !> the last aug_factor. Statics' preconditioner (dynamics_static_krylov) asks for
+  !> mass_scale M + c_q K0 instead, and for the traces of the two parts over the free
+  !> coordinates (stiffness, mass) to choose mass_scale.
+  subroutine aug_factor_newton(this, model, mass, c_q, c_v, info, mass_scale, traces)
     class(augmented_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     type(element_mass_t), intent(in) :: mass
     real(wp), intent(in) :: c_q, c_v
     integer, intent(out) :: info
+    real(wp), intent(in), optional :: mass_scale
+    real(wp), intent(out), optional :: traces(2)
     real(wp), allocatable :: de(:, :), s(:, :), block(:, :)
     logical, allocatable :: stressed(:)
-    real(wp) :: rcond
+    real(wp) :: rcond, scale, tr(2)
     integer :: iel, k, l, next, nd, nm
-    call start_assembly(this, model, this%newton, next)
+    scale = 1.0_wp
+    if (present(mass_scale)) scale = mass_scale
+    call start_assembly(this, model, this%newton, next, scale)
+    tr = [0.0_wp, sum(model%lumped, mask=this%free_index > 0)]
     do iel = 1, model%n_elements
       associate (el => model%elements(iel)%e)
         nd = size(el%dofs)
@@ -294,8 +301,18 @@ contains
           model%modes(model%mode_first(iel):model%mode_first(iel) + nm - 1)%class))
         where (.not. spread(stressed, 2, nd)) de = 0.0_wp
         block = (c_q + c_v * el%damping) * matmul(transpose(de), matmul(s, de))
-        if (mass%offset(iel) > 0) block = block + reshape(mass%val(mass%offset(iel): &
-          mass%offset(iel) + nd * nd - 1), [nd, nd])
+        do k = 1, nd
+          if (this%free_index(el%dofs(k)) > 0) tr(1) = tr(1) + block(k, k)
+        end do
+        if (mass%offset(iel) > 0) then
+          associate (me => reshape(mass%val(mass%offset(iel):mass%offset(iel) + nd * nd - 1), &
+                                   [nd, nd]))
+            block = block + scale * me
+            do k = 1, nd
+              if (this%free_index(el%dofs(k)) > 0) tr(2) = tr(2) + me(k, k)
+            end do
+          end associate
+        end if
         do l = 1, nd
           do k = 1, nd
             if (this%free_index(el%dofs(k)) == 0 .or. this%free_index(el%dofs(l)) == 0) cycle
@@ -308,21 +325,24 @@ contains
         deallocate(s, block)
       end associate
     end do
+    if (present(traces)) traces = tr
     call this%newton%factor(info, rcond)
     if (rcond < 1.0e-14_wp) info = max(info, 1)
   end subroutine aug_factor_newton
 
-  !> Zero the values, put the lumped masses on the diagonal (the first n entries of both
-  !> patterns) and point next at the last diagonal entry.
-  subroutine start_assembly(this, model, lu, next)
+  !> Zero the values, put the lumped masses (times mass_scale) on the diagonal (the first n
+  !> entries of both patterns) and point next at the last diagonal entry.
+  subroutine start_assembly(this, model, lu, next, mass_scale)
     type(augmented_t), intent(in) :: this
     type(model_t), intent(in) :: model
     type(sparse_lu_t), intent(inout) :: lu
     integer, intent(out) :: next
+    real(wp), intent(in) :: mass_scale
     integer :: i
     lu%val = 0.0_wp
     do i = 1, model%n_x
-      if (this%free_index(i) > 0) call add_entry(lu, this%free_index(i), model%lumped(i))
+      if (this%free_index(i) > 0) call add_entry(lu, this%free_index(i), &
+        mass_scale * model%lumped(i))
     end do
     next = this%n_free + this%n_con
   end subroutine start_assembly

@@ -73,18 +73,21 @@ contains
     real(wp), intent(in) :: t, q_dy(:)
     integer, intent(in) :: step
     type(error_t), intent(out) :: err
-    real(wp) :: k(size(q_dy), size(q_dy)), r(dyn%model%n_x), acc(size(q_dy))
+    real(wp), allocatable :: k(:, :)
+    real(wp) :: r(dyn%model%n_x), acc(size(q_dy))
     logical :: was_locked, need_compliance
     integer :: i
     was_locked = dyn%locked
     dyn%locked = .true.
     need_compliance = size(this%compliance_coords, 2) > 0
-    ! The tangent (2 or 4 n_dy evaluations) only when asked for; reactions need one evaluation.
+    ! The tangent (2 or 4 n_dy evaluations) only when asked for; reactions need the nodal
+    ! forces and kinematic factors of one evaluation (O(n): no dense mass matrix).
     if (need_compliance .or. this%n_frequencies > 0) then
+      allocate(k(size(q_dy), size(q_dy)))
       call tangent_stiffness(dyn, t, q_dy, k, err, &
         accurate=need_compliance .or. dyn%model%n_elastic > 0)
     else
-      call dyn%evaluate_dense(t, q_dy, 0.0_wp * q_dy, acc, err)
+      call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, acc, err)
     end if
     if (err%ok()) then
       r = reactions(dyn)

@@ -25,6 +25,7 @@ module dynamics_static
   use core_linalg, only: lu_factor, lu_solve, chol_factor, gen_eig_values
   use dynamics_system, only: dynamics_t
   use core_progress, only: progress_t
+  use dynamics_static_krylov, only: krylov_statics_t
   implicit none
   private
   public :: tangent_stiffness, motion_tangent, static_solve, stable_tangent, STABILITY_MARGIN
@@ -35,6 +36,9 @@ module dynamics_static
   !> below P_cr has omega^2 = 1e-6 s, and s grows with the fourth power of the element count,
   !> so that a load within 0.02 % of P_cr is told apart at 50 elements, within 0.3 % at 100.
   real(wp), parameter :: STABILITY_MARGIN = 1.0e-12_wp
+  !> solver = 'auto' takes Newton-Krylov (dynamics_static_krylov) on the sparse path above
+  !> this many dynamic coordinates: measured on the 45-degree bend (docs/bench/statics.md).
+  integer, parameter :: KRYLOV_ABOVE = 40
 
 contains
 
@@ -219,12 +223,13 @@ contains
 
   !> Newton-Raphson with the load applied in n_steps equal increments (modified: the tangent
   !> is refreshed at the start of a step and when convergence slows, as differencing it costs
-  !> 2 n_dy evaluations). q_dy holds the start
+  !> 2 n_dy evaluations), or Newton-Krylov (dynamics_static_krylov: no tangent, O(n) per
+  !> iteration), by `solver`. q_dy holds the start
   !> on entry and the equilibrium on exit; x_steps(:, k) the nodal coordinates after step k,
   !> stable(k) whether that equilibrium is stable (stable_tangent of the last Newton matrix,
   !> taken within the Newton tolerance of it). `progress` is polled once per Newton iteration.
   subroutine static_solve(dyn, t, n_steps, tol, max_iter, q_dy, x_steps, iterations, err, &
-      stable, progress, q_steps)
+      stable, progress, q_steps, solver, products)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, tol
     integer, intent(in) :: n_steps, max_iter
@@ -235,8 +240,15 @@ contains
     logical, intent(out), optional :: stable(:)
     type(progress_t), intent(inout), optional :: progress
     real(wp), intent(out), optional :: q_steps(:, :)   !< q_dy after each step
-    real(wp) :: k(size(q_dy), size(q_dy)), r(size(q_dy)), a(size(q_dy)), v0(size(q_dy))
-    real(wp) :: kf(size(q_dy), size(q_dy)), rhs(size(q_dy), 1)
+    !> 'dense' (the difference tangent, LU), 'krylov' (Newton-Krylov, the sparse path only) or
+    !> 'auto' (the default: krylov on the sparse path above KRYLOV_ABOVE coordinates)
+    character(len=*), intent(in), optional :: solver
+    !> Products with the tangent that Newton-Krylov took (0 on the dense path)
+    integer, intent(out), optional :: products
+    real(wp), allocatable :: k(:, :), kf(:, :)
+    real(wp) :: r(size(q_dy)), a(size(q_dy)), v0(size(q_dy)), rhs(size(q_dy), 1)
+    type(krylov_statics_t) :: kry
+    logical :: krylov, decided
     real(wp) :: lambda, scale, rcond, r_prev, q_last(size(q_dy))
     integer :: step, it, info, ipiv(size(q_dy))
     logical :: refresh, fresh
@@ -245,6 +257,18 @@ contains
       call err%set(ERR_INPUT, 'group &static: n_steps and max_iter must be >= 1 and tol > 0')
       return
     end if
+    krylov = dyn%sparse .and. size(q_dy) > KRYLOV_ABOVE
+    if (present(solver)) then
+      if (solver == 'dense') krylov = .false.
+      if (solver == 'krylov') krylov = .true.
+    end if
+    if (krylov .and. .not. dyn%sparse) then
+      call err%set(ERR_INPUT, 'group &static: variable ''solver'' = ''krylov'' needs the ' // &
+        'sparse path (&scene linear_solver = ''sparse'' or ''auto'' with more than 12 ' // &
+        'nodal coordinates)')
+      return
+    end if
+    if (.not. krylov) allocate(k(size(q_dy), size(q_dy)), kf(size(q_dy), size(q_dy)))
     v0 = 0.0_wp
     iterations = 0
     scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
@@ -261,6 +285,32 @@ contains
       a = q_dy
       if (step > 1) q_dy = q_dy + (q_dy - q_last)
       q_last = a
+      if (krylov) then
+        if (present(progress)) then
+          if (progress%due()) call progress%report_load(step, n_steps, lambda)
+        end if
+        call kry%equilibrium(dyn, t, q_dy, tol * scale, max_iter, iterations, err)
+        if (.not. err%ok()) exit
+        if (present(stable)) then
+          ! Moments fixed in space give complex pairs that Arnoldi converges on slowly, if at
+          ! all: there, and where it does not converge, the dense test decides (O(n^2)).
+          decided = .false.
+          if (size(dyn%model%moment_lambda) == 0) &
+            call kry%stable(dyn, t, q_dy, stable(step), decided, err)
+          if (.not. err%ok()) exit
+          if (.not. decided) then
+            if (.not. allocated(k)) allocate(k(size(q_dy), size(q_dy)))
+            call tangent_stiffness(dyn, t, q_dy, k, err)
+            if (.not. err%ok()) exit
+            stable(step) = stable_tangent(k, dyn%mbar)
+          end if
+          call dyn%generalised_force(t, q_dy, v0, a, err)
+          if (.not. err%ok()) exit
+        end if
+        x_steps(:, step) = dyn%kin%x
+        if (present(q_steps)) q_steps(:, step) = q_dy
+        cycle
+      end if
       refresh = .true.
       r_prev = huge(1.0_wp)
       do it = 1, max_iter
@@ -325,6 +375,7 @@ contains
       x_steps(:, step) = dyn%kin%x
       if (present(q_steps)) q_steps(:, step) = q_dy
     end do
+    if (present(products)) products = kry%n_products
     dyn%locked = .false.
     dyn%ramp_prescribed = .false.
     dyn%load_factor = 1.0_wp

@@ -391,7 +391,7 @@ module io_schema
     var_spec_t('controller', 'feedforward', VK_LOGICAL, '', '.false.', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'add the rigid-body inverse dynamics of reference')]
-  type(var_spec_t), parameter :: STATIC_VARS(7) = [ &
+  type(var_spec_t), parameter :: STATIC_VARS(8) = [ &
     var_spec_t('static', 'n_steps', VK_INT, '', '10', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
       '', 'load steps'), &
@@ -412,7 +412,10 @@ module io_schema
       '', 'arc-length step in (q/|q1|, lambda)'), &
     var_spec_t('static', 'max_load_factor', VK_REAL, '', 'none', .false., &
       0.0_wp, .true., huge(1.0_wp), .false., &
-      '', 'arc-length stops beyond this load factor')]
+      '', 'arc-length stops beyond this load factor'), &
+    var_spec_t('static', 'solver', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|dense|krylov', 'Newton: difference tangent or Newton-Krylov')]
   type(var_spec_t), parameter :: MODAL_VARS(3) = [ &
     var_spec_t('modal', 'n_modes', VK_INT, '', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
@@ -522,7 +525,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(154) = [ &
+  type(var_spec_t), parameter :: SCHEMA(155) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

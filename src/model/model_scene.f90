@@ -145,6 +145,7 @@ module model_scene
     character(len=:), allocatable :: method   !< 'load' or 'arc_length'
     real(wp) :: arc_length = 0.0_wp           !< 0: sqrt(2)/n_steps
     real(wp) :: max_load_factor = huge(1.0_wp)
+    character(len=:), allocatable :: solver   !< 'auto', 'dense' or 'krylov'
   end type static_rec_t
 
   type :: modal_rec_t

@@ -1,0 +1,134 @@
+#!/usr/bin/env python3
+"""Cost of a static analysis against model size: Bathe and Bolourchi's 45-degree bend
+(input/bend45.nml: tip force raised to 600 in 4 load steps) with n beams, solved by Newton with
+the dense difference tangent (&static solver = 'dense') and by Newton-Krylov ('krylov'),
+docs/theory.md 7.3.
+
+Per mesh and solver: the processor time of the analysis (root attribute ``cpu_time_s``, the
+least of --repeat runs), the Newton iterations, the products with the tangent (Krylov), and the
+tip after the last step against the finest Krylov run. The exponent p of time ~ n^p is fitted by
+least squares in log-log over the meshes of each solver from 16 beams on.
+
+Usage (the flexmor Python package installed, or PYTHONPATH=python):
+
+    python3 scripts/bench_statics.py [--bin build/bin/flexmor] [--out-dir docs/bench] \\
+        [--meshes 8,16,32,64,128,256] [--dense-max 64] [--repeat 2]
+
+Writes statics.md and statics.csv into --out-dir with the command, date, machine, flexmor
+version and commit. Bad arguments exit with 2, a failed run with 1.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import subprocess
+import sys
+import tempfile
+from datetime import datetime
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from flexmor.bench import command_line, cpu_model, git_commit, usable_cores, write_csv
+from flexmor.results import run_attributes
+from spatial_examples import bend45_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run_once(binary, folder, n, solver):
+    """One run: cpu time [s], Newton iterations, tangent products, tip after the last step."""
+    text = bend45_scene(n).replace("&static n_steps = 4 /",
+                                   f"&static n_steps = 4, solver = '{solver}' /")
+    if f"solver = '{solver}'" not in text:
+        raise RuntimeError("the bend scene's &static line changed: update bench_statics.py")
+    nml, out = Path(folder) / f"bend_{solver}_{n}.nml", Path(folder) / f"bend_{solver}_{n}.h5"
+    nml.write_text(text)
+    proc = subprocess.run([str(binary), str(nml), "-o", str(out)], capture_output=True,
+                          text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{nml.name}: {proc.stderr.strip()}")
+    line = next(s for s in proc.stdout.splitlines() if s.startswith("static:"))
+    iterations = int(re.search(r"(\d+) Newton iterations", line).group(1))
+    found = re.search(r"Newton-Krylov: (\d+) products", line)
+    with h5py.File(out) as f:
+        tip = f["static/nodes/tip/position"][-1]
+    return float(run_attributes(out)["cpu_time_s"]), iterations, \
+        int(found.group(1)) if found else 0, tip
+
+
+def fit_exponent(ns, times):
+    keep = [(n, t) for n, t in zip(ns, times) if n >= 16]
+    if len(keep) < 2:
+        return float("nan")
+    x, y = np.log([k[0] for k in keep]), np.log([k[1] for k in keep])
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--bin", type=Path, default=ROOT / "build" / "bin" / "flexmor")
+    p.add_argument("--out-dir", type=Path, default=ROOT / "docs" / "bench")
+    p.add_argument("--meshes", default="8,16,32,64,128,256")
+    p.add_argument("--dense-max", type=int, default=64)
+    p.add_argument("--repeat", type=int, default=2)
+    args = p.parse_args(argv)
+    try:
+        meshes = [int(s) for s in args.meshes.split(",")]
+    except ValueError:
+        p.error(f"--meshes: comma-separated integers expected, got {args.meshes!r}")
+    if any(n < 1 for n in meshes) or args.repeat < 1:
+        p.error("--meshes and --repeat must be >= 1")
+    if not args.bin.is_file():
+        p.error(f"--bin: no flexmor binary at {args.bin}")
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        try:
+            for n in meshes:
+                for solver in ("dense", "krylov"):
+                    if solver == "dense" and n > args.dense_max:
+                        continue
+                    runs = [run_once(args.bin, folder, n, solver) for _ in range(args.repeat)]
+                    cpu = min(r[0] for r in runs)
+                    _, iterations, products, tip = runs[0]
+                    rows.append(dict(beams=n, solver=solver, cpu_s=cpu, newton=iterations,
+                                     products=products, tip=tip))
+                    print(f"{n:4d} beams {solver:6s} {cpu:8.3f} s  {iterations} Newton "
+                          f"iterations, {products} products", flush=True)
+        except RuntimeError as e:
+            print(f"bench_statics: {e}", file=sys.stderr)
+            return 1
+    finest = max((r for r in rows if r["solver"] == "krylov"), key=lambda r: r["beams"])
+    for r in rows:
+        r["tip_diff_m"] = float(np.max(np.abs(r["tip"] - finest["tip"])))
+    args.out_dir.mkdir(parents=True, exist_ok=True)
+    columns = ["beams", "solver", "cpu_s", "newton", "products", "tip_diff_m"]
+    write_csv([{k: r[k] for k in columns} for r in rows], columns, args.out_dir / "statics.csv")
+    exps = {s: fit_exponent([r["beams"] for r in rows if r["solver"] == s],
+                            [r["cpu_s"] for r in rows if r["solver"] == s])
+            for s in ("dense", "krylov")}
+    lines = ["# Statics against model size: dense tangent and Newton-Krylov", "",
+             f"`{command_line('scripts/bench_statics.py', argv)}`", "",
+             f"Date: {datetime.now():%Y-%m-%d %H:%M}; machine: {cpu_model()}, "
+             f"{usable_cores()} cores; commit {git_commit(ROOT)}.", "",
+             "The 45-degree bend (input/bend45.nml with n beams), 4 load steps to 600; "
+             "processor time of the analysis, least of "
+             f"{args.repeat} runs. Tip difference: after the last step, against the "
+             f"{finest['beams']}-beam Krylov run (discretisation error plus solver tolerance).",
+             "", "| beams | dynamic coordinates | solver | cpu [s] | Newton iterations | "
+             "tangent products | tip difference [m] |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        lines.append(f"| {r['beams']} | {6 * r['beams']} | {r['solver']} | {r['cpu_s']:.3f} | "
+                     f"{r['newton']} | {r['products'] or '-'} | {r['tip_diff_m']:.2e} |")
+    lines += ["", "Fitted exponent of cpu time ~ n^p from 16 beams on: "
+              + ", ".join(f"{s} {e:.2f}" for s, e in exps.items() if not math.isnan(e)) + "."]
+    (args.out_dir / "statics.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines[-1:]))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

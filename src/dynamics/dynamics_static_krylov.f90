@@ -1,0 +1,231 @@
+!> Newton-Krylov statics for large models (docs/theory.md 7.3): the Newton system
+!> K_T dq = g(q) is solved by GMRES without forming K_T, each product K_T v a central
+!> difference of the generalised force along v (two evaluations, O(n) each on the sparse
+!> path), right-preconditioned by the structural stiffness K0 = DF_dy^T K_x DF_dy, which the
+!> augmented sparse system factors in O(n) (dynamics_augmented, the implicit integrators' form
+!> with the mass left out). K_T - K0 is the geometric and load stiffness, so GMRES needs as many
+!> iterations as K0^-1 K_T has distinct eigenvalue clusters, not n: O(n) per Newton iteration
+!> where the dense difference tangent costs 2 n_dy evaluations and an O(n^3) factorisation.
+!>
+!> Where K0 is singular (a released mode that only the loads stiffen: a pendulum under
+!> gravity) the preconditioner is K0 + s M, with s = 1e-8 tr(K_x) / tr(M) over the free
+!> coordinates: far below the stiffness of every elastic mode, it only makes P invertible.
+!>
+!> Stability of a converged equilibrium (K_T positive definite on the dynamic coordinates,
+!> as the dense path decides it): with P symmetric positive definite, K_T is so exactly when
+!> every eigenvalue of P^-1 K_T is positive (Sylvester), and those are found by Arnoldi (ARPACK
+!> dnaupd, smallest real part) on the same products and solves.
+module dynamics_static_krylov
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_NUMERIC
+  use dynamics_system, only: dynamics_t
+  implicit none
+  private
+  public :: krylov_statics_t
+
+  !> GMRES stops at this residual relative to |g|: Newton then contracts by about this much
+  !> per iteration, far below the 0.25 at which static_solve would call convergence slow.
+  real(wp), parameter :: GMRES_TOL = 1.0e-6_wp
+  integer, parameter :: RESTART = 60, MAX_PRODUCTS = 600
+
+  type :: krylov_statics_t
+    real(wp) :: h = 0.0_wp                    !< difference step along a unit (max-norm) v
+    real(wp) :: shift = 0.0_wp                !< s of K0 + s M (0: K0 alone)
+    integer :: n_products = 0, n_factors = 0
+  contains
+    procedure :: equilibrium => kry_equilibrium
+    procedure :: precondition => kry_precondition
+    procedure :: solve => kry_solve
+    procedure :: product => kry_product
+    procedure :: apply_p => kry_apply_p
+    procedure :: stable => kry_stable
+  end type krylov_statics_t
+
+  interface
+    !> Whether the equilibrium q_dy is stable: no real eigenvalue of P^-1 K_T below
+    !> -STABLE_MARGIN (complex pairs, from moments fixed in space, are not taken as unstable,
+    !> as in dynamics_static's stable_tangent). P is factored afresh at q_dy. Not `decided`
+    !> when the Arnoldi iteration does not converge. dynamics_static_krylov_stability.
+    module subroutine kry_stable(this, dyn, t, q_dy, stable, decided, err)
+      class(krylov_statics_t), intent(inout) :: this
+      type(dynamics_t), intent(inout) :: dyn
+      real(wp), intent(in) :: t, q_dy(:)
+      logical, intent(out) :: stable, decided
+      type(error_t), intent(out) :: err
+    end subroutine kry_stable
+  end interface
+
+contains
+
+  !> Newton from q_dy to the equilibrium g(q_dy) = 0 at the model's current load factor, with
+  !> the preconditioner factored once at the start; converged when a correction is at most
+  !> tol_abs. Leaves the kinematics at the equilibrium.
+  subroutine kry_equilibrium(this, dyn, t, q_dy, tol_abs, max_iter, iterations, err)
+    class(krylov_statics_t), intent(inout) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, tol_abs
+    real(wp), intent(inout) :: q_dy(:)
+    integer, intent(in) :: max_iter
+    integer, intent(inout) :: iterations
+    type(error_t), intent(out) :: err
+    real(wp) :: g(size(q_dy)), dq(size(q_dy))
+    integer :: it
+    character(len=200) :: msg
+    call this%precondition(dyn, t, q_dy, err)
+    if (.not. err%ok()) return
+    g = dyn%gen_force
+    do it = 1, max_iter
+      call this%solve(dyn, t, q_dy, g, dq, err)
+      if (.not. err%ok()) return
+      q_dy = q_dy + dq
+      iterations = iterations + 1
+      call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, g, err)
+      if (.not. err%ok()) return
+      if (maxval(abs(dq)) <= tol_abs) return
+    end do
+    write(msg, '(a,i0,a,f8.5,a,es10.3)') 'static analysis (krylov): Newton did not converge in ', &
+      max_iter, ' iterations at load factor ', dyn%load_factor, ', last correction ', &
+      maxval(abs(dq))
+    call err%set(ERR_NUMERIC, trim(msg))
+  end subroutine kry_equilibrium
+
+  !> Factor the preconditioner at q_dy (the model locked, as statics has it). Leaves the
+  !> generalised force there in dyn%gen_force.
+  subroutine kry_precondition(this, dyn, t, q_dy, err)
+    class(krylov_statics_t), intent(inout) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: g(size(q_dy)), traces(2)
+    integer :: info
+    call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, g, err)
+    if (.not. err%ok()) return
+    this%h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+    dyn%aug%de_val = dyn%kin%de_val
+    this%shift = 0.0_wp
+    call dyn%aug%factor_newton(dyn%model, dyn%mass, 1.0_wp, 0.0_wp, info, &
+      mass_scale=0.0_wp, traces=traces)
+    if (info /= 0 .and. traces(2) > 0) then
+      this%shift = 1.0e-8_wp * traces(1) / traces(2)
+      call dyn%aug%factor_newton(dyn%model, dyn%mass, 1.0_wp, 0.0_wp, info, &
+        mass_scale=this%shift)
+    end if
+    this%n_factors = this%n_factors + 1
+    if (info /= 0) call err%set(ERR_NUMERIC, 'static analysis (krylov): the structural ' // &
+      'stiffness is singular and nothing has mass to regularise it (a mechanism?); ' // &
+      'try &static solver = ''dense''')
+  end subroutine kry_precondition
+
+  !> z = P^-1 r with the factors of the last precondition.
+  subroutine kry_apply_p(this, dyn, r, z)
+    class(krylov_statics_t), intent(in) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: r(:)
+    real(wp), intent(out) :: z(:)
+    real(wp) :: z2(size(z), 1)
+    call dyn%aug%accelerations(dyn%model, dyn%aug%nodal_equivalent(dyn%model, &
+      reshape(r, [size(r), 1])), z2, newton=.true.)
+    z = z2(:, 1)
+  end subroutine kry_apply_p
+
+  !> K_T v = -dg/dq v by central differences of g along v / |v|_max, step h.
+  subroutine kry_product(this, dyn, t, q_dy, v, kv, err)
+    class(krylov_statics_t), intent(inout) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:), v(:)
+    real(wp), intent(out) :: kv(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: vmax, gp(size(q_dy)), gm(size(q_dy))
+    vmax = maxval(abs(v))
+    kv = 0.0_wp
+    if (vmax == 0) return
+    call dyn%generalised_force(t, q_dy + (this%h / vmax) * v, 0.0_wp * v, gp, err)
+    if (.not. err%ok()) return
+    call dyn%generalised_force(t, q_dy - (this%h / vmax) * v, 0.0_wp * v, gm, err)
+    if (.not. err%ok()) return
+    kv = -(gp - gm) * (vmax / (2 * this%h))
+    this%n_products = this%n_products + 1
+  end subroutine kry_product
+
+  !> dq with K_T dq = g at q_dy, by restarted GMRES right-preconditioned with P (the factors of
+  !> the last precondition): K_T P^-1 u = g, dq = P^-1 u. Relative residual GMRES_TOL.
+  subroutine kry_solve(this, dyn, t, q_dy, g, dq, err)
+    class(krylov_statics_t), intent(inout) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:), g(:)
+    real(wp), intent(out) :: dq(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: v(size(g), RESTART + 1), hm(RESTART + 1, RESTART), cs(RESTART), sn(RESTART)
+    real(wp) :: s(RESTART + 1), w(size(g)), z(size(g)), u(size(g)), y(RESTART)
+    real(wp) :: beta, g_norm, tmp, r(size(g))
+    integer :: j, i, n_done
+    character(len=160) :: msg
+    u = 0.0_wp
+    dq = 0.0_wp
+    g_norm = norm2(g)
+    if (g_norm == 0) return
+    r = g
+    n_done = 0
+    do
+      beta = norm2(r)
+      if (beta <= GMRES_TOL * g_norm) exit
+      if (n_done >= MAX_PRODUCTS) then
+        write(msg, '(a,i0,a,es9.2,a)') 'static analysis (krylov): GMRES did not converge in ', &
+          MAX_PRODUCTS, ' products (residual ', beta / g_norm, ' of the force; a critical ' // &
+          'load?); try &static solver = ''dense'''
+        call err%set(ERR_NUMERIC, trim(msg))
+        return
+      end if
+      v(:, 1) = r / beta
+      s = 0.0_wp
+      s(1) = beta
+      do j = 1, RESTART
+        call this%apply_p(dyn, v(:, j), z)
+        call this%product(dyn, t, q_dy, z, w, err)
+        if (.not. err%ok()) return
+        n_done = n_done + 1
+        ! Modified Gram-Schmidt, twice: the products carry difference noise, and a basis that
+        ! loses orthogonality stalls the residual estimate.
+        hm(:, j) = 0.0_wp
+        do i = 1, j
+          tmp = dot_product(v(:, i), w)
+          hm(i, j) = hm(i, j) + tmp
+          w = w - tmp * v(:, i)
+        end do
+        do i = 1, j
+          tmp = dot_product(v(:, i), w)
+          hm(i, j) = hm(i, j) + tmp
+          w = w - tmp * v(:, i)
+        end do
+        hm(j + 1, j) = norm2(w)
+        if (hm(j + 1, j) > 0) v(:, j + 1) = w / hm(j + 1, j)
+        do i = 1, j - 1
+          tmp = cs(i) * hm(i, j) + sn(i) * hm(i + 1, j)
+          hm(i + 1, j) = -sn(i) * hm(i, j) + cs(i) * hm(i + 1, j)
+          hm(i, j) = tmp
+        end do
+        tmp = hypot(hm(j, j), hm(j + 1, j))
+        cs(j) = hm(j, j) / tmp
+        sn(j) = hm(j + 1, j) / tmp
+        hm(j, j) = tmp
+        hm(j + 1, j) = 0.0_wp
+        s(j + 1) = -sn(j) * s(j)
+        s(j) = cs(j) * s(j)
+        if (abs(s(j + 1)) <= GMRES_TOL * g_norm .or. n_done >= MAX_PRODUCTS .or. &
+            j == RESTART) exit
+      end do
+      ! Back substitution for the cycle's coefficients, then its correction to u.
+      do i = j, 1, -1
+        y(i) = (s(i) - dot_product(hm(i, i + 1:j), y(i + 1:j))) / hm(i, i)
+      end do
+      u = u + matmul(v(:, 1:j), y(1:j))
+      ! The true residual (not the recurrence's): one more product, and a check on the noise.
+      call this%apply_p(dyn, u, dq)
+      call this%product(dyn, t, q_dy, dq, w, err)
+      if (.not. err%ok()) return
+      r = g - w
+      if (abs(s(j + 1)) <= GMRES_TOL * g_norm) exit
+    end do
+    call this%apply_p(dyn, u, dq)
+  end subroutine kry_solve
+end module dynamics_static_krylov
