@@ -2,12 +2,17 @@
 difference tangent (solver = 'dense'): the same equilibria and stability verdicts on spatial,
 compliant (elastic modes) and non-conservative (moments fixed in space) scenes, a column past its
 Euler load on both of Krylov's stability paths (formed matrix and Arnoldi), and the input
-errors."""
+errors; scripts/bench_statics.py on small meshes."""
+import csv
+import os
+import subprocess
+import sys
+
 import h5py
 import numpy as np
 import pytest
 
-from helpers import ROOT, assert_clean_error, run_scene
+from helpers import BIN, ROOT, assert_clean_error, run_scene
 
 
 def with_static(text, extra):
@@ -81,3 +86,33 @@ def test_column_past_its_euler_load(tmp_path, n_elements):
 def test_krylov_input_errors(tmp_path, text, fragments):
     proc, out = run_scene(tmp_path, text)
     assert_clean_error(proc, out, *fragments)
+
+
+def run_bench(*args):
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "python"))
+    return subprocess.run([sys.executable, str(ROOT / "scripts" / "bench_statics.py"),
+                           *map(str, args)], capture_output=True, text=True, timeout=300,
+                          env=env)
+
+
+def test_bench_statics_quick(tmp_path):
+    """scripts/bench_statics.py on two small meshes writes its table and CSV: both solvers at
+    each mesh, the Krylov rows with their products, the same tip from both solvers (the 4-beam
+    dense run within 1e-6 m of the 4-beam Krylov one; the tips are 60 m from the start)."""
+    proc = run_bench("--bin", BIN, "--meshes", "2,4", "--repeat", "1", "--out-dir", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    text = (tmp_path / "statics.md").read_text()
+    assert "| 4 | 24 | krylov |" in text and "| 2 | 12 | dense |" in text
+    with open(tmp_path / "statics.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [(r["beams"], r["solver"]) for r in rows] == [
+        ("2", "dense"), ("2", "krylov"), ("4", "dense"), ("4", "krylov")]
+    assert int(rows[3]["products"]) > 0 and int(rows[2]["products"]) == 0
+    assert float(rows[2]["tip_diff_m"]) < 1e-6
+
+
+@pytest.mark.parametrize("args", [["--meshes", "2,x"], ["--repeat", "0"],
+                                  ["--bin", "/nonexistent/flexmor"]])
+def test_bench_statics_bad_arguments(tmp_path, args):
+    proc = run_bench(*args, "--out-dir", tmp_path)
+    assert proc.returncode == 2 and "error" in proc.stderr
