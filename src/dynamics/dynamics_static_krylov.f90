@@ -158,7 +158,7 @@ contains
     real(wp) :: v(size(g), RESTART + 1), hm(RESTART + 1, RESTART), cs(RESTART), sn(RESTART)
     real(wp) :: s(RESTART + 1), w(size(g)), z(size(g)), u(size(g)), y(RESTART)
     real(wp) :: beta, g_norm, tmp, r(size(g))
-    integer :: j, i, n_done
+    integer :: j, i, n_done, pass
     character(len=160) :: msg
     u = 0.0_wp
     dq = 0.0_wp
@@ -187,15 +187,12 @@ contains
         ! Modified Gram-Schmidt, twice: the products carry difference noise, and a basis that
         ! loses orthogonality stalls the residual estimate.
         hm(:, j) = 0.0_wp
-        do i = 1, j
-          tmp = dot_product(v(:, i), w)
-          hm(i, j) = hm(i, j) + tmp
-          w = w - tmp * v(:, i)
-        end do
-        do i = 1, j
-          tmp = dot_product(v(:, i), w)
-          hm(i, j) = hm(i, j) + tmp
-          w = w - tmp * v(:, i)
+        do pass = 1, 2
+          do i = 1, j
+            tmp = dot_product(v(:, i), w)
+            hm(i, j) = hm(i, j) + tmp
+            w = w - tmp * v(:, i)
+          end do
         end do
         hm(j + 1, j) = norm2(w)
         if (hm(j + 1, j) > 0) v(:, j + 1) = w / hm(j + 1, j)

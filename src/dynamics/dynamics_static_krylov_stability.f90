@@ -3,6 +3,7 @@
 !> product with K_T (two evaluations) and one solve with P; a small problem directly.
 submodule (dynamics_static_krylov) dynamics_static_krylov_stability
   use core_linalg, only: gen_eig_values
+  use core_arpack, only: dnaupd, dneupd
   implicit none
 
   !> mu = eigenvalue of P^-1 K_T is a ratio to the structural stiffness (1 where the loads add
@@ -13,34 +14,6 @@ submodule (dynamics_static_krylov) dynamics_static_krylov_stability
   real(wp), parameter :: STABLE_MARGIN = 1.0e-6_wp
   !> Below this size the n x n matrix P^-1 K_T is formed by n products and solved by LAPACK.
   integer, parameter :: ARNOLDI_ABOVE = 30
-
-  interface
-    subroutine dnaupd(ido, bmat, n, which, nev, tol, resid, ncv, v, ldv, iparam, ipntr, &
-      workd, workl, lworkl, info)
-      import :: wp
-      integer, intent(inout) :: ido
-      character(len=1), intent(in) :: bmat
-      integer, intent(in) :: n, nev, ncv, ldv, lworkl
-      character(len=2), intent(in) :: which
-      real(wp), intent(inout) :: tol
-      real(wp), intent(inout) :: resid(*), v(ldv, *), workd(*), workl(*)
-      integer, intent(inout) :: iparam(11), ipntr(14), info
-    end subroutine dnaupd
-    subroutine dneupd(rvec, howmny, sel, dr, di, z, ldz, sigmar, sigmai, workev, bmat, n, &
-      which, nev, tol, resid, ncv, v, ldv, iparam, ipntr, workd, workl, lworkl, info)
-      import :: wp
-      integer, intent(in) :: ldz, n, nev, ncv, ldv, lworkl
-      logical, intent(in) :: rvec
-      character(len=1), intent(in) :: howmny, bmat
-      logical, intent(inout) :: sel(*)
-      real(wp), intent(out) :: dr(*), di(*), z(ldz, *), workev(*)
-      real(wp), intent(in) :: sigmar, sigmai
-      character(len=2), intent(in) :: which
-      real(wp), intent(inout) :: tol
-      real(wp), intent(inout) :: resid(*), v(ldv, *), workd(*), workl(*)
-      integer, intent(inout) :: iparam(11), ipntr(14), info
-    end subroutine dneupd
-  end interface
 
 contains
 

@@ -11,6 +11,7 @@ module reduction_eigen
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use core_linalg, only: sym_gen_eig, chol_factor
   use core_strings, only: int_str
+  use core_arpack, only: dsaupd, dseupd
   implicit none
   private
   public :: lowest_modes, eigen_solver_choice
@@ -35,33 +36,6 @@ module reduction_eigen
     1.0_wp, 1.0e2_wp, 1.0e4_wp]
 
   interface
-    subroutine dsaupd(ido, bmat, n, which, nev, tol, resid, ncv, v, ldv, iparam, ipntr, &
-      workd, workl, lworkl, info)
-      import :: wp
-      integer, intent(inout) :: ido
-      character(len=1), intent(in) :: bmat
-      integer, intent(in) :: n, nev, ncv, ldv, lworkl
-      character(len=2), intent(in) :: which
-      real(wp), intent(inout) :: tol
-      real(wp), intent(inout) :: resid(*), v(ldv, *), workd(*), workl(*)
-      integer, intent(inout) :: iparam(11), ipntr(11), info
-    end subroutine dsaupd
-    subroutine dseupd(rvec, howmny, sel, d, z, ldz, sigma, bmat, n, which, nev, tol, resid, &
-      ncv, v, ldv, iparam, ipntr, workd, workl, lworkl, info)
-      import :: wp
-      logical, intent(in) :: rvec
-      character(len=1), intent(in) :: howmny, bmat
-      logical, intent(inout) :: sel(*)
-      real(wp), intent(out) :: d(*)
-      integer, intent(in) :: ldz, n, nev, ncv, ldv, lworkl
-      real(wp), intent(out) :: z(ldz, *)
-      real(wp), intent(in) :: sigma
-      character(len=2), intent(in) :: which
-      real(wp), intent(inout) :: tol
-      real(wp), intent(inout) :: resid(*), v(ldv, *), workd(*), workl(*)
-      integer, intent(inout) :: iparam(11), ipntr(11)
-      integer, intent(inout) :: info
-    end subroutine dseupd
     subroutine dsymv(uplo, n, alpha, a, lda, x, incx, beta, y, incy)
       import :: wp
       character(len=1), intent(in) :: uplo
