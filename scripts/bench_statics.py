@@ -2,7 +2,9 @@
 """Cost of a static analysis against model size: Bathe and Bolourchi's 45-degree bend
 (input/bend45.nml: tip force raised to 600 in 4 load steps) with n beams, solved by Newton with
 the dense difference tangent (&static solver = 'dense') and by Newton-Krylov ('krylov'),
-docs/theory.md 7.3.
+docs/theory.md 7.3; and the linearised lateral-torsional buckling of a narrow cantilever
+(input/lateral_buckling.nml's scene with n beams) by the dense eigenproblem and matrix-free
+(&buckling solver).
 
 Per mesh and solver: the processor time of the analysis (root attribute ``cpu_time_s``, the
 least of --repeat runs), the Newton iterations, the products with the tangent (Krylov), and the
@@ -33,7 +35,7 @@ import numpy as np
 
 from flexmor.bench import command_line, cpu_model, git_commit, usable_cores, write_csv
 from flexmor.results import run_attributes
-from spatial_examples import bend45_scene
+from spatial_examples import bend45_scene, lateral_buckling_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -57,6 +59,20 @@ def run_once(binary, folder, n, solver):
         tip = f["static/nodes/tip/position"][-1]
     return float(run_attributes(out)["cpu_time_s"]), iterations, \
         int(found.group(1)) if found else 0, tip
+
+
+def buckling_once(binary, folder, n, solver):
+    """One buckling run: cpu time [s] and the lowest multiplier [N]."""
+    text = lateral_buckling_scene(n).replace("&buckling ", f"&buckling solver = '{solver}', ")
+    nml, out = Path(folder) / f"ltb_{solver}_{n}.nml", Path(folder) / f"ltb_{solver}_{n}.h5"
+    nml.write_text(text)
+    proc = subprocess.run([str(binary), str(nml), "-o", str(out), "-q"], capture_output=True,
+                          text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{nml.name}: {proc.stderr.strip()}")
+    with h5py.File(out) as f:
+        mu = float(f["buckling/load_factor"][0])
+    return float(run_attributes(out)["cpu_time_s"]), mu
 
 
 def fit_exponent(ns, times):
@@ -83,9 +99,19 @@ def main(argv=None):
         p.error("--meshes and --repeat must be >= 1")
     if not args.bin.is_file():
         p.error(f"--bin: no flexmor binary at {args.bin}")
-    rows = []
+    rows, buckling = [], []
     with tempfile.TemporaryDirectory() as folder:
         try:
+            for n in meshes:
+                for solver in ("dense", "krylov"):
+                    if solver == "dense" and n > 2 * args.dense_max:
+                        continue
+                    runs = [buckling_once(args.bin, folder, n, solver)
+                            for _ in range(args.repeat)]
+                    buckling.append(dict(beams=n, solver=solver,
+                                         cpu_s=min(r[0] for r in runs), mu=runs[0][1]))
+                    print(f"{n:4d} beams buckling {solver:6s} {buckling[-1]['cpu_s']:8.3f} s  "
+                          f"mu {runs[0][1]:.6f} N", flush=True)
             for n in meshes:
                 for solver in ("dense", "krylov"):
                     if solver == "dense" and n > args.dense_max:
@@ -125,6 +151,17 @@ def main(argv=None):
                      f"{r['newton']} | {r['products'] or '-'} | {r['tip_diff_m']:.2e} |")
     lines += ["", "Fitted exponent of cpu time ~ n^p from 16 beams on: "
               + ", ".join(f"{s} {e:.2f}" for s, e in exps.items() if not math.isnan(e)) + "."]
+    lines += ["", "## Lateral-torsional buckling of the narrow cantilever", "",
+              "The lowest multiplier (the critical tip force) and the processor time, both "
+              "solvers; the dense path up to twice the meshes of the bend's.", "",
+              "| beams | solver | cpu [s] | critical force [N] |", "| --- | --- | --- | --- |"]
+    for r in buckling:
+        lines.append(f"| {r['beams']} | {r['solver']} | {r['cpu_s']:.3f} | {r['mu']:.6f} |")
+    bexps = {s: fit_exponent([r["beams"] for r in buckling if r["solver"] == s],
+                             [r["cpu_s"] for r in buckling if r["solver"] == s])
+             for s in ("dense", "krylov")}
+    lines += ["", "Fitted exponent of the buckling cpu time from 16 beams on: "
+              + ", ".join(f"{s} {e:.2f}" for s, e in bexps.items() if not math.isnan(e)) + "."]
     (args.out_dir / "statics.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines[-1:]))
     return 0

@@ -405,7 +405,7 @@ contains
     type(run_t), intent(inout) :: this
     type(error_t), intent(out) :: err
     call buckling_analysis(this%dyn, 0.0_wp, this%q_static, this%scene%buckling%n_modes, &
-      this%scene%buckling%load_factor, this%buckling, err)
+      this%scene%buckling%load_factor, this%buckling, err, solver=this%scene%buckling%solver)
     if (.not. err%ok()) return
     if (size(this%buckling%load_factor) == 0) then
       call add_warning(this, 'buckling: no positive load multiplier: the loads compress ' // &

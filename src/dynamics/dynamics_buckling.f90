@@ -26,6 +26,7 @@ module dynamics_buckling
   use core_strings, only: int_str
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: tangent_stiffness
+  use dynamics_buckling_krylov, only: krylov_buckling, krylov_buckling_applies
   implicit none
   private
   public :: buckling_result_t, buckling_analysis, THETA_CUTOFF
@@ -35,6 +36,9 @@ module dynamics_buckling
   !> the k-th Euler multiplier of a column is k^2 times the first, so real multipliers stay
   !> above the cutoff up to k = 1e4.
   real(wp), parameter :: THETA_CUTOFF = 1.0e-8_wp
+  !> solver = 'auto' takes the matrix-free path (dynamics_buckling_krylov) where it applies
+  !> above this many dynamic coordinates, as statics does (dynamics_static's KRYLOV_ABOVE).
+  integer, parameter :: KRYLOV_ABOVE = 40
 
   !> Result of one buckling analysis; n = the number of positive multipliers kept.
   type :: buckling_result_t
@@ -42,7 +46,8 @@ module dynamics_buckling
     real(wp), allocatable :: shapes(:, :)       !< (n_dy, n), unit largest nodal translation
     real(wp), allocatable :: node_shapes(:, :)  !< (n_x, n) nodal: DF_dy v, same scaling
     real(wp), allocatable :: k0(:, :), kg(:, :) !< K0 and K_G (per unit load factor)
-    integer :: n_negative = 0                   !< multipliers of the reversed load left out
+    !> multipliers of the reversed load left out (-1: not counted, the matrix-free path)
+    integer :: n_negative = 0
   end type buckling_result_t
 
 contains
@@ -51,13 +56,18 @@ contains
   !> of them, lowest first, K_G differenced at load factor lambda_ref. dyn%load_factor is
   !> restored on return.
   !> `held`: nodal coordinate indices (model%node_coord) held at zero in the shapes.
-  subroutine buckling_analysis(dyn, t, q_dy, n_modes, lambda_ref, res, err, held)
+  !> `solver`: 'dense', 'krylov' (matrix-free, where dynamics_buckling_krylov applies) or
+  !> 'auto' (the default: krylov where it applies above KRYLOV_ABOVE coordinates).
+  subroutine buckling_analysis(dyn, t, q_dy, n_modes, lambda_ref, res, err, held, solver)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:), lambda_ref
     integer, intent(in) :: n_modes
     type(buckling_result_t), intent(out) :: res
     type(error_t), intent(out) :: err
     integer, intent(in), optional :: held(:)
+    character(len=*), intent(in), optional :: solver
+    character(len=:), allocatable :: why_not
+    logical :: krylov
     real(wp), allocatable :: kt(:, :), a(:, :), theta(:), v(:, :), z(:, :), k0z(:, :), kgz(:, :)
     real(wp) :: saved, big
     integer :: n, info, i, nk, nz
@@ -80,6 +90,31 @@ contains
         size(dyn%model%moment_lambda) > 0)) then
       call err%set(ERR_INPUT, 'group &buckling: the scene has no load (no &force and no ' // &
         'gravity) to take the buckling multipliers of')
+      return
+    end if
+    why_not = krylov_buckling_applies(dyn, present(held))
+    krylov = len(why_not) == 0 .and. n > KRYLOV_ABOVE
+    if (present(solver)) then
+      if (solver == 'dense') krylov = .false.
+      if (solver == 'krylov') then
+        if (len(why_not) > 0) then
+          call err%set(ERR_INPUT, 'group &buckling: variable ''solver'' = ''krylov'' does ' // &
+            'not apply: ' // why_not // ' (use ''dense'' or ''auto'')')
+          return
+        end if
+        krylov = .true.
+      end if
+    end if
+    if (krylov) then
+      call krylov_buckling(dyn, t, q_dy, n_modes, lambda_ref, THETA_CUTOFF, theta, &
+        res%shapes, res%node_shapes, err)
+      if (.not. err%ok()) return
+      nk = min(n_modes, size(theta))
+      res%load_factor = 1 / theta(1:nk)
+      res%shapes = res%shapes(:, 1:nk)
+      res%node_shapes = res%node_shapes(:, 1:nk)
+      res%n_negative = -1
+      call normalise(dyn, res)
       return
     end if
     allocate(res%k0(n, n), kt(n, n))

@@ -37,6 +37,7 @@ module dynamics_static_krylov
     procedure :: precondition => kry_precondition
     procedure :: solve => kry_solve
     procedure :: product => kry_product
+    procedure :: load_product => kry_load_product
     procedure :: apply_p => kry_apply_p
     procedure :: stable => kry_stable
   end type krylov_statics_t
@@ -116,16 +117,28 @@ contains
       'try &static solver = ''dense''')
   end subroutine kry_precondition
 
-  !> z = P^-1 r with the factors of the last precondition.
+  !> z = P^-1 r with the factors of the last precondition. Where P = K0 is the dynamic modes'
+  !> stiffness alone (no elastic modes, no shift), K0 z is exact and cheap (dyn%stresses), and
+  !> one step of iterative refinement takes the augmented system's round-off out of z: its
+  !> saddle-point form (element stiffnesses EA/l beside constraint rows of order 1) is far worse
+  !> conditioned than K0, and buckling and stability read small eigenvalues through it.
   subroutine kry_apply_p(this, dyn, r, z)
     class(krylov_statics_t), intent(in) :: this
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: r(:)
     real(wp), intent(out) :: z(:)
-    real(wp) :: z2(size(z), 1)
-    call dyn%aug%accelerations(dyn%model, dyn%aug%nodal_equivalent(dyn%model, &
-      reshape(r, [size(r), 1])), z2, newton=.true.)
-    z = z2(:, 1)
+    real(wp) :: z2(size(z), 1), q_full(dyn%model%n_q)
+    integer :: pass
+    z = 0.0_wp
+    z2(:, 1) = r
+    q_full = 0.0_wp
+    do pass = 1, merge(2, 1, dyn%model%n_elastic == 0 .and. this%shift == 0)
+      call dyn%aug%accelerations(dyn%model, dyn%aug%nodal_equivalent(dyn%model, z2), z2, &
+        newton=.true.)
+      z = z + z2(:, 1)
+      q_full(dyn%model%n_rh + 1:) = z
+      z2(:, 1) = r - dyn%stresses(q_full, 0.0_wp * q_full)
+    end do
   end subroutine kry_apply_p
 
   !> K_T v = -dg/dq v by central differences of g along v / |v|_max, step h.
@@ -136,7 +149,7 @@ contains
     real(wp), intent(out) :: kv(:)
     type(error_t), intent(out) :: err
     real(wp) :: vmax, gp(size(q_dy)), gm(size(q_dy))
-    vmax = maxval(abs(v))
+    vmax = sum(abs(v))
     kv = 0.0_wp
     if (vmax == 0) return
     call dyn%generalised_force(t, q_dy + (this%h / vmax) * v, 0.0_wp * v, gp, err)
@@ -146,6 +159,39 @@ contains
     kv = -(gp - gm) * (vmax / (2 * this%h))
     this%n_products = this%n_products + 1
   end subroutine kry_product
+
+  !> K_L v = (K_T - S_dd) v, the tangent without the dynamic modes' own (linear) stiffness:
+  !> central differences of the load part DF_dy^T f = g + sigma_dy alone, as the dense
+  !> tangent differences it. Where K0 = S_dd (no elastic modes), P^-1 K_T = I + P^-1 K_L: the
+  !> eigenvalue problems take that form, since P^-1 (K0 v + K_L v) would lose the small
+  !> K_L v against K0 v to the solve's round-off, eps cond(K0) |v|.
+  subroutine kry_load_product(this, dyn, t, q_dy, v, kv, err)
+    class(krylov_statics_t), intent(inout) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:), v(:)
+    real(wp), intent(out) :: kv(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: vmax, fp(size(q_dy)), fm(size(q_dy))
+    vmax = sum(abs(v))
+    kv = 0.0_wp
+    if (vmax == 0) return
+    call load_part(q_dy + (this%h / vmax) * v, fp)
+    if (.not. err%ok()) return
+    call load_part(q_dy - (this%h / vmax) * v, fm)
+    if (.not. err%ok()) return
+    kv = -(fp - fm) * (vmax / (2 * this%h))
+    this%n_products = this%n_products + 1
+  contains
+    subroutine load_part(q, f)
+      real(wp), intent(in) :: q(:)
+      real(wp), intent(out) :: f(:)
+      real(wp) :: q_full(dyn%model%n_q)
+      call dyn%generalised_force(t, q, 0.0_wp * q, f, err)
+      if (.not. err%ok()) return
+      q_full = dyn%full_q(t, q)
+      f = f + dyn%stresses(q_full, 0.0_wp * q_full)
+    end subroutine load_part
+  end subroutine kry_load_product
 
   !> dq with K_T dq = g at q_dy, by restarted GMRES right-preconditioned with P (the factors of
   !> the last precondition): K_T P^-1 u = g, dq = P^-1 u. Relative residual GMRES_TOL.

@@ -34,6 +34,27 @@ contains
     stable = all(mu_r > -STABLE_MARGIN .or. abs(mu_i) > STABLE_MARGIN)
   end procedure kry_stable
 
+  !> y = P^-1 K_T x: as x + P^-1 K_L x where P = K0 holds the dynamic modes' stiffness alone
+  !> (no elastic modes, no shift: kry_load_product says why), else directly.
+  subroutine apply_op(kry, dyn, t, q_dy, x, y, err)
+    type(krylov_statics_t), intent(inout) :: kry
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:), x(:)
+    real(wp), intent(out) :: y(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: kv(size(x))
+    if (dyn%model%n_elastic == 0 .and. kry%shift == 0) then
+      call kry%load_product(dyn, t, q_dy, x, kv, err)
+      if (.not. err%ok()) return
+      call kry%apply_p(dyn, kv, y)
+      y = x + y
+    else
+      call kry%product(dyn, t, q_dy, x, kv, err)
+      if (.not. err%ok()) return
+      call kry%apply_p(dyn, kv, y)
+    end if
+  end subroutine apply_op
+
   subroutine all_eigenvalues(kry, dyn, t, q_dy, mu_r, mu_i, err)
     type(krylov_statics_t), intent(inout) :: kry
     type(dynamics_t), intent(inout) :: dyn
@@ -41,15 +62,13 @@ contains
     real(wp), allocatable, intent(out) :: mu_r(:), mu_i(:)
     type(error_t), intent(out) :: err
     real(wp) :: a(size(q_dy), size(q_dy)), id(size(q_dy), size(q_dy)), e(size(q_dy))
-    real(wp) :: kv(size(q_dy))
     integer :: j, info
     id = 0.0_wp
     do j = 1, size(q_dy)
       id(j, j) = 1.0_wp
       e = id(:, j)
-      call kry%product(dyn, t, q_dy, e, kv, err)
+      call apply_op(kry, dyn, t, q_dy, e, a(:, j), err)
       if (.not. err%ok()) return
-      call kry%apply_p(dyn, kv, a(:, j))
     end do
     allocate(mu_r(size(q_dy)), mu_i(size(q_dy)))
     call gen_eig_values(a, id, mu_r, mu_i, info)
@@ -70,7 +89,7 @@ contains
     integer, parameter :: NEV = 3, NCV = 20
     integer :: n, ido, info, iparam(11), ipntr(14), lworkl
     real(wp) :: tol, resid(size(q_dy)), v(size(q_dy), NCV), workd(3 * size(q_dy))
-    real(wp) :: kv(size(q_dy)), dr(NEV + 1), di(NEV + 1), z(1, 1), workev(3 * NCV)
+    real(wp) :: dr(NEV + 1), di(NEV + 1), z(1, 1), workev(3 * NCV)
     real(wp), allocatable :: workl(:)
     logical :: sel(NCV)
     character(len=240) :: msg
@@ -89,9 +108,9 @@ contains
       call dnaupd(ido, 'I', n, 'SR', NEV, tol, resid, NCV, v, n, iparam, ipntr, workd, &
         workl, lworkl, info)
       if (ido /= 1 .and. ido /= -1) exit
-      call kry%product(dyn, t, q_dy, workd(ipntr(1):ipntr(1) + n - 1), kv, err)
+      call apply_op(kry, dyn, t, q_dy, workd(ipntr(1):ipntr(1) + n - 1), &
+        workd(ipntr(2):ipntr(2) + n - 1), err)
       if (.not. err%ok()) return
-      call kry%apply_p(dyn, kv, workd(ipntr(2):ipntr(2) + n - 1))
     end do
     if (info == 1) return
     if (info < 0 .or. info > 1) then

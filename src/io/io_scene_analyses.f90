@@ -54,6 +54,7 @@ contains
     scene%buckling%active = .true.
     call rd_int(g, 'n_modes', scene%buckling%n_modes, err)
     call rd_real(g, 'load_factor', scene%buckling%load_factor, err)
+    call rd_choice(g, 'solver', scene%buckling%solver, err)
   end subroutine read_buckling
 
   subroutine read_controller(g, r, err)

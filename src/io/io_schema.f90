@@ -442,13 +442,16 @@ module io_schema
     var_spec_t('linear', 'times', VK_REAL_LIST, 's', 'none', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'times along the dynamic run')]
-  type(var_spec_t), parameter :: BUCKLING_VARS(2) = [ &
+  type(var_spec_t), parameter :: BUCKLING_VARS(3) = [ &
     var_spec_t('buckling', 'n_modes', VK_INT, '', '6', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
       '', 'multipliers kept'), &
     var_spec_t('buckling', 'load_factor', VK_REAL, '', '1', .false., &
       0.0_wp, .true., huge(1.0_wp), .false., &
-      '', 'load factor of the difference')]
+      '', 'load factor of the difference'), &
+    var_spec_t('buckling', 'solver', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|dense|krylov', 'dense eigenproblem or matrix-free Arnoldi')]
   type(var_spec_t), parameter :: DYNAMIC_VARS(11) = [ &
     var_spec_t('dynamic', 't_end', VK_REAL, 's', '', .true., &
       0.0_wp, .true., huge(1.0_wp), .false., &
@@ -525,7 +528,7 @@ module io_schema
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(155) = [ &
+  type(var_spec_t), parameter :: SCHEMA(156) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

@@ -161,6 +161,7 @@ module model_scene
     logical :: active = .false.
     integer :: n_modes = 6             !< at most this many multipliers, lowest first
     real(wp) :: load_factor = 1.0_wp   !< load factor at which K_G is differenced
+    character(len=:), allocatable :: solver   !< 'auto', 'dense' or 'krylov'
   end type buckling_rec_t
 
   !> A feedback controller (docs/input.md, &controller).
