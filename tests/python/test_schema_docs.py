@@ -1,4 +1,4 @@
-"""The scene schema (`flexmor --schema`, declared once in src/io/io_schema.f90) and the tables
+"""The scene schema (`flexmor --schema`, declared once in src/io/io_schema_tables.f90) and the tables
 of docs/input.md describe the same variables: each variable of a group's table is in the
 schema and each schema variable in its group's table, with the same unit."""
 import re

@@ -1,0 +1,504 @@
+!> The scene schema's table: every input variable of a scene file, group by group (see
+!> io_schema). A new variable is one entry here, its group's count and SCHEMA's, and a row
+!> in docs/input.md (tests/python/test_schema_docs.py compares them).
+module io_schema_tables
+  use core_kinds, only: wp
+  use io_schema_types, only: var_spec_t, VK_REAL, VK_INT, VK_LOGICAL, VK_STRING, VK_CHOICE, &
+    VK_REAL_LIST, VK_STRING_LIST, VK_CHOICE_LIST
+  implicit none
+  private
+  public :: SCHEMA
+
+  type(var_spec_t), parameter :: SCENE_VARS(4) = [ &
+    var_spec_t('scene', 'title', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'free text, the result file title attribute'), &
+    var_spec_t('scene', 'gravity', VK_REAL_LIST, 'm/s^2', '0, 0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'gravitational acceleration (gx, gy)'), &
+    var_spec_t('scene', 'linear_solver', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|dense|sparse', 'dense (LAPACK) or sparse (KLU) linear algebra'), &
+    var_spec_t('scene', 'dimension', VK_INT, '', '2', .false., &
+      2.0_wp, .false., 3.0_wp, .false., &
+      '', 'planar (2) or spatial (3)')]
+  type(var_spec_t), parameter :: NODE_VARS(17) = [ &
+    var_spec_t('node', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'unique name'), &
+    var_spec_t('node', 'x', VK_REAL, 'm', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'reference position'), &
+    var_spec_t('node', 'y', VK_REAL, 'm', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'reference position'), &
+    var_spec_t('node', 'fixed', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'default of fix_x, fix_y, fix_phi'), &
+    var_spec_t('node', 'fix_x', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hold that coordinate'), &
+    var_spec_t('node', 'fix_y', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hold that coordinate'), &
+    var_spec_t('node', 'fix_phi', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hold that coordinate'), &
+    var_spec_t('node', 'dynamic', VK_CHOICE_LIST, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'x|y|phi|z|rotation', 'coordinates that are degrees of freedom'), &
+    var_spec_t('node', 'motion_x', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion prescribing that coordinate'), &
+    var_spec_t('node', 'motion_y', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion prescribing that coordinate'), &
+    var_spec_t('node', 'motion_phi', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion prescribing that coordinate'), &
+    var_spec_t('node', 'motion_z', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion prescribing that coordinate (spatial)'), &
+    var_spec_t('node', 'z', VK_REAL, 'm', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'reference position (spatial scenes)'), &
+    var_spec_t('node', 'fix_z', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'support (spatial scenes)'), &
+    var_spec_t('node', 'fix_rotation', VK_LOGICAL, '', 'fixed', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'clamp the rotation (spatial scenes)'), &
+    var_spec_t('node', 'motion_rotation', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion driving the rotation angle (spatial)'), &
+    var_spec_t('node', 'rotation_axis', VK_REAL_LIST, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'axis of motion_rotation, fixed in space')]
+  type(var_spec_t), parameter :: LINK_VARS(19) = [ &
+    var_spec_t('link', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'unique name'), &
+    var_spec_t('link', 'from', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'end node labels'), &
+    var_spec_t('link', 'to', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'end node labels'), &
+    var_spec_t('link', 'n_elements', VK_INT, '', '1', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'beam elements'), &
+    var_spec_t('link', 'E', VK_REAL, 'N/m^2 (Pa)', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'Young''s modulus'), &
+    var_spec_t('link', 'A', VK_REAL, 'm^2', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'cross-section area'), &
+    var_spec_t('link', 'I', VK_REAL, 'm^4', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'second moment of area'), &
+    var_spec_t('link', 'rho', VK_REAL, 'kg/m^3', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'density'), &
+    var_spec_t('link', 'G', VK_REAL, 'N/m^2', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'shear modulus, 0 = Euler-Bernoulli'), &
+    var_spec_t('link', 'shear_factor', VK_REAL, '', '5/6', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'shear correction factor'), &
+    var_spec_t('link', 'elongation', VK_CHOICE_LIST, '', 'rigid', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|dynamic|elastic', 'elongation class, 1 or n_elements values'), &
+    var_spec_t('link', 'bending', VK_CHOICE_LIST, '', 'dynamic', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|dynamic|elastic', 'bending classes, 1, n_elements or 2 n_elements values'), &
+    var_spec_t('link', 'bending_form', VK_CHOICE, '', 'angle', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'angle|sine', 'bending measure'), &
+    var_spec_t('link', 'mass', VK_CHOICE, '', 'consistent', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'consistent|lumped', 'mass model'), &
+    var_spec_t('link', 'damping', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'stiffness-proportional time constant'), &
+    var_spec_t('link', 'Iy', VK_REAL, 'm^4', 'I', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'second moment about section y (spatial)'), &
+    var_spec_t('link', 'J', VK_REAL, 'm^4', '', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'torsion constant (spatial scenes)'), &
+    var_spec_t('link', 'orientation', VK_REAL_LIST, '', 'z x chord', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'section y axis direction (spatial scenes)'), &
+    var_spec_t('link', 'rotary_inertia', VK_REAL_LIST, 'kg m', 'rho(Iy+I, Iy, I)', &
+      .false., 0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'rotary inertia per length about x, y, z (spatial)')]
+  type(var_spec_t), parameter :: HINGE_VARS(14) = [ &
+    var_spec_t('hinge', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'name'), &
+    var_spec_t('hinge', 'node', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'node label'), &
+    var_spec_t('hinge', 'link', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'link label'), &
+    var_spec_t('hinge', 'mode', VK_CHOICE, '', 'dynamic', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|prescribed|dynamic|elastic', 'class of the relative rotation'), &
+    var_spec_t('hinge', 'motion', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion of a prescribed hinge'), &
+    var_spec_t('hinge', 'stiffness', VK_REAL, 'N m/rad', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'torsion spring'), &
+    var_spec_t('hinge', 'damping', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'stiffness-proportional time constant'), &
+    var_spec_t('hinge', 'axis', VK_REAL_LIST, '', '0, 0, 1', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hinge axis direction (spatial)'), &
+    var_spec_t('hinge', 'type', VK_CHOICE, '', 'revolute', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'revolute|universal|spherical', 'joint type (spatial)'), &
+    var_spec_t('hinge', 'torque', VK_REAL, 'N m', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'actuator torque on a dynamic hinge'), &
+    var_spec_t('hinge', 'torque_law', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion whose value scales torque'), &
+    var_spec_t('hinge', 'kp', VK_REAL, 'N m/rad', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'PD controller: proportional gain'), &
+    var_spec_t('hinge', 'kd', VK_REAL, 'N m s/rad', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'PD controller: derivative gain'), &
+    var_spec_t('hinge', 'reference', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'PD controller: motion of the reference angle')]
+  type(var_spec_t), parameter :: TRUSS_VARS(11) = [ &
+    var_spec_t('truss', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'name'), &
+    var_spec_t('truss', 'from', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'end node labels'), &
+    var_spec_t('truss', 'to', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'end node labels'), &
+    var_spec_t('truss', 'E', VK_REAL, 'N/m^2', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'Young''s modulus'), &
+    var_spec_t('truss', 'A', VK_REAL, 'm^2', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'area'), &
+    var_spec_t('truss', 'rho', VK_REAL, 'kg/m^3', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'density, 0 = massless'), &
+    var_spec_t('truss', 'mode', VK_CHOICE, '', 'dynamic', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|dynamic|elastic', 'class of the elongation'), &
+    var_spec_t('truss', 'mass', VK_CHOICE, '', 'consistent', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'consistent|lumped', 'mass model'), &
+    var_spec_t('truss', 'damping', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'stiffness-proportional time constant'), &
+    var_spec_t('truss', 'force', VK_REAL, 'N', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'actuator force along a dynamic truss'), &
+    var_spec_t('truss', 'force_law', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion whose value scales force')]
+  type(var_spec_t), parameter :: SLIDER_VARS(6) = [ &
+    var_spec_t('slider', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'name'), &
+    var_spec_t('slider', 'node', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'node label'), &
+    var_spec_t('slider', 'direction', VK_REAL_LIST, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'guide direction (dx, dy)'), &
+    var_spec_t('slider', 'mode', VK_CHOICE, '', 'rigid', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'rigid|released|dynamic|elastic', 'class of the offset across the guide'), &
+    var_spec_t('slider', 'stiffness', VK_REAL, 'N/m', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'guide spring across the guide'), &
+    var_spec_t('slider', 'damping', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'stiffness-proportional time constant')]
+  type(var_spec_t), parameter :: MASS_VARS(6) = [ &
+    var_spec_t('mass', 'node', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'node label'), &
+    var_spec_t('mass', 'm', VK_REAL, 'kg', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'point mass'), &
+    var_spec_t('mass', 'J', VK_REAL, 'kg m^2', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'rotary inertia'), &
+    var_spec_t('mass', 'inertia', VK_REAL_LIST, 'kg m^2', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'inertia tensor Jxx, Jyy, Jzz, Jxy, Jxz, Jyz (spatial)'), &
+    var_spec_t('mass', 'rotation', VK_REAL_LIST, 'rad', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'axes of inertia: axis (3) and angle (spatial)'), &
+    var_spec_t('mass', 'axes', VK_REAL_LIST, '', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'axes of inertia: x axis, vector in x-y plane (3D)')]
+  type(var_spec_t), parameter :: FORCE_VARS(9) = [ &
+    var_spec_t('force', 'node', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'node label'), &
+    var_spec_t('force', 'fx', VK_REAL, 'N', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'force components'), &
+    var_spec_t('force', 'fy', VK_REAL, 'N', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'force components'), &
+    var_spec_t('force', 'moment', VK_REAL, 'N m', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'moment'), &
+    var_spec_t('force', 'time_law', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion whose value multiplies the load'), &
+    var_spec_t('force', 'fz', VK_REAL, 'N', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'force component (spatial scenes)'), &
+    var_spec_t('force', 'mx', VK_REAL, 'N m', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'moment, fixed in space (spatial scenes)'), &
+    var_spec_t('force', 'my', VK_REAL, 'N m', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'moment, fixed in space (spatial scenes)'), &
+    var_spec_t('force', 'mz', VK_REAL, 'N m', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'moment, fixed in space (spatial scenes)')]
+  type(var_spec_t), parameter :: MOTION_VARS(14) = [ &
+    var_spec_t('motion', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'unique name'), &
+    var_spec_t('motion', 'law', VK_CHOICE, '', 'cubic', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'constant|cubic|quintic|cycloidal|ramp|harmonic|spin_up|sum|table', 'time law'), &
+    var_spec_t('motion', 'start', VK_REAL, 'rad', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'value before t0'), &
+    var_spec_t('motion', 't0', VK_REAL, 's', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'start time'), &
+    var_spec_t('motion', 'end', VK_REAL, 'rad', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'value after t0 + duration'), &
+    var_spec_t('motion', 'duration', VK_REAL, 's', 'law', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'length of the motion'), &
+    var_spec_t('motion', 'rate', VK_REAL, 'rad/s', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'constant (final) rate'), &
+    var_spec_t('motion', 'amplitude', VK_REAL, 'rad', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'harmonic amplitude'), &
+    var_spec_t('motion', 'frequency', VK_REAL, 'Hz', 'law', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'harmonic frequency'), &
+    var_spec_t('motion', 'phase', VK_REAL, 'rad', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'harmonic phase'), &
+    var_spec_t('motion', 'terms', VK_STRING_LIST, '', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motions to add'), &
+    var_spec_t('motion', 'times', VK_REAL_LIST, 's', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'table times'), &
+    var_spec_t('motion', 'values', VK_REAL_LIST, 'rad', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'table values'), &
+    var_spec_t('motion', 'file', VK_STRING, '', 'law', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'table CSV file')]
+  type(var_spec_t), parameter :: CONTROLLER_VARS(13) = [ &
+    var_spec_t('controller', 'label', VK_STRING, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'name (output /controllers/<label>)'), &
+    var_spec_t('controller', 'law', VK_CHOICE, '', 'pid', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'pid|user', 'PID, or a law set by the program (API)'), &
+    var_spec_t('controller', 'actuator', VK_STRING_LIST, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hinge.torque, truss.force or node.fx (...)'), &
+    var_spec_t('controller', 'measure', VK_STRING_LIST, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'hinge.angle, truss.elongation or node.x (...)'), &
+    var_spec_t('controller', 'reference', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'motion of the reference (none: 0)'), &
+    var_spec_t('controller', 'kp', VK_REAL, 'u/y', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'proportional gain'), &
+    var_spec_t('controller', 'ki', VK_REAL, 'u/(y s)', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'integral gain'), &
+    var_spec_t('controller', 'kd', VK_REAL, 'u s/y', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'derivative gain'), &
+    var_spec_t('controller', 'n_states', VK_INT, '', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'law = ''user'': number of the law''s own states'), &
+    var_spec_t('controller', 'period', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'sampling period with zero-order hold (0: none)'), &
+    var_spec_t('controller', 'u_min', VK_REAL, 'N (N m)', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'lower limit of the actuator'), &
+    var_spec_t('controller', 'u_max', VK_REAL, 'N (N m)', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'upper limit of the actuator'), &
+    var_spec_t('controller', 'feedforward', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'add the rigid-body inverse dynamics of reference')]
+  type(var_spec_t), parameter :: STATIC_VARS(8) = [ &
+    var_spec_t('static', 'n_steps', VK_INT, '', '10', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'load steps'), &
+    var_spec_t('static', 'tol', VK_REAL, '', '1e-10', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'Newton tolerance relative to the model size'), &
+    var_spec_t('static', 'max_iter', VK_INT, '', '30', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'Newton iterations per step'), &
+    var_spec_t('static', 'n_frequencies', VK_INT, '', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'frequencies written per step'), &
+    var_spec_t('static', 'method', VK_CHOICE, '', 'load', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'load|arc_length', 'load control or arc-length continuation'), &
+    var_spec_t('static', 'arc_length', VK_REAL, '', 'auto', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'arc-length step in (q/|q1|, lambda)'), &
+    var_spec_t('static', 'max_load_factor', VK_REAL, '', 'none', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'arc-length stops beyond this load factor'), &
+    var_spec_t('static', 'solver', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|dense|krylov', 'Newton: difference tangent or Newton-Krylov')]
+  type(var_spec_t), parameter :: MODAL_VARS(3) = [ &
+    var_spec_t('modal', 'n_modes', VK_INT, '', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'lowest modes kept, 0 = all'), &
+    var_spec_t('modal', 'time', VK_REAL, 's', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'time of the prescribed motions'), &
+    var_spec_t('modal', 'along_motion', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'dynamic stiffening of the motion at time')]
+  type(var_spec_t), parameter :: LINEAR_VARS(5) = [ &
+    var_spec_t('linear', 'inputs', VK_STRING_LIST, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'inputs node.component (forces, moments)'), &
+    var_spec_t('linear', 'outputs', VK_STRING_LIST, '', '', .true., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'outputs node.component (displacements, rotations)'), &
+    var_spec_t('linear', 'time', VK_REAL, 's', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'time of the prescribed motions'), &
+    var_spec_t('linear', 'along_motion', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'linearise along the motion (joints moving)'), &
+    var_spec_t('linear', 'times', VK_REAL_LIST, 's', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'times along the dynamic run')]
+  type(var_spec_t), parameter :: BUCKLING_VARS(3) = [ &
+    var_spec_t('buckling', 'n_modes', VK_INT, '', '6', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'multipliers kept'), &
+    var_spec_t('buckling', 'load_factor', VK_REAL, '', '1', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'load factor of the difference'), &
+    var_spec_t('buckling', 'solver', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|dense|krylov', 'dense eigenproblem or matrix-free Arnoldi')]
+  type(var_spec_t), parameter :: DYNAMIC_VARS(11) = [ &
+    var_spec_t('dynamic', 't_end', VK_REAL, 's', '', .true., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'end time'), &
+    var_spec_t('dynamic', 'output_dt', VK_REAL, 's', '1e-3', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'output interval'), &
+    var_spec_t('dynamic', 'integrator', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|bdf|galpha|galpha_adaptive|erk', 'time integrator'), &
+    var_spec_t('dynamic', 'jacobian', VK_CHOICE, '', 'linearised', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'linearised|fd|internal', 'Jacobian of the implicit integrators'), &
+    var_spec_t('dynamic', 'rtol', VK_REAL, '', '1e-6', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'relative tolerance'), &
+    var_spec_t('dynamic', 'atol', VK_REAL, '', '1e-8', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'absolute tolerance'), &
+    var_spec_t('dynamic', 'max_step', VK_REAL, 's', '0', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'largest step, 0 = no limit'), &
+    var_spec_t('dynamic', 'max_order', VK_INT, '', '0', .false., &
+      0.0_wp, .false., 5.0_wp, .false., &
+      '', 'largest BDF order, 0 = by rtol'), &
+    var_spec_t('dynamic', 'erk_order', VK_INT, '', '5', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '2|3|4|5|6|8', 'order of the Runge-Kutta pair'), &
+    var_spec_t('dynamic', 'dt', VK_REAL, 's', '1e-3', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'generalized-alpha step'), &
+    var_spec_t('dynamic', 'rho_inf', VK_REAL, '', '0.8', .false., &
+      0.0_wp, .false., 1.0_wp, .false., &
+      '', 'spectral radius at infinite frequency')]
+  type(var_spec_t), parameter :: REDUCTION_VARS(11) = [ &
+    var_spec_t('reduction', 'n_modes', VK_INT, '', 'one of three', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'modes kept'), &
+    var_spec_t('reduction', 'cutoff_hz', VK_REAL, 'Hz', 'one of three', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'keep modes up to this frequency'), &
+    var_spec_t('reduction', 'auto_factor', VK_REAL, '', 'one of three', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'multiple of the motion bandwidth'), &
+    var_spec_t('reduction', 'basis_time', VK_REAL, 's', '0', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'configuration of the basis'), &
+    var_spec_t('reduction', 'basis_prescribed', VK_REAL_LIST, 'rad (m)', 'motions', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'prescribed values of the basis configuration'), &
+    var_spec_t('reduction', 'static_correction', VK_LOGICAL, '', '.false.', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'mode-acceleration correction of the output'), &
+    var_spec_t('reduction', 'update', VK_CHOICE, '', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'none|interval|mac', 'basis updates'), &
+    var_spec_t('reduction', 'update_interval', VK_REAL, 's', 'with update', .false., &
+      0.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'time between checks'), &
+    var_spec_t('reduction', 'mac_threshold', VK_REAL, '', '0.9', .false., &
+      0.0_wp, .true., 1.0_wp, .false., &
+      '', 'MAC below which the basis is replaced'), &
+    var_spec_t('reduction', 'eigensolver', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|lapack|arpack', 'eigensolver of the basis'), &
+    var_spec_t('reduction', 'joints', VK_CHOICE, '', 'free', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'free|held', 'controlled joints free or held in the basis')]
+  type(var_spec_t), parameter :: OUTPUT_VARS(2) = [ &
+    var_spec_t('output', 'nodes', VK_STRING_LIST, '', 'all nodes', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'output nodes'), &
+    var_spec_t('output', 'compliance_nodes', VK_STRING_LIST, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'nodes whose static compliance is written')]
+  !> Every variable, group by group.
+  type(var_spec_t), parameter :: SCHEMA(156) = [ &
+    SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
+    MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
+    STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &
+    OUTPUT_VARS]
+
+end module io_schema_tables
