@@ -145,7 +145,7 @@ class Modal:
 class Buckling:
     """``&buckling`` results: load multipliers (n,) lowest first, shapes (n, n_dy) and per
     output node the (n, 3) shape (largest nodal translation 1); ``attrs`` holds
-    ``reference_load_factor`` and ``n_negative``."""
+    ``reference_load_factor`` and ``n_negative`` (-1: not counted, the matrix-free solver)."""
 
     load_factor: np.ndarray
     shapes: np.ndarray
