@@ -152,6 +152,9 @@ contains
     do i = 1, size(f_hz)
       near = max(near, minval(abs(f_dyn - f_hz(i))) / f_hz(i))
     end do
+    ! The eigensolver's relative error in omega^2 is about eps (omega_max / omega)^2: the axial
+    ! modes raise omega_max to 3.8e4 Hz against 5.83 Hz, 9.4e-9 in omega^2, 4.7e-9 in f.
+    ! Bound 1e-8, above that worst case; observed 2.2e-12 in both builds.
     call suite%check(near < 1.0e-8_wp, 'elongation dynamic: every bending frequency unchanged')
     f_axial = 1 / (4 * LEN) * sqrt(E_MOD / RHO)
     near = minval(abs(f_dyn - f_axial)) / f_axial

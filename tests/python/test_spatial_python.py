@@ -106,7 +106,11 @@ def test_cantilever_curve_follows_euler_bernoulli(static_result):
     ref = mesh.reference_points()
     # The reference curve: the straight chord, points evenly along it.
     s = np.arange(1, SEGMENTS) / SEGMENTS
-    np.testing.assert_allclose(ref[n:], s[:, None] * L * CHORD, rtol=0, atol=1e-15)
+    # Both sides are two or three roundings of numbers up to L (ends, differences, s times
+    # them): they differ by up to ~4 eps L; bound 10x, 40 eps L = 8.9e-15 L (1e-15 was 4.5 eps,
+    # within 9x of the observed 1.1e-16). A misplaced point is off by O(L / SEGMENTS).
+    np.testing.assert_allclose(ref[n:], s[:, None] * L * CHORD, rtol=0,
+                               atol=40 * np.finfo(float).eps * L)
     pts = mesh.points(result.static.x[-1])
     # The drawn tip is the node's output position.
     np.testing.assert_array_equal(pts[tip], result.static.nodes["tip"].position[-1])
