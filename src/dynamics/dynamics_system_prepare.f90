@@ -24,21 +24,10 @@ contains
       qd(nr + 1:) = v_dy
       call this%kin%solve(m, q, err)
       if (.not. err%ok()) return
-      if (present(dq_dy) .and. present(w)) then
-        block
-          real(wp) :: dq2(m%n_q, 2), xw(m%n_x, 2)
-          dq2(:, 1) = qd
-          dq2(1:nr, 2) = 0.0_wp
-          dq2(nr + 1:, 2) = dq_dy
-          call this%kin%apply_df_many(m, dq2, xw)
-          xd = xw(:, 1)
-          w = xw(:, 2)
-        end block
-      else
-        call this%kin%apply_df(m, qd, xd)
-      end if
-      dq = 0.0_wp
+      call this%kin%apply_df(m, qd, xd)
       dq(1:nr) = pdd
+      dq(nr + 1:) = 0.0_wp
+      if (present(qdd_dy)) dq(nr + 1:) = qdd_dy
       call this%kin%second(m, qd, conv, xd, dq)
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
       weighted = any(m%gravity /= 0)
