@@ -11,9 +11,10 @@ contains
     real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
     real(wp) :: dq(this%model%n_q), pot
     real(wp) :: me_work(this%model%max_dofs, this%model%max_dofs)
-    real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
+    real(wp) :: fe_work(this%model%max_dofs)
     real(wp) :: xe(this%model%max_dofs), xde(this%model%max_dofs), ce(this%model%max_dofs)
-    integer :: iel, nr, nd, k, l
+    real(wp) :: d2e(size(this%model%modes)), h_all(size(this%mass%dofs))
+    integer :: iel, nr, nd, k, l, mf, d0
     logical :: weighted
     real(wp) :: g(3)
     this%n_evals = this%n_evals + 1
@@ -28,30 +29,57 @@ contains
       dq(1:nr) = pdd
       dq(nr + 1:) = 0.0_wp
       if (present(qdd_dy)) dq(nr + 1:) = qdd_dy
-      call this%kin%second(m, qd, conv, xd, dq)
+      ! One pass over the elements at (x, x_dot): the second-order terms of the kinematics
+      ! and the element masses and convective forces (one chord per beam); then the solve
+      ! for conv, and the inertia forces from the kept blocks.
+      do iel = 1, m%n_elements
+        nd = size(m%elements(iel)%e%dofs)
+        mf = m%mode_first(iel)
+        associate (el => m%elements(iel)%e, me => me_work(1:nd, 1:nd), &
+                   first => this%mass%offset(iel), d2 => d2e(mf:mf + this%kin%el_nm(iel) - 1))
+          ! Gathered: vector-subscripted actual arguments would be temporaries per element.
+          do k = 1, nd
+            xe(k) = this%kin%x(el%dofs(k))
+            xde(k) = xd(el%dofs(k))
+          end do
+          if (first == 0) then
+            call el%second(xe(1:nd), xde(1:nd), d2)
+            cycle
+          end if
+          d0 = this%mass%dof_first(iel) - 1
+          call el%second_inertia(xe(1:nd), xde(1:nd), d2, me, h_all(d0 + 1:d0 + nd))
+          do l = 1, nd
+            do k = 1, nd
+              this%mass%val(first + (l - 1) * nd + k - 1) = me(k, l)
+            end do
+          end do
+        end associate
+      end do
+      call this%kin%second_solve(m, d2e, conv, dq)
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
       weighted = any(m%gravity /= 0)
       g = this%load_factor * m%gravity
       do iel = 1, m%n_elements
         if (this%mass%offset(iel) == 0) cycle
         nd = size(m%elements(iel)%e%dofs)
-        associate (el => m%elements(iel)%e, me => me_work(1:nd, 1:nd), he => he_work(1:nd), &
+        d0 = this%mass%dof_first(iel) - 1
+        associate (el => m%elements(iel)%e, he => h_all(d0 + 1:d0 + nd), &
                    fe => fe_work(1:nd), first => this%mass%offset(iel))
-          ! Gathered: vector-subscripted actual arguments would be temporaries per element.
           do k = 1, nd
-            xe(k) = this%kin%x(el%dofs(k))
-            xde(k) = xd(el%dofs(k))
             ce(k) = conv(el%dofs(k))
           end do
-          call el%inertia(xe(1:nd), xde(1:nd), me, he)
           fe = 0.0_wp
-          if (weighted) call el%weight(xe(1:nd), g(1:m%dim), fe, pot)
+          if (weighted) then
+            do k = 1, nd
+              xe(k) = this%kin%x(el%dofs(k))
+            end do
+            call el%weight(xe(1:nd), g(1:m%dim), fe, pot)
+          end if
           fe = fe - he
           ! By hand: the element is small and matmul/reshape here cost more than the product.
           do l = 1, nd
             do k = 1, nd
-              fe(k) = fe(k) - me(k, l) * ce(l)
-              this%mass%val(first + (l - 1) * nd + k - 1) = me(k, l)
+              fe(k) = fe(k) - this%mass%val(first + (l - 1) * nd + k - 1) * ce(l)
             end do
           end do
           do k = 1, nd

@@ -66,6 +66,7 @@ module model_kinematics
     procedure :: apply_df_many => kin_apply_df_many
     procedure :: apply_dft => kin_apply_dft
     procedure :: second => kin_second
+    procedure :: second_solve => kin_second_solve
     procedure :: residual => kin_residual
     procedure :: jacobian_solve => kin_jacobian_solve
     procedure :: restart_from => kin_restart_from
@@ -114,6 +115,16 @@ module model_kinematics
       real(wp), intent(out) :: d2x(:)
       real(wp), intent(in), optional :: xd_known(:), qdd(:)
     end subroutine kin_second
+    !> The solve of kin_second for element terms evaluated by the caller: d2e holds D2D(x_dot,
+    !> x_dot) of every mode (model numbering), so that an evaluation gets them in its own pass
+    !> over the elements (with the inertia, at the same x and x_dot).
+    module subroutine kin_second_solve(this, model, d2e, d2x, qdd)
+      class(kinematics_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: d2e(:)
+      real(wp), intent(out) :: d2x(:)
+      real(wp), intent(in), optional :: qdd(:)
+    end subroutine kin_second_solve
   end interface
 
 contains
