@@ -4,6 +4,7 @@ module model_kinematics
   use core_linalg, only: lu_factor, lu_solve
   use core_sparse, only: sparse_lu_t, entries_t
   use model_system, only: model_t
+  use elements_base, only: element_t
   implicit none
   private
   public :: kinematics_t, kin_state_t
@@ -45,6 +46,10 @@ module model_kinematics
     integer, allocatable :: mode_row(:), mode_q(:)
     real(wp), allocatable :: mode_period(:)
     integer, allocatable :: jac_src(:), jac_row(:), jac_col(:), jac_slot(:), in_src(:)
+    !> Sparse: the same entries by value slot (slot s sums de_val(jac_gather(p)) over p from
+    !> jac_first(s) to jac_first(s + 1) - 1, in element order), so that the assembly writes
+    !> each slot once instead of zeroing all and adding.
+    integer, allocatable :: jac_first(:), jac_gather(:)
     real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer (allocated there)
     logical :: has_df = .false.          !< df belongs to x
     logical :: has_factors = .false.     !< the factors belong to x (up to the last correction)
@@ -203,7 +208,43 @@ contains
       end do
     end if
     call flat_entries(this, model, ent_col, ent_slot, ent_in)
+    if (this%sparse) call gather_lists(this)
   end subroutine kin_init
+
+  !> jac_first and jac_gather from jac_slot and jac_src (a stable counting sort by slot).
+  subroutine gather_lists(this)
+    type(kinematics_t), intent(inout) :: this
+    integer :: k, s, n_slots
+    integer, allocatable :: next(:)
+    n_slots = size(this%jac_sp%val)
+    if (allocated(this%jac_first)) deallocate(this%jac_first, this%jac_gather)
+    allocate(this%jac_first(n_slots + 1), this%jac_gather(size(this%jac_src)), next(n_slots))
+    this%jac_first = 0
+    do k = 1, size(this%jac_slot)
+      this%jac_first(this%jac_slot(k) + 1) = this%jac_first(this%jac_slot(k) + 1) + 1
+    end do
+    this%jac_first(1) = 1
+    do s = 1, n_slots
+      this%jac_first(s + 1) = this%jac_first(s + 1) + this%jac_first(s)
+    end do
+    next = this%jac_first(1:n_slots)
+    do k = 1, size(this%jac_slot)
+      s = this%jac_slot(k)
+      this%jac_gather(next(s)) = this%jac_src(k)
+      next(s) = next(s) + 1
+    end do
+  end subroutine gather_lists
+
+  !> el%evaluate with the Jacobian written straight into its flat storage de (nm x nd,
+  !> contiguous in de_val): no copy per element and coordinate.
+  subroutine evaluate_into(el, x, e, nm, nd, de)
+    class(element_t), intent(in) :: el
+    real(wp), intent(in) :: x(:)
+    real(wp), intent(out) :: e(:)
+    integer, intent(in) :: nm, nd
+    real(wp), intent(out) :: de(nm, nd)
+    call el%evaluate(x, e, de)
+  end subroutine evaluate_into
 
   !> The flat entry lists (jac_src, ...) from kin_init's per-entry arrays.
   subroutine flat_entries(this, model, ent_col, ent_slot, ent_in)
@@ -250,7 +291,8 @@ contains
     real(wp), intent(out) :: r(:)
     logical, intent(in), optional :: jacobian
     real(wp) :: e(model%max_modes), de(model%max_modes, model%max_dofs), xe(model%max_dofs)
-    integer :: iel, j, k, m, row, nm, nd, first
+    real(wp) :: v
+    integer :: iel, j, k, m, row, nm, nd, first, p
     logical :: with_jac
     with_jac = .false.
     if (present(jacobian)) with_jac = jacobian
@@ -264,16 +306,14 @@ contains
         do k = 1, nd
           xe(k) = this%x(el%dofs(k))
         end do
-        call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
+        if (with_jac) then
+          first = this%de_offset(iel)
+          call evaluate_into(el, xe(1:nd), e(1:nm), nm, nd, &
+            this%de_val(first:first + nm * nd - 1))
+        else
+          call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
+        end if
       end associate
-      if (with_jac) then
-        first = this%de_offset(iel) - 1
-        do k = 1, nd
-          do j = 1, nm
-            this%de_val(first + (k - 1) * nm + j) = de(j, k)
-          end do
-        end do
-      end if
       do j = 1, nm
         m = model%mode_first(iel) + j - 1
         row = this%mode_row(m)
@@ -290,10 +330,12 @@ contains
     if (.not. with_jac) return
     ! The entries in the element order of kin_init: the sums into repeated slots are the same.
     if (this%sparse) then
-      this%jac_sp%val = 0.0_wp
-      do k = 1, size(this%jac_src)
-        this%jac_sp%val(this%jac_slot(k)) = this%jac_sp%val(this%jac_slot(k)) + &
-          this%de_val(this%jac_src(k))
+      do k = 1, size(this%jac_first) - 1
+        v = 0.0_wp
+        do p = this%jac_first(k), this%jac_first(k + 1) - 1
+          v = v + this%de_val(this%jac_gather(p))
+        end do
+        this%jac_sp%val(k) = v
       end do
     else
       this%lu = 0.0_wp
