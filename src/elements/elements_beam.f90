@@ -280,6 +280,9 @@ contains
     real(wp) :: e(3), de(3, 6), d2(6), d3(6), e2, e3, f2, f3, v2, v3
     real(wp) :: u(2), pd(2), ll, sc, scc, k2, k4, s2, s4, rho_l
     real(wp) :: gp(6), gq(6), gc(6), q2(6), q3(6), bm(6, 6), r2(2), r4(2), rp(2), rq(2), rc(2)
+    ! Assembled in a local of fixed shape (constant strides, loops the compiler unrolls), then
+    ! copied once into the assumed-shape m.
+    real(wp) :: mm(6, 6)
     integer :: i, j
     call modes(this, c, e, de)
     ! c(xi) = H2 e2 - H4 e3 etc. with the 1 / l0 of c folded in.
@@ -311,23 +314,24 @@ contains
     rho_l = this%rho_a * this%l0
     do j = 1, 6
       do i = 1, j
-        m(i, j) = bm(i, j) + bm(j, i) + d2(i) * q2(j) + d3(i) * q3(j)
+        mm(i, j) = bm(i, j) + bm(j, i) + d2(i) * q2(j) + d3(i) * q3(j)
       end do
     end do
-    m(1, 1) = m(1, 1) + (M_PP + scc)
-    m(2, 2) = m(2, 2) + (M_PP + scc)
-    m(4, 4) = m(4, 4) + (M_XX + scc)
-    m(5, 5) = m(5, 5) + (M_XX + scc)
-    m(1, 4) = m(1, 4) + (M_PX - scc)
-    m(2, 5) = m(2, 5) + (M_PX - scc)
-    m(1, 5) = m(1, 5) - sc
-    m(2, 4) = m(2, 4) + sc
+    mm(1, 1) = mm(1, 1) + (M_PP + scc)
+    mm(2, 2) = mm(2, 2) + (M_PP + scc)
+    mm(4, 4) = mm(4, 4) + (M_XX + scc)
+    mm(5, 5) = mm(5, 5) + (M_XX + scc)
+    mm(1, 4) = mm(1, 4) + (M_PX - scc)
+    mm(2, 5) = mm(2, 5) + (M_PX - scc)
+    mm(1, 5) = mm(1, 5) - sc
+    mm(2, 4) = mm(2, 4) + sc
     do j = 1, 6
       do i = 1, j
-        m(i, j) = rho_l * m(i, j)
-        m(j, i) = m(i, j)
+        mm(i, j) = rho_l * mm(i, j)
+        mm(j, i) = mm(i, j)
       end do
     end do
+    m = mm
     ! d2r(xi) = d2c u + 2 (dc . xd) perp(dlv) = H2 r2 - H4 r4, pd = perp(dlv)
     v2 = dot_product(d2, xd)
     v3 = dot_product(d3, xd)
