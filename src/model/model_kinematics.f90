@@ -46,10 +46,10 @@ module model_kinematics
     integer, allocatable :: mode_row(:), mode_q(:)
     real(wp), allocatable :: mode_period(:)
     integer, allocatable :: jac_src(:), jac_row(:), jac_col(:), jac_slot(:), in_src(:)
-    !> Sparse: the same entries by value slot (slot s sums de_val(jac_gather(p)) over p from
-    !> jac_first(s) to jac_first(s + 1) - 1, in element order), so that the assembly writes
-    !> each slot once instead of zeroing all and adding.
-    integer, allocatable :: jac_first(:), jac_gather(:)
+    !> Sparse: the entries split into each slot's first one in element order (jac_set_*:
+    !> assigned) and the others (jac_add_*: added, in element order), so that the assembly
+    !> needs no zeroing pass over the values and sums in the same order as before.
+    integer, allocatable :: jac_set_src(:), jac_set_slot(:), jac_add_src(:), jac_add_slot(:)
     real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer (allocated there)
     logical :: has_df = .false.          !< df belongs to x
     logical :: has_factors = .false.     !< the factors belong to x (up to the last correction)
@@ -211,28 +211,22 @@ contains
     if (this%sparse) call gather_lists(this)
   end subroutine kin_init
 
-  !> jac_first and jac_gather from jac_slot and jac_src (a stable counting sort by slot).
+  !> jac_set_* and jac_add_* from jac_slot and jac_src. A slot without entries keeps the zero
+  !> of sparse_setup: nothing else writes the values.
   subroutine gather_lists(this)
     type(kinematics_t), intent(inout) :: this
-    integer :: k, s, n_slots
-    integer, allocatable :: next(:)
-    n_slots = size(this%jac_sp%val)
-    if (allocated(this%jac_first)) deallocate(this%jac_first, this%jac_gather)
-    allocate(this%jac_first(n_slots + 1), this%jac_gather(size(this%jac_src)), next(n_slots))
-    this%jac_first = 0
+    logical :: seen(size(this%jac_sp%val))
+    logical :: first(size(this%jac_slot))
+    integer :: k
+    seen = .false.
     do k = 1, size(this%jac_slot)
-      this%jac_first(this%jac_slot(k) + 1) = this%jac_first(this%jac_slot(k) + 1) + 1
+      first(k) = .not. seen(this%jac_slot(k))
+      seen(this%jac_slot(k)) = .true.
     end do
-    this%jac_first(1) = 1
-    do s = 1, n_slots
-      this%jac_first(s + 1) = this%jac_first(s + 1) + this%jac_first(s)
-    end do
-    next = this%jac_first(1:n_slots)
-    do k = 1, size(this%jac_slot)
-      s = this%jac_slot(k)
-      this%jac_gather(next(s)) = this%jac_src(k)
-      next(s) = next(s) + 1
-    end do
+    this%jac_set_src = pack(this%jac_src, first)
+    this%jac_set_slot = pack(this%jac_slot, first)
+    this%jac_add_src = pack(this%jac_src, .not. first)
+    this%jac_add_slot = pack(this%jac_slot, .not. first)
   end subroutine gather_lists
 
   !> el%evaluate with the Jacobian written straight into its flat storage de (nm x nd,
@@ -291,8 +285,7 @@ contains
     real(wp), intent(out) :: r(:)
     logical, intent(in), optional :: jacobian
     real(wp) :: e(model%max_modes), de(model%max_modes, model%max_dofs), xe(model%max_dofs)
-    real(wp) :: v
-    integer :: iel, j, k, m, row, nm, nd, first, p
+    integer :: iel, j, k, m, row, nm, nd, first
     logical :: with_jac
     with_jac = .false.
     if (present(jacobian)) with_jac = jacobian
@@ -330,12 +323,13 @@ contains
     if (.not. with_jac) return
     ! The entries in the element order of kin_init: the sums into repeated slots are the same.
     if (this%sparse) then
-      do k = 1, size(this%jac_first) - 1
-        v = 0.0_wp
-        do p = this%jac_first(k), this%jac_first(k + 1) - 1
-          v = v + this%de_val(this%jac_gather(p))
-        end do
-        this%jac_sp%val(k) = v
+      ! 0 + d as the former zeroing and sum gave (-0.0 becomes +0.0): the same bits.
+      do k = 1, size(this%jac_set_src)
+        this%jac_sp%val(this%jac_set_slot(k)) = 0.0_wp + this%de_val(this%jac_set_src(k))
+      end do
+      do k = 1, size(this%jac_add_src)
+        this%jac_sp%val(this%jac_add_slot(k)) = this%jac_sp%val(this%jac_add_slot(k)) + &
+          this%de_val(this%jac_add_src(k))
       end do
     else
       this%lu = 0.0_wp
