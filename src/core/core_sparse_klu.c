@@ -6,9 +6,10 @@
  * Row scaling is done here rather than by KLU, with KLU's own rule (its default scale = 2:
  * each row divided by its largest magnitude, 1 for an empty row) and the same divisions, so
  * that KLU sees the same scaled values and its pivots, factors and solutions are bitwise
- * those of its own scaling. KLU's scaling pass validates the pattern on every
- * refactorisation; the pattern here is fixed at creation, and the plain pass costs about a
- * third (two-link at 64 elements per link: klu_scale was 4 % of a time step). */
+ * those of its own scaling. KLU's scaling pass checks every row index on every
+ * refactorisation (the pattern here is fixed at creation); the plain pass here, with the
+ * divisions KLU's refactorisation no longer makes, is 2 % fewer instructions per step
+ * (two-link, 64 elements per link, callgrind). */
 #include <stdlib.h>
 #include <string.h>
 #include <math.h>
