@@ -40,7 +40,8 @@ module dynamics_system
     real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last assembly
     real(wp), allocatable :: gen_force(:)     !< right-hand side of the last assembly
     !> Nodal forces of the last evaluation before projection (n_x): loads, weight, inertia
-    !> terms and the stresses of elastic elements; reactions are computed from it.
+    !> terms and the stresses of elastic elements; reactions are computed from it. After a
+    !> Newton correction (prepare with qdd_dy) it also holds -M DF_dy qdd_dy.
     real(wp), allocatable :: nodal_force(:)
     !> Full q, qd, x_dot and sigma_dy of the last evaluation.
     real(wp), allocatable :: q_now(:), qd_now(:), xd_now(:), sigma_now(:)
