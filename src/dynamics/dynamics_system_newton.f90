@@ -42,14 +42,14 @@ contains
   end procedure dyn_iteration_factor
 
   module procedure dyn_newton_correction
-    real(wp) :: w(this%model%n_x, 1), r_q(this%model%n_q)
+    real(wp) :: r_q(this%model%n_q)
     real(wp) :: r(size(x), 1), a(size(x), 1)
     type(error_t) :: err
     dx = 0.0_wp
-    call this%prepare(t, q, v, err, x, w(:, 1))
+    ! nodal_force is then f - M DF_dy x - M conv - h, whose projection is the residual.
+    call this%prepare(t, q, v, err, x)
     if (err%ok()) then
-      w = this%mass%times(this%model, w)
-      call this%kin%apply_dft(this%model, this%nodal_force - w(:, 1), r_q)
+      call this%kin%apply_dft(this%model, this%nodal_force, r_q)
       r(:, 1) = r_q(this%model%n_rh + 1:) - this%sigma_now
       call this%aug%accelerations(this%model, this%aug%nodal_equivalent(this%model, r), a, &
         newton=.true.)

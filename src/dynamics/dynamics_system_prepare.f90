@@ -2,6 +2,7 @@
 !> the element inertia, loads and stresses as nodal forces (prepare), and what statics and the
 !> dense path take from it.
 submodule (dynamics_system) dynamics_system_prepare
+  use elements_base, only: element_t
   implicit none
 
 contains
@@ -10,10 +11,10 @@ contains
     real(wp) :: q(this%model%n_q), qd(this%model%n_q), pdd(this%model%n_rh)
     real(wp) :: conv(this%model%n_x), rhs(this%model%n_x), xd(this%model%n_x)
     real(wp) :: dq(this%model%n_q), pot
-    real(wp) :: me_work(this%model%max_dofs, this%model%max_dofs)
-    real(wp) :: he_work(this%model%max_dofs), fe_work(this%model%max_dofs)
+    real(wp) :: fe_work(this%model%max_dofs)
     real(wp) :: xe(this%model%max_dofs), xde(this%model%max_dofs), ce(this%model%max_dofs)
-    integer :: iel, nr, nd, k, l
+    real(wp) :: d2e(size(this%model%modes)), h_all(size(this%mass%dofs))
+    integer :: iel, nr, nd, k, mf, d0
     logical :: weighted
     real(wp) :: g(3)
     this%n_evals = this%n_evals + 1
@@ -24,47 +25,54 @@ contains
       qd(nr + 1:) = v_dy
       call this%kin%solve(m, q, err)
       if (.not. err%ok()) return
-      if (present(dq_dy) .and. present(w)) then
-        block
-          real(wp) :: dq2(m%n_q, 2), xw(m%n_x, 2)
-          dq2(:, 1) = qd
-          dq2(1:nr, 2) = 0.0_wp
-          dq2(nr + 1:, 2) = dq_dy
-          call this%kin%apply_df_many(m, dq2, xw)
-          xd = xw(:, 1)
-          w = xw(:, 2)
-        end block
-      else
-        call this%kin%apply_df(m, qd, xd)
-      end if
-      dq = 0.0_wp
+      call this%kin%apply_df(m, qd, xd)
       dq(1:nr) = pdd
-      call this%kin%second(m, qd, conv, xd, dq)
+      dq(nr + 1:) = 0.0_wp
+      if (present(qdd_dy)) dq(nr + 1:) = qdd_dy
+      ! One pass over the elements at (x, x_dot): the second-order terms of the kinematics
+      ! and the element masses and convective forces (one chord per beam); then the solve
+      ! for conv, and the inertia forces from the kept blocks.
+      do iel = 1, m%n_elements
+        nd = size(m%elements(iel)%e%dofs)
+        mf = m%mode_first(iel)
+        associate (el => m%elements(iel)%e, first => this%mass%offset(iel), &
+                   d2 => d2e(mf:mf + this%kin%el_nm(iel) - 1))
+          ! Gathered: vector-subscripted actual arguments would be temporaries per element.
+          do k = 1, nd
+            xe(k) = this%kin%x(el%dofs(k))
+            xde(k) = xd(el%dofs(k))
+          end do
+          if (first == 0) then
+            call el%second(xe(1:nd), xde(1:nd), d2)
+            cycle
+          end if
+          d0 = this%mass%dof_first(iel) - 1
+          call second_inertia_into(el, xe(1:nd), xde(1:nd), d2, nd, &
+            this%mass%val(first:first + nd * nd - 1), h_all(d0 + 1:d0 + nd))
+        end associate
+      end do
+      call this%kin%second_solve(m, d2e, conv, dq)
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
       weighted = any(m%gravity /= 0)
       g = this%load_factor * m%gravity
       do iel = 1, m%n_elements
         if (this%mass%offset(iel) == 0) cycle
         nd = size(m%elements(iel)%e%dofs)
-        associate (el => m%elements(iel)%e, me => me_work(1:nd, 1:nd), he => he_work(1:nd), &
+        d0 = this%mass%dof_first(iel) - 1
+        associate (el => m%elements(iel)%e, he => h_all(d0 + 1:d0 + nd), &
                    fe => fe_work(1:nd), first => this%mass%offset(iel))
-          ! Gathered: vector-subscripted actual arguments would be temporaries per element.
           do k = 1, nd
-            xe(k) = this%kin%x(el%dofs(k))
-            xde(k) = xd(el%dofs(k))
             ce(k) = conv(el%dofs(k))
           end do
-          call el%inertia(xe(1:nd), xde(1:nd), me, he)
           fe = 0.0_wp
-          if (weighted) call el%weight(xe(1:nd), g(1:m%dim), fe, pot)
-          fe = fe - he
-          ! By hand: the element is small and matmul/reshape here cost more than the product.
-          do l = 1, nd
+          if (weighted) then
             do k = 1, nd
-              fe(k) = fe(k) - me(k, l) * ce(l)
-              this%mass%val(first + (l - 1) * nd + k - 1) = me(k, l)
+              xe(k) = this%kin%x(el%dofs(k))
             end do
-          end do
+            call el%weight(xe(1:nd), g(1:m%dim), fe, pot)
+          end if
+          fe = fe - he
+          call subtract_product(nd, this%mass%val(first:first + nd * nd - 1), ce, fe)
           do k = 1, nd
             rhs(el%dofs(k)) = rhs(el%dofs(k)) + fe(k)
           end do
@@ -83,6 +91,31 @@ contains
       if (this%controls_on) call this%apply_controllers(t, err)
     end associate
   end procedure dyn_prepare
+
+  !> el%second_inertia with the mass matrix written straight into its flat block m (nd x nd,
+  !> contiguous in element_mass_t%val): no copy per element.
+  subroutine second_inertia_into(el, x, xd, d2e, nd, m, h)
+    class(element_t), intent(in) :: el
+    real(wp), intent(in) :: x(:), xd(:)
+    real(wp), intent(out) :: d2e(:)
+    integer, intent(in) :: nd
+    real(wp), intent(out) :: m(nd, nd), h(:)
+    call el%second_inertia(x, xd, d2e, m, h)
+  end subroutine second_inertia_into
+
+  !> f := f - m c for one element block, by hand (explicit shapes: constant strides; matmul
+  !> on such small blocks costs more than the product).
+  pure subroutine subtract_product(nd, m, c, f)
+    integer, intent(in) :: nd
+    real(wp), intent(in) :: m(nd, nd), c(nd)
+    real(wp), intent(inout) :: f(nd)
+    integer :: k, l
+    do l = 1, nd
+      do k = 1, nd
+        f(k) = f(k) - m(k, l) * c(l)
+      end do
+    end do
+  end subroutine subtract_product
 
   !> Nodal forces of the moments on spatial nodes: M . omega_global = M . 2 E(lambda) lambda'
   !> gives 2 E^T M on the Euler parameters, E = [-lv, l0 I + [lv x]]. A moment fixed in space

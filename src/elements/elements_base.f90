@@ -35,6 +35,7 @@ module elements_base
     procedure :: mode_period => element_no_period
     procedure :: has_inertia => element_no_inertia
     procedure :: inertia => element_zero_inertia
+    procedure :: second_inertia => element_second_inertia
     procedure :: weight => element_zero_weight
     procedure :: lumped_mass => element_no_lumped_mass
     procedure :: has_limit => element_no_limit
@@ -107,6 +108,17 @@ contains
     m = 0.0_wp
     h = 0.0_wp
   end subroutine element_zero_inertia
+
+  !> second (d2e along xd) and inertia (m, h) at the same (x, xd) in one call: the evaluation's
+  !> single pass over the elements with masses. An element whose two share their geometry
+  !> (the planar beam's chord) overrides it to compute that once.
+  pure subroutine element_second_inertia(this, x, xd, d2e, m, h)
+    class(element_t), intent(in) :: this
+    real(wp), intent(in) :: x(:), xd(:)
+    real(wp), intent(out) :: d2e(:), m(:, :), h(:)
+    call this%second(x, xd, d2e)
+    call this%inertia(x, xd, m, h)
+  end subroutine element_second_inertia
 
   !> Nodal forces f (n_coords) of gravity g (2 components in the plane, 3 in space) on a
   !> consistent mass, and its potential energy.

@@ -60,6 +60,7 @@ module elements_beam
     procedure, nopass :: type_name => beam_type_name
     procedure :: has_inertia => beam_has_inertia
     procedure :: inertia => beam_inertia
+    procedure :: second_inertia => beam_second_inertia
     procedure :: weight => beam_weight
     procedure :: lumped_mass => beam_lumped_mass
   end type beam_t
@@ -243,18 +244,47 @@ contains
     real(wp), intent(in) :: x(:), xd(:)
     real(wp), intent(out) :: m(:, :), h(:)
     type(chord_t) :: c
-    real(wp) :: e(3), de(3, 6), d2e(3), d2(6), d3(6), e2, e3, f2, f3, v2, v3
-    real(wp) :: u(2), pd(2), ll, sc, scc, k2, k4, s2, s4, rho_l
-    real(wp) :: gp(6), gq(6), gc(6), q2(6), q3(6), bm(6, 6), r2(2), r4(2), rp(2), rq(2), rc(2)
-    integer :: i, j
+    real(wp) :: d2e(3)
     if (.not. this%has_inertia()) then
       m = 0.0_wp
       h = 0.0_wp
       return
     end if
     c = chord(this, x)
-    call modes(this, c, e, de)
     call second_modes(this, c, xd, d2e)
+    call inertia_at(this, c, xd, d2e, m, h)
+  end subroutine beam_inertia
+
+  !> second and inertia from one chord (the evaluation's pass over the elements).
+  pure subroutine beam_second_inertia(this, x, xd, d2e, m, h)
+    class(beam_t), intent(in) :: this
+    real(wp), intent(in) :: x(:), xd(:)
+    real(wp), intent(out) :: d2e(:), m(:, :), h(:)
+    type(chord_t) :: c
+    c = chord(this, x)
+    call second_modes(this, c, xd, d2e)
+    if (this%has_inertia()) then
+      call inertia_at(this, c, xd, d2e, m, h)
+    else
+      m = 0.0_wp
+      h = 0.0_wp
+    end if
+  end subroutine beam_second_inertia
+
+  !> The body of beam_inertia at the chord c, with d2e = second_modes along xd.
+  pure subroutine inertia_at(this, c, xd, d2e, m, h)
+    class(beam_t), intent(in) :: this
+    type(chord_t), intent(in) :: c
+    real(wp), intent(in) :: xd(:), d2e(:)
+    real(wp), intent(out) :: m(:, :), h(:)
+    real(wp) :: e(3), de(3, 6), d2(6), d3(6), e2, e3, f2, f3, v2, v3
+    real(wp) :: u(2), pd(2), ll, sc, scc, k2, k4, s2, s4, rho_l
+    real(wp) :: gp(6), gq(6), gc(6), q2(6), q3(6), bm(6, 6), r2(2), r4(2), rp(2), rq(2), rc(2)
+    ! Assembled in a local of fixed shape (constant strides, loops the compiler unrolls), then
+    ! copied once into the assumed-shape m.
+    real(wp) :: mm(6, 6)
+    integer :: i, j
+    call modes(this, c, e, de)
     ! c(xi) = H2 e2 - H4 e3 etc. with the 1 / l0 of c folded in.
     e2 = e(2) / this%l0; e3 = e(3) / this%l0
     d2 = de(2, :) / this%l0; d3 = de(3, :) / this%l0
@@ -284,23 +314,24 @@ contains
     rho_l = this%rho_a * this%l0
     do j = 1, 6
       do i = 1, j
-        m(i, j) = bm(i, j) + bm(j, i) + d2(i) * q2(j) + d3(i) * q3(j)
+        mm(i, j) = bm(i, j) + bm(j, i) + d2(i) * q2(j) + d3(i) * q3(j)
       end do
     end do
-    m(1, 1) = m(1, 1) + (M_PP + scc)
-    m(2, 2) = m(2, 2) + (M_PP + scc)
-    m(4, 4) = m(4, 4) + (M_XX + scc)
-    m(5, 5) = m(5, 5) + (M_XX + scc)
-    m(1, 4) = m(1, 4) + (M_PX - scc)
-    m(2, 5) = m(2, 5) + (M_PX - scc)
-    m(1, 5) = m(1, 5) - sc
-    m(2, 4) = m(2, 4) + sc
+    mm(1, 1) = mm(1, 1) + (M_PP + scc)
+    mm(2, 2) = mm(2, 2) + (M_PP + scc)
+    mm(4, 4) = mm(4, 4) + (M_XX + scc)
+    mm(5, 5) = mm(5, 5) + (M_XX + scc)
+    mm(1, 4) = mm(1, 4) + (M_PX - scc)
+    mm(2, 5) = mm(2, 5) + (M_PX - scc)
+    mm(1, 5) = mm(1, 5) - sc
+    mm(2, 4) = mm(2, 4) + sc
     do j = 1, 6
       do i = 1, j
-        m(i, j) = rho_l * m(i, j)
-        m(j, i) = m(i, j)
+        mm(i, j) = rho_l * mm(i, j)
+        mm(j, i) = mm(i, j)
       end do
     end do
+    m = mm
     ! d2r(xi) = d2c u + 2 (dc . xd) perp(dlv) = H2 r2 - H4 r4, pd = perp(dlv)
     v2 = dot_product(d2, xd)
     v3 = dot_product(d3, xd)
@@ -317,7 +348,7 @@ contains
     h(4:5) = rq - perp(rc)
     h(6) = 0.0_wp
     h = rho_l * (h + (M_22 * s2 - M_24 * s4) * d2 - (M_24 * s2 - M_44 * s4) * d3)
-  end subroutine beam_inertia
+  end subroutine inertia_at
 
   pure function perp(a) result(p)
     real(wp), intent(in) :: a(2)

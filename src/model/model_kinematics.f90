@@ -45,6 +45,10 @@ module model_kinematics
     integer, allocatable :: mode_row(:), mode_q(:)
     real(wp), allocatable :: mode_period(:)
     integer, allocatable :: jac_src(:), jac_row(:), jac_col(:), jac_slot(:), in_src(:)
+    !> Sparse: the entries split into each slot's first one in element order (jac_set_*:
+    !> assigned) and the others (jac_add_*: added, in element order), so that the assembly
+    !> needs no zeroing pass over the values and sums in the same order as before.
+    integer, allocatable :: jac_set_src(:), jac_set_slot(:), jac_add_src(:), jac_add_slot(:)
     real(wp), allocatable :: df(:, :)    !< DF_x (n_x, n_q) from transfer (allocated there)
     logical :: has_df = .false.          !< df belongs to x
     logical :: has_factors = .false.     !< the factors belong to x (up to the last correction)
@@ -66,6 +70,7 @@ module model_kinematics
     procedure :: apply_df_many => kin_apply_df_many
     procedure :: apply_dft => kin_apply_dft
     procedure :: second => kin_second
+    procedure :: second_solve => kin_second_solve
     procedure :: residual => kin_residual
     procedure :: jacobian_solve => kin_jacobian_solve
     procedure :: restart_from => kin_restart_from
@@ -114,6 +119,36 @@ module model_kinematics
       real(wp), intent(out) :: d2x(:)
       real(wp), intent(in), optional :: xd_known(:), qdd(:)
     end subroutine kin_second
+    !> The solve of kin_second for element terms evaluated by the caller: d2e holds D2D(x_dot,
+    !> x_dot) of every mode (model numbering), so that an evaluation gets them in its own pass
+    !> over the elements (with the inertia, at the same x and x_dot).
+    module subroutine kin_second_solve(this, model, d2e, d2x, qdd)
+      class(kinematics_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: d2e(:)
+      real(wp), intent(out) :: d2x(:)
+      real(wp), intent(in), optional :: qdd(:)
+    end subroutine kin_second_solve
+    !> Residual r (n_c) of the kinematic equations at this%x and, with `jacobian`, their
+    !> Jacobian J_c (into the dense or sparse storage) and the input-coordinate entries.
+    module subroutine kin_residual(this, model, q, r, jacobian)
+      class(kinematics_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: q(:)
+      real(wp), intent(out) :: r(:)
+      logical, intent(in), optional :: jacobian
+    end subroutine kin_residual
+    !> The flat entry lists (jac_src, ...) from kin_init's per-entry arrays.
+    module subroutine flat_entries(this, model, ent_col, ent_slot, ent_in)
+      type(kinematics_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: ent_col(:), ent_slot(:), ent_in(:)
+    end subroutine flat_entries
+    !> jac_set_* and jac_add_* from jac_slot and jac_src. A slot without entries keeps the zero
+    !> of sparse_setup: nothing else writes the values.
+    module subroutine gather_lists(this)
+      type(kinematics_t), intent(inout) :: this
+    end subroutine gather_lists
   end interface
 
 contains
@@ -192,109 +227,8 @@ contains
       end do
     end if
     call flat_entries(this, model, ent_col, ent_slot, ent_in)
+    if (this%sparse) call gather_lists(this)
   end subroutine kin_init
-
-  !> The flat entry lists (jac_src, ...) from kin_init's per-entry arrays.
-  subroutine flat_entries(this, model, ent_col, ent_slot, ent_in)
-    type(kinematics_t), intent(inout) :: this
-    type(model_t), intent(in) :: model
-    integer, intent(in) :: ent_col(:), ent_slot(:), ent_in(:)
-    integer :: iel, j, k, p, n_jac, n_in, row
-    n_jac = count(ent_col > 0)
-    if (allocated(this%jac_src)) deallocate(this%jac_src, this%jac_row, this%jac_col, &
-      this%jac_slot, this%in_src)
-    allocate(this%jac_src(n_jac), this%jac_row(n_jac), this%jac_col(n_jac), &
-      this%jac_slot(n_jac), this%in_src(count(ent_in > 0)))
-    p = 0
-    n_jac = 0
-    n_in = 0
-    do iel = 1, model%n_elements
-      do j = 1, this%el_nm(iel)
-        row = this%mode_row(model%mode_first(iel) + j - 1)
-        if (row == 0) cycle
-        do k = 1, this%el_nd(iel)
-          p = p + 1
-          if (ent_col(p) > 0) then
-            n_jac = n_jac + 1
-            this%jac_src(n_jac) = this%de_offset(iel) + (k - 1) * this%el_nm(iel) + j - 1
-            this%jac_row(n_jac) = row
-            this%jac_col(n_jac) = ent_col(p)
-            this%jac_slot(n_jac) = ent_slot(p)
-          end if
-          if (ent_in(p) > 0) then
-            n_in = n_in + 1
-            this%in_src(n_in) = this%de_offset(iel) + (k - 1) * this%el_nm(iel) + j - 1
-          end if
-        end do
-      end do
-    end do
-  end subroutine flat_entries
-
-  !> Residual r (n_c) of the kinematic equations at this%x and, with `jacobian`, their
-  !> Jacobian J_c (into the dense or sparse storage) and the input-coordinate entries.
-  subroutine kin_residual(this, model, q, r, jacobian)
-    class(kinematics_t), intent(inout) :: this
-    type(model_t), intent(in) :: model
-    real(wp), intent(in) :: q(:)
-    real(wp), intent(out) :: r(:)
-    logical, intent(in), optional :: jacobian
-    real(wp) :: e(model%max_modes), de(model%max_modes, model%max_dofs), xe(model%max_dofs)
-    integer :: iel, j, k, m, row, nm, nd, first
-    logical :: with_jac
-    with_jac = .false.
-    if (present(jacobian)) with_jac = jacobian
-    r = 0.0_wp
-    do iel = 1, model%n_elements
-      nm = this%el_nm(iel)
-      nd = this%el_nd(iel)
-      associate (el => model%elements(iel)%e)
-        ! Gathered into a contiguous buffer: a vector subscript as the actual argument makes
-        ! the compiler allocate a temporary per element.
-        do k = 1, nd
-          xe(k) = this%x(el%dofs(k))
-        end do
-        call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
-      end associate
-      if (with_jac) then
-        first = this%de_offset(iel) - 1
-        do k = 1, nd
-          do j = 1, nm
-            this%de_val(first + (k - 1) * nm + j) = de(j, k)
-          end do
-        end do
-      end if
-      do j = 1, nm
-        m = model%mode_first(iel) + j - 1
-        row = this%mode_row(m)
-        if (row == 0) cycle
-        r(row) = e(j)
-        if (this%mode_q(m) > 0) then
-          r(row) = e(j) - q(this%mode_q(m))
-          associate (period => this%mode_period(m))
-            if (period > 0) r(row) = modulo(r(row) + period / 2, period) - period / 2
-          end associate
-        end if
-      end do
-    end do
-    if (.not. with_jac) return
-    ! The entries in the element order of kin_init: the sums into repeated slots are the same.
-    if (this%sparse) then
-      this%jac_sp%val = 0.0_wp
-      do k = 1, size(this%jac_src)
-        this%jac_sp%val(this%jac_slot(k)) = this%jac_sp%val(this%jac_slot(k)) + &
-          this%de_val(this%jac_src(k))
-      end do
-    else
-      this%lu = 0.0_wp
-      do k = 1, size(this%jac_src)
-        this%lu(this%jac_row(k), this%jac_col(k)) = this%lu(this%jac_row(k), this%jac_col(k)) &
-          + this%de_val(this%jac_src(k))
-      end do
-    end if
-    do k = 1, size(this%in_src)
-      this%in_val(k) = this%de_val(this%in_src(k))
-    end do
-  end subroutine kin_residual
 
   !> Factorise the Jacobian just assembled; info /= 0 if it is singular, worst is then a
   !> column that is not determined (0 if unknown).

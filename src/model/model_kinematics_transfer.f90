@@ -91,33 +91,40 @@ contains
   end procedure kin_transfer
 
   module procedure kin_second
-    real(wp) :: rhs(model%n_c, 1), xd(model%n_x), d2e(model%max_modes)
+    real(wp) :: xd(model%n_x), d2e(size(model%modes))
     real(wp) :: xe(model%max_dofs), xde(model%max_dofs)
-    integer :: iel, j, k, row, nm, nd, i, iq
+    integer :: iel, k, nm, nd, first
     if (present(xd_known)) then
       xd = xd_known
     else
       call this%apply_df(model, qd, xd)
     end if
-    if (present(qdd)) then
-      call transfer_rhs(this, model, 1, qdd, rhs)
-    else
-      rhs = 0.0_wp
-    end if
     do iel = 1, model%n_elements
       nm = this%el_nm(iel)
       nd = this%el_nd(iel)
+      first = model%mode_first(iel)
       associate (el => model%elements(iel)%e)
         do k = 1, nd
           xe(k) = this%x(el%dofs(k))
           xde(k) = xd(el%dofs(k))
         end do
-        call el%second(xe(1:nd), xde(1:nd), d2e(1:nm))
+        call el%second(xe(1:nd), xde(1:nd), d2e(first:first + nm - 1))
       end associate
-      do j = 1, nm
-        row = this%mode_row(model%mode_first(iel) + j - 1)
-        if (row > 0) rhs(row, 1) = rhs(row, 1) - d2e(j)
-      end do
+    end do
+    call this%second_solve(model, d2e, d2x, qdd)
+  end procedure kin_second
+
+  module procedure kin_second_solve
+    real(wp) :: rhs(model%n_c, 1)
+    integer :: m, row, i, iq
+    if (present(qdd)) then
+      call transfer_rhs(this, model, 1, qdd, rhs)
+    else
+      rhs = 0.0_wp
+    end if
+    do m = 1, size(d2e)
+      row = this%mode_row(m)
+      if (row > 0) rhs(row, 1) = rhs(row, 1) - d2e(m)
     end do
     call this%jacobian_solve(rhs)
     d2x = 0.0_wp
@@ -128,5 +135,5 @@ contains
     do iq = 1, model%n_q
       if (model%q_coord(iq) > 0) d2x(model%q_coord(iq)) = qdd(iq)
     end do
-  end procedure kin_second
+  end procedure kin_second_solve
 end submodule model_kinematics_transfer

@@ -1,0 +1,138 @@
+!> The kinematic residual and Jacobian (the element pass of every Newton iteration) and the
+!> flat entry lists that kin_init makes for it.
+submodule (model_kinematics) model_kinematics_residual
+  use elements_base, only: element_t
+  implicit none
+
+contains
+
+  module subroutine flat_entries(this, model, ent_col, ent_slot, ent_in)
+    type(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    integer, intent(in) :: ent_col(:), ent_slot(:), ent_in(:)
+    integer :: iel, j, k, p, n_jac, n_in, row
+    n_jac = count(ent_col > 0)
+    if (allocated(this%jac_src)) deallocate(this%jac_src, this%jac_row, this%jac_col, &
+      this%jac_slot, this%in_src)
+    allocate(this%jac_src(n_jac), this%jac_row(n_jac), this%jac_col(n_jac), &
+      this%jac_slot(n_jac), this%in_src(count(ent_in > 0)))
+    p = 0
+    n_jac = 0
+    n_in = 0
+    do iel = 1, model%n_elements
+      do j = 1, this%el_nm(iel)
+        row = this%mode_row(model%mode_first(iel) + j - 1)
+        if (row == 0) cycle
+        do k = 1, this%el_nd(iel)
+          p = p + 1
+          if (ent_col(p) > 0) then
+            n_jac = n_jac + 1
+            this%jac_src(n_jac) = this%de_offset(iel) + (k - 1) * this%el_nm(iel) + j - 1
+            this%jac_row(n_jac) = row
+            this%jac_col(n_jac) = ent_col(p)
+            this%jac_slot(n_jac) = ent_slot(p)
+          end if
+          if (ent_in(p) > 0) then
+            n_in = n_in + 1
+            this%in_src(n_in) = this%de_offset(iel) + (k - 1) * this%el_nm(iel) + j - 1
+          end if
+        end do
+      end do
+    end do
+  end subroutine flat_entries
+
+
+  module subroutine gather_lists(this)
+    type(kinematics_t), intent(inout) :: this
+    logical :: seen(size(this%jac_sp%val))
+    logical :: first(size(this%jac_slot))
+    integer :: k
+    seen = .false.
+    do k = 1, size(this%jac_slot)
+      first(k) = .not. seen(this%jac_slot(k))
+      seen(this%jac_slot(k)) = .true.
+    end do
+    this%jac_set_src = pack(this%jac_src, first)
+    this%jac_set_slot = pack(this%jac_slot, first)
+    this%jac_add_src = pack(this%jac_src, .not. first)
+    this%jac_add_slot = pack(this%jac_slot, .not. first)
+  end subroutine gather_lists
+
+
+  !> el%evaluate with the Jacobian written straight into its flat storage de (nm x nd,
+  !> contiguous in de_val): no copy per element and coordinate.
+  subroutine evaluate_into(el, x, e, nm, nd, de)
+    class(element_t), intent(in) :: el
+    real(wp), intent(in) :: x(:)
+    real(wp), intent(out) :: e(:)
+    integer, intent(in) :: nm, nd
+    real(wp), intent(out) :: de(nm, nd)
+    call el%evaluate(x, e, de)
+  end subroutine evaluate_into
+
+
+  module subroutine kin_residual(this, model, q, r, jacobian)
+    class(kinematics_t), intent(inout) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: q(:)
+    real(wp), intent(out) :: r(:)
+    logical, intent(in), optional :: jacobian
+    real(wp) :: e(model%max_modes), de(model%max_modes, model%max_dofs), xe(model%max_dofs)
+    integer :: iel, j, k, m, row, nm, nd, first
+    logical :: with_jac
+    with_jac = .false.
+    if (present(jacobian)) with_jac = jacobian
+    r = 0.0_wp
+    do iel = 1, model%n_elements
+      nm = this%el_nm(iel)
+      nd = this%el_nd(iel)
+      associate (el => model%elements(iel)%e)
+        ! Gathered into a contiguous buffer: a vector subscript as the actual argument makes
+        ! the compiler allocate a temporary per element.
+        do k = 1, nd
+          xe(k) = this%x(el%dofs(k))
+        end do
+        if (with_jac) then
+          first = this%de_offset(iel)
+          call evaluate_into(el, xe(1:nd), e(1:nm), nm, nd, &
+            this%de_val(first:first + nm * nd - 1))
+        else
+          call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
+        end if
+      end associate
+      do j = 1, nm
+        m = model%mode_first(iel) + j - 1
+        row = this%mode_row(m)
+        if (row == 0) cycle
+        r(row) = e(j)
+        if (this%mode_q(m) > 0) then
+          r(row) = e(j) - q(this%mode_q(m))
+          associate (period => this%mode_period(m))
+            if (period > 0) r(row) = modulo(r(row) + period / 2, period) - period / 2
+          end associate
+        end if
+      end do
+    end do
+    if (.not. with_jac) return
+    ! The entries in the element order of kin_init: the sums into repeated slots are the same.
+    if (this%sparse) then
+      ! 0 + d as the former zeroing and sum gave (-0.0 becomes +0.0): the same bits.
+      do k = 1, size(this%jac_set_src)
+        this%jac_sp%val(this%jac_set_slot(k)) = 0.0_wp + this%de_val(this%jac_set_src(k))
+      end do
+      do k = 1, size(this%jac_add_src)
+        this%jac_sp%val(this%jac_add_slot(k)) = this%jac_sp%val(this%jac_add_slot(k)) + &
+          this%de_val(this%jac_add_src(k))
+      end do
+    else
+      this%lu = 0.0_wp
+      do k = 1, size(this%jac_src)
+        this%lu(this%jac_row(k), this%jac_col(k)) = this%lu(this%jac_row(k), this%jac_col(k)) &
+          + this%de_val(this%jac_src(k))
+      end do
+    end if
+    do k = 1, size(this%in_src)
+      this%in_val(k) = this%de_val(this%in_src(k))
+    end do
+  end subroutine kin_residual
+end submodule model_kinematics_residual
