@@ -314,9 +314,16 @@ def test_guide_frequencies_along_the_path(tmp_path):
 
 def test_shuttle_translation_as_the_coordinate(tmp_path, guide):
     """&node dynamic = 'x' on the shuttle (the stroke itself a degree of freedom, one more leaf
-    mode elastic to keep the count) describes the same structure: same path (observed 4e-13 m),
-    compliance (2e-12 m/N) and reactions (1e-9 N: the shuttle's x now carries the equilibrium
-    residual, zero to the Newton tolerance). Bounds 1e-10 m, 1e-9 m/N, 1e-7 N."""
+    mode elastic to keep the count) describes the same structure: same path (observed 9e-13 m;
+    bound 1e-10 m, the Newton tolerance 1e-11 m times 10), compliance and reactions.
+    - Compliance: both come from difference tangents, whose rounding eps |x| / h = 4e-11 of
+      the leaves' axial stiffness EA/l = 1e8 N/m reaches the stroke (227 N/m) magnified by the
+      ratio, up to 1.6e-5 relative in the worst alignment; the two models difference different
+      coordinates. Observed 1.3e-7 relative (5.8e-10 m/N of 4.4e-3), the same in both builds and
+      for Newton tolerances 1e-9 to 1e-12; bound 2e-6 relative.
+    - Reactions: the shuttle's x now carries the unbalanced force, the rounding of internal
+      forces eps |x| EA/l = 2e-9 N (observed 1.2e-9 N, independent of the Newton tolerance);
+      bound 1e-7 N, 45 times that estimate."""
     text = (ROOT / "input" / "leaf_spring_guide.nml").read_text().replace(
         "&node label = 'shuttle', x = 0.025, y = 0.1 /",
         "&node label = 'shuttle', x = 0.025, y = 0.1, dynamic = 'x' /").replace(
@@ -325,7 +332,9 @@ def test_shuttle_translation_as_the_coordinate(tmp_path, guide):
     assert "dynamic = 'x'" in text and "'elastic', 15*" in text
     with run(tmp_path, text) as f:
         node = f["static/nodes/shuttle"]
-        for name, bound in (("position", 1e-10), ("compliance", 1e-9), ("reaction", 1e-7)):
+        reference = guide["static/nodes/shuttle/compliance"][:]
+        for name, bound in (("position", 1e-10), ("compliance", 2e-6 * np.max(np.abs(reference))),
+                            ("reaction", 1e-7)):
             assert np.max(np.abs(node[name][:] - guide["static/nodes/shuttle/" + name][:])) < bound
 
 
