@@ -26,7 +26,7 @@ module dynamics_buckling
   use core_strings, only: int_str
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: tangent_stiffness
-  use dynamics_buckling_krylov, only: krylov_buckling, krylov_buckling_applies
+  use dynamics_buckling_krylov, only: krylov_buckling, krylov_buckling_applies, sort_descending
   implicit none
   private
   public :: buckling_result_t, buckling_analysis, THETA_CUTOFF
@@ -213,23 +213,6 @@ contains
     end do
     z = matmul(z, e)
   end subroutine restrict
-
-  !> Order the indices `idx` by decreasing value(idx) (insertion sort: a few entries).
-  subroutine sort_descending(value, idx)
-    real(wp), intent(in) :: value(:)
-    integer, intent(inout) :: idx(:)
-    integer :: i, j, tmp
-    do i = 2, size(idx)
-      tmp = idx(i)
-      j = i - 1
-      do while (j >= 1)
-        if (value(idx(j)) >= value(tmp)) exit
-        idx(j + 1) = idx(j)
-        j = j - 1
-      end do
-      idx(j + 1) = tmp
-    end do
-  end subroutine sort_descending
 
   !> Scale each shape to a unit largest nodal translation, its largest translation component
   !> positive (a shape that moves no node: unit largest component instead).

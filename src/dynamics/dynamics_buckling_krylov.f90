@@ -22,7 +22,7 @@ module dynamics_buckling_krylov
   use dynamics_static_krylov, only: krylov_statics_t
   implicit none
   private
-  public :: krylov_buckling, krylov_buckling_applies
+  public :: krylov_buckling, krylov_buckling_applies, sort_descending
 
 contains
 
@@ -150,20 +150,9 @@ contains
     real(wp), allocatable, intent(inout) :: theta(:), shapes(:, :)
     real(wp), intent(in) :: cutoff
     integer, allocatable :: order(:)
-    integer :: i, j, tmp
-    real(wp) :: big
-    big = maxval(abs(theta), mask=theta == theta)
-    order = pack([(i, i = 1, size(theta))], theta > cutoff * big)
-    do i = 2, size(order)
-      tmp = order(i)
-      j = i - 1
-      do while (j >= 1)
-        if (theta(order(j)) >= theta(tmp)) exit
-        order(j + 1) = order(j)
-        j = j - 1
-      end do
-      order(j + 1) = tmp
-    end do
+    integer :: i
+    order = pack([(i, i = 1, size(theta))], theta > cutoff * maxval(abs(theta)))
+    call sort_descending(theta, order)
     theta = theta(order)
     shapes = shapes(:, order)
   end subroutine keep_positive
@@ -183,4 +172,20 @@ contains
     allocate(node_shapes(dyn%model%n_x, size(shapes, 2)))
     call dyn%kin%apply_df_many(dyn%model, dq, node_shapes)
   end subroutine nodal_shapes
+  !> Order the indices `idx` by decreasing value(idx) (insertion sort: a few entries).
+  subroutine sort_descending(value, idx)
+    real(wp), intent(in) :: value(:)
+    integer, intent(inout) :: idx(:)
+    integer :: i, j, tmp
+    do i = 2, size(idx)
+      tmp = idx(i)
+      j = i - 1
+      do while (j >= 1)
+        if (value(idx(j)) >= value(tmp)) exit
+        idx(j + 1) = idx(j)
+        j = j - 1
+      end do
+      idx(j + 1) = tmp
+    end do
+  end subroutine sort_descending
 end module dynamics_buckling_krylov

@@ -141,23 +141,15 @@ contains
     end do
   end subroutine kry_apply_p
 
-  !> K_T v = -dg/dq v by central differences of g along v / |v|_max, step h.
+  !> K_T v = -dg/dq v by central differences of g along v / |v|_1, step h (docs/theory.md
+  !> 7.3: the 1-norm bounds the turn of a whole chain, which the truncation error grows with).
   subroutine kry_product(this, dyn, t, q_dy, v, kv, err)
     class(krylov_statics_t), intent(inout) :: this
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:), v(:)
     real(wp), intent(out) :: kv(:)
     type(error_t), intent(out) :: err
-    real(wp) :: vmax, gp(size(q_dy)), gm(size(q_dy))
-    vmax = sum(abs(v))
-    kv = 0.0_wp
-    if (vmax == 0) return
-    call dyn%generalised_force(t, q_dy + (this%h / vmax) * v, 0.0_wp * v, gp, err)
-    if (.not. err%ok()) return
-    call dyn%generalised_force(t, q_dy - (this%h / vmax) * v, 0.0_wp * v, gm, err)
-    if (.not. err%ok()) return
-    kv = -(gp - gm) * (vmax / (2 * this%h))
-    this%n_products = this%n_products + 1
+    call difference_along(this, dyn, t, q_dy, v, .false., kv, err)
   end subroutine kry_product
 
   !> K_L v = (K_T - S_dd) v, the tangent without the dynamic modes' own (linear) stiffness:
@@ -171,27 +163,38 @@ contains
     real(wp), intent(in) :: t, q_dy(:), v(:)
     real(wp), intent(out) :: kv(:)
     type(error_t), intent(out) :: err
-    real(wp) :: vmax, fp(size(q_dy)), fm(size(q_dy))
-    vmax = sum(abs(v))
+    call difference_along(this, dyn, t, q_dy, v, .true., kv, err)
+  end subroutine kry_load_product
+
+  !> -(f(q + s v) - f(q - s v)) / (2 s), s = h / |v|_1, of f = g, or of its load part.
+  subroutine difference_along(this, dyn, t, q_dy, v, load_only, kv, err)
+    type(krylov_statics_t), intent(inout) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:), v(:)
+    logical, intent(in) :: load_only
+    real(wp), intent(out) :: kv(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: vsum, fp(size(q_dy)), fm(size(q_dy))
+    vsum = sum(abs(v))
     kv = 0.0_wp
-    if (vmax == 0) return
-    call load_part(q_dy + (this%h / vmax) * v, fp)
+    if (vsum == 0) return
+    call force_at(q_dy + (this%h / vsum) * v, fp)
     if (.not. err%ok()) return
-    call load_part(q_dy - (this%h / vmax) * v, fm)
+    call force_at(q_dy - (this%h / vsum) * v, fm)
     if (.not. err%ok()) return
-    kv = -(fp - fm) * (vmax / (2 * this%h))
+    kv = -(fp - fm) * (vsum / (2 * this%h))
     this%n_products = this%n_products + 1
   contains
-    subroutine load_part(q, f)
+    subroutine force_at(q, f)
       real(wp), intent(in) :: q(:)
       real(wp), intent(out) :: f(:)
       real(wp) :: q_full(dyn%model%n_q)
       call dyn%generalised_force(t, q, 0.0_wp * q, f, err)
-      if (.not. err%ok()) return
+      if (.not. (err%ok() .and. load_only)) return
       q_full = dyn%full_q(t, q)
       f = f + dyn%stresses(q_full, 0.0_wp * q_full)
-    end subroutine load_part
-  end subroutine kry_load_product
+    end subroutine force_at
+  end subroutine difference_along
 
   !> dq with K_T dq = g at q_dy, by restarted GMRES right-preconditioned with P (the factors of
   !> the last precondition): K_T P^-1 u = g, dq = P^-1 u. Relative residual GMRES_TOL.
