@@ -53,6 +53,9 @@ contains
             call linearise_sample(this, k, inputs, outputs, this%linear(i), err)
             if (.not. err%ok()) exit
           end do
+          ! Back to the charts of the run's end, which its last state is in.
+          if (.not. allocated(this%red)) &
+            call this%dyn%use_charts(this%dyn%chart_hist(:, size(this%time)))
         end if
       end if
       this%dyn%kin%continuation = .false.
