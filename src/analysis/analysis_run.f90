@@ -26,6 +26,7 @@ module analysis_run
   use core_strings, only: int_str, real_str, approx_str
   use reduction_basis, only: basis_t, held_joints
   use reduction_system, only: reduced_t
+  use reduction_expansion, only: expansion_unsupported
   use dynamics_control, only: controlled_t
   use model_control, only: control_law_t
   use reduction_adaptive, only: update_spec_t, update_log_t, integrate_reduced

@@ -141,6 +141,10 @@ contains
       ! The basis is the open-loop plant's; the controllers act in the integration.
       this%red%dyn%controls_on = .false.
       this%red%static_correction = r%static_correction
+      this%red%expanded = r%evaluation == 'expanded'
+      this%red%expansions%tol = r%expansion_tol
+      if (this%red%expanded) call check_expanded(this, err)
+      if (.not. err%ok()) return
       ! &linear times linearises at the basis each sample was computed in.
       this%red%keep_bases = this%scene%linear%active .and. allocated(this%scene%linear%times)
       call reduction_basis(this, this%red%dyn, this%red%basis, err)
@@ -185,6 +189,25 @@ contains
       'reduction: ', this%updates%n_updates, ' basis updates in ', size(this%updates%time), &
       ' checks'
   end subroutine run_reduced
+
+  !> What evaluation = 'expanded' cannot take, as input errors before the basis is made.
+  subroutine check_expanded(this, err)
+    type(run_t), intent(in) :: this
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: why
+    character(len=*), parameter :: g = "group &reduction: evaluation = 'expanded' "
+    why = expansion_unsupported(this%dyn%model)
+    if (len(why) > 0) then
+      call err%set(ERR_INPUT, g // 'does not represent ' // why // &
+        "; use evaluation = 'full'")
+    else if (this%scene%reduction%static_correction) then
+      call err%set(ERR_INPUT, g // 'has no static_correction (it needs a model pass at ' // &
+        "every output); use evaluation = 'full'")
+    else if (this%dyn%controls_on) then
+      call err%set(ERR_INPUT, g // 'does not take &controller groups (their sensors read ' // &
+        "the full model); use evaluation = 'full'")
+    end if
+  end subroutine check_expanded
 
   !> The rigid-body model for the controllers' feedforward, when one asks for it.
   subroutine add_feedforward(this, err)

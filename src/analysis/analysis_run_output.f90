@@ -312,6 +312,11 @@ contains
       if (err%ok()) call h5%write_real_attr(g, 'residual_max', maxval(red%residual), err)
       if (err%ok() .and. red%has_estimate) call h5%write_real_attr(g, 'error_estimate_max', &
         maxval(red%estimate), err)
+      if (err%ok()) call h5%write_string_attr(g, 'evaluation', r%evaluation, err)
+      if (err%ok() .and. red%expanded) call h5%write_int_attr(g, 'n_expansions', &
+        red%expansions%n_expansions, err)
+      if (err%ok() .and. red%expanded) call h5%write_real_attr(g, 'manifold_error_max', &
+        red%expansions%manifold_error, err)
       if (err%ok()) call h5%write_string_attr(g, 'update', r%update, err)
       if (err%ok()) call h5%write_int_attr(g, 'n_updates', this%updates%n_updates, err)
       if (err%ok() .and. size(this%updates%time) > 0) then

@@ -193,6 +193,10 @@ contains
       call rd_choice(g, 'eigensolver', r%eigensolver, err)
       if (r%update /= 'none') call rd_real(g, 'update_interval', r%update_interval, err)
       call rd_choice(g, 'joints', r%joints, err)
+      call rd_choice(g, 'evaluation', r%evaluation, err)
+      if (err%ok()) call only_with(g, ['expansion_tol'], r%evaluation == 'expanded', &
+        'with evaluation = ''expanded''', err)
+      call rd_real(g, 'expansion_tol', r%expansion_tol, err)
       if (err%ok() .and. r%joints == 'held') then
         if (r%selection /= 'count') call err%set(ERR_INPUT, g%where() // ': variable ' // &
           '''joints'': ''held'' takes n_modes (cutoff_hz and auto_factor are not built for it)')

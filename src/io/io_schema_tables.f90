@@ -453,7 +453,7 @@ module io_schema_tables
     var_spec_t('dynamic', 'rho_inf', VK_REAL, '', '0.8', .false., &
       0.0_wp, .false., 1.0_wp, .false., &
       '', 'spectral radius at infinite frequency')]
-  type(var_spec_t), parameter :: REDUCTION_VARS(11) = [ &
+  type(var_spec_t), parameter :: REDUCTION_VARS(13) = [ &
     var_spec_t('reduction', 'n_modes', VK_INT, '', 'one of three', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
       '', 'modes kept'), &
@@ -486,7 +486,13 @@ module io_schema_tables
       'auto|lapack|arpack', 'eigensolver of the basis'), &
     var_spec_t('reduction', 'joints', VK_CHOICE, '', 'free', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      'free|held', 'controlled joints free or held in the basis')]
+      'free|held', 'controlled joints free or held in the basis'), &
+    var_spec_t('reduction', 'evaluation', VK_CHOICE, '', 'full', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'full|expanded', 'model pass or expansion per evaluation'), &
+    var_spec_t('reduction', 'expansion_tol', VK_REAL, '', '1e-3', .false., &
+      0.0_wp, .true., 1.0_wp, .false., &
+      '', 'relative size of the expansion''s dropped terms')]
   type(var_spec_t), parameter :: OUTPUT_VARS(2) = [ &
     var_spec_t('output', 'nodes', VK_STRING_LIST, '', 'all nodes', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -495,7 +501,7 @@ module io_schema_tables
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(156) = [ &
+  type(var_spec_t), parameter :: SCHEMA(158) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

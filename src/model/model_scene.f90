@@ -213,6 +213,9 @@ module model_scene
     !> 'free' (modes of the free structure) or 'held' (the controlled joints held: their unit
     !> motions plus the modes with them held)
     character(len=:), allocatable :: joints
+    !> 'full' (the full model evaluated at every call) or 'expanded' (reduction_expansion)
+    character(len=:), allocatable :: evaluation
+    real(wp) :: expansion_tol = 1.0e-3_wp
   end type reduction_rec_t
 
   type :: scene_t

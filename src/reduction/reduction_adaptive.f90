@@ -175,6 +175,7 @@ contains
       red%basis%frequency_hz = modes%frequency_hz(pick)
       red%basis%q_ref = q_dy
       red%basis%time = t
+      call red%expansions%forget()
       red%basis%k_chol = modes%k0
       call chol_factor(red%basis%k_chol, info)
       if (info /= 0) deallocate(red%basis%k_chol)

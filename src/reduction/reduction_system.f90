@@ -16,6 +16,7 @@ module reduction_system
   use dynamics_system, only: dynamics_t, check_finite
   use integrators_system, only: ode2_system_t, system_fd_jacobian
   use reduction_basis, only: basis_t
+  use reduction_expansion, only: expansion_set_t
   implicit none
   private
   public :: reduced_t
@@ -38,6 +39,12 @@ module reduction_system
     logical :: keep_bases = .false.
     type(basis_t), allocatable :: bases(:)
     integer, allocatable :: basis_of(:)
+    !> evaluation = 'expanded' (reduction_expansion): evaluations from the expansion, which
+    !> is redone where it goes stale; the error indicators are measured there and reported
+    !> at the outputs that follow.
+    logical :: expanded = .false.
+    type(expansion_set_t) :: expansions
+    real(wp) :: expansion_residual = 0.0_wp, expansion_estimate = 0.0_wp
   contains
     procedure :: keep_basis => red_keep_basis
     procedure :: accel => red_accel
@@ -64,6 +71,11 @@ contains
     class(reduced_t), intent(inout) :: this
     real(wp), intent(in) :: dq(:), q_old(:), q_new(:), rtol, atol
     real(wp), intent(out) :: norm
+    if (this%expanded .and. this%expansions%current > 0) then
+      call this%expansions%item(this%expansions%current)%error_norm(this%dyn%model, dq, &
+        q_old, q_new, rtol, atol, norm)
+      return
+    end if
     call this%dyn%error_norm(matmul(this%basis%v, dq), this%basis%q_ref + &
       matmul(this%basis%v, q_old), this%basis%q_ref + matmul(this%basis%v, q_new), rtol, &
       atol, norm)
@@ -74,6 +86,7 @@ contains
     integer, intent(in) :: nt
     integer :: k
     k = this%basis%k()
+    call this%expansions%forget()
     call this%dyn%allocate_history(nt)
     if (allocated(this%eta_hist)) deallocate(this%eta_hist, this%eta_dot_hist, this%residual, &
       this%estimate)
@@ -145,10 +158,34 @@ contains
     real(wp), intent(out) :: a(:)
     integer, intent(out) :: status
     type(error_t) :: err
-    call reduced_accel(this, t, q, v, a, err)
+    if (this%expanded) then
+      call expanded_accel(this, t, q, v, a, err)
+    else
+      call reduced_accel(this, t, q, v, a, err)
+    end if
     call this%dyn%report(err, status)
     if (status /= 0) a = 0.0_wp
   end subroutine red_accel
+
+  !> Accelerations from the expansion, expanded anew (with the error indicators measured
+  !> there, exactly) when the state has left its range.
+  subroutine expanded_accel(this, t, eta, eta_dot, a, err)
+    class(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: t, eta(:), eta_dot(:)
+    real(wp), intent(out) :: a(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
+    real(wp) :: dq(this%dyn%model%n_dy)
+    call this%dyn%prescribed(t, p, pd, pdd)
+    if (.not. this%expansions%find(p, eta)) then
+      call indicators(this, t, eta, eta_dot, this%expansion_residual, &
+        this%expansion_estimate, dq, err)
+      if (err%ok()) call this%expansions%expand(this%dyn, this%basis, t, eta, err)
+      if (.not. err%ok()) return
+    end if
+    call this%expansions%item(this%expansions%current)%accel(this%dyn, t, eta, eta_dot, a, err)
+    if (err%ok()) call check_finite(a, t, err)
+  end subroutine expanded_accel
 
   !> V^T of the full model's linearised Jacobian: -(V^T Mbar V)^-1 V^T [K0, D0] V, with the
   !> constant K0 of the dynamic modes applied element by element and that of elastic elements
@@ -162,7 +199,7 @@ contains
     real(wp), allocatable :: kv(:, :), dv(:, :), w(:, :)
     integer :: j, info
     type(error_t) :: err
-    if (this%dyn%jacobian_kind == 'fd') then
+    if (this%dyn%jacobian_kind == 'fd' .or. this%expanded) then
       call system_fd_jacobian(this, t, q, v, dadq, dadv, status)
       return
     end if
@@ -189,8 +226,8 @@ contains
     integer, intent(in) :: k
     real(wp), intent(in) :: t, q(:), v(:)
     integer, intent(out) :: status
-    real(wp) :: a(size(q)), q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
-    real(wp) :: r(this%dyn%model%n_dy), dq(this%dyn%model%n_dy)
+    real(wp) :: q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
+    real(wp) :: dq(this%dyn%model%n_dy)
     integer :: kg
     type(error_t) :: err
     this%last_eta = q
@@ -199,27 +236,74 @@ contains
     kg = this%out_index(k)
     if (kg == 0) return
     call this%full_state(q, v, q_dy, v_dy)
-    call reduced_accel(this, t, q, v, a, err)
-    if (err%ok()) call full_residual(this, t, q_dy, v_dy, a, r, this%residual(kg), err)
-    call this%dyn%report(err, status)
-    if (status /= 0) return
-    if (allocated(this%basis%k_chol)) then
-      dq = r
-      call chol_solve(this%basis%k_chol, dq)
-      this%estimate(kg) = largest_translation(this%dyn%model, nodal_motion(this, dq))
-      if (this%static_correction) q_dy = q_dy + dq
-    else
-      this%has_estimate = .false.
-    end if
     this%eta_hist(:, kg) = q
     this%eta_dot_hist(:, kg) = v
     if (this%keep_bases) this%basis_of(kg) = size(this%bases)
+    if (this%expanded) then
+      call expanded_store(this, kg, t, q, v, q_dy, v_dy, err)
+      call this%dyn%report(err, status)
+      return
+    end if
+    call indicators(this, t, q, v, this%residual(kg), this%estimate(kg), dq, err)
+    call this%dyn%report(err, status)
+    if (status /= 0) return
     if (this%static_correction) then
-      call this%dyn%record(kg, t, q_dy, v_dy, status)
+      call this%dyn%record(kg, t, q_dy + dq, v_dy, status)
     else
       call this%dyn%store(kg, t, q_dy, v_dy)
     end if
   end subroutine red_record
+
+  !> The error indicators at a reduced state, exactly: the residual's norm and, with a definite
+  !> K0, the estimate from dq = K0^-1 r (the static correction). Leaves the full model
+  !> evaluated at the state.
+  subroutine indicators(this, t, eta, eta_dot, residual, estimate, dq, err)
+    type(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: t, eta(:), eta_dot(:)
+    real(wp), intent(out) :: residual, estimate, dq(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: a(size(eta)), q_dy(size(dq)), v_dy(size(dq)), r(size(dq))
+    call this%full_state(eta, eta_dot, q_dy, v_dy)
+    call reduced_accel(this, t, eta, eta_dot, a, err)
+    if (err%ok()) call full_residual(this, t, q_dy, v_dy, a, r, residual, err)
+    if (.not. err%ok()) return
+    estimate = 0.0_wp
+    dq = 0.0_wp
+    if (allocated(this%basis%k_chol)) then
+      dq = r
+      call chol_solve(this%basis%k_chol, dq)
+      estimate = largest_translation(this%dyn%model, nodal_motion(this, dq))
+    else
+      this%has_estimate = .false.
+    end if
+  end subroutine indicators
+
+  !> An output of the expanded evaluation: the nodal coordinates (O(n m^3), no solve) and the
+  !> energies from the expansion, the indicators of the last new expansion.
+  subroutine expanded_store(this, kg, t, eta, eta_dot, q_dy, v_dy, err)
+    type(reduced_t), intent(inout) :: this
+    integer, intent(in) :: kg
+    real(wp), intent(in) :: t, eta(:), eta_dot(:), q_dy(:), v_dy(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
+    real(wp) :: a(size(eta)), x(this%dyn%model%n_x)
+    call this%dyn%prescribed(t, p, pd, pdd)
+    if (.not. this%expansions%find(p, eta)) then
+      call expanded_accel(this, t, eta, eta_dot, a, err)
+      if (.not. err%ok()) return
+    end if
+    associate (ex => this%expansions%item(this%expansions%current))
+      x = ex%coordinates([p, eta])
+      this%dyn%energy_hist(:, kg) = ex%energy([p, eta], [pd, eta_dot], &
+        this%dyn%load_factor * this%dyn%loads_at(t), x)
+    end associate
+    this%residual(kg) = this%expansion_residual
+    this%estimate(kg) = this%expansion_estimate
+    this%dyn%x_hist(:, kg) = x
+    this%dyn%q_hist(:, kg) = q_dy
+    this%dyn%v_hist(:, kg) = v_dy
+    this%dyn%chart_hist(:, kg) = this%dyn%charts()
+  end subroutine expanded_store
 
   !> The residual of the full equations r = DF_dy^T (f - M W a_eta) - sigma_dy (W = DF_dy V)
   !> just after reduced_accel, by one transposed solve, and its norm sqrt(r^T Mbar^-1 r):

@@ -1,0 +1,327 @@
+!> The expanded evaluation of a reduced model (docs/theory.md section 9.5): a cost per
+!> evaluation independent of the model's size.
+!>
+!> In z = (q_rh, eta), the prescribed coordinates and the modal ones, the nodal coordinates are
+!> expanded to third order about a point z0,
+!>     x(z) = x0 + X1 dz + X2[dz, dz] / 2 + X3[dz, dz, dz] / 6,   dz = z - z0,
+!> X1 = DF T and X2 = D2F[T., T.] from solves with the kinematic factors at z0 (T: z -> q), X3
+!> by differences of X2. With W = dx/dz, x_dot = W zd and x_ddot = W zdd + (X2 + X3[dz])[zd,
+!> zd], so that the reduced mass W^T M W, the inertia forces W^T (M x_ddot + h), the loads
+!> W^T f and the stresses V^T sigma are polynomials in dz and zd whose coefficients (up to m^4
+!> numbers, m = n_rh + k) are projected once per expansion: an evaluation then costs O(m^4),
+!> not O(n). All of them are kept to first order in dz (the element masses and weights by a
+!> difference along X1; the elements' quadratic velocity forces h at z0); the stresses of the
+!> dynamic modes are linear, exact.
+!>
+!> An expansion serves while the quadratic term is small: with d1 and d2 bounds of the nodal
+!> translations of X1 dz and X2[dz, dz] / 2, while (d2 / d1)^2 <= tol, which for a rotation by
+!> an angle a is a^2 / 4, the relative size of the first term the mass matrix drops. Up to
+!> MAX_KEPT expansions are kept: a state that leaves one is looked up among the others (a
+!> structure vibrating about a rest position goes back and forth between two) before a new
+!> one is made in place of the one used longest ago.
+module reduction_expansion
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_MODEL
+  use core_linalg, only: chol_factor, chol_solve
+  use model_system, only: model_t, COORD_PHI, COORD_EULER
+  use dynamics_system, only: dynamics_t
+  use reduction_basis, only: basis_t
+  implicit none
+  private
+  public :: expansion_t, expansion_set_t, expansion_unsupported, largest_translation
+
+  integer, parameter :: MAX_KEPT = 16
+
+  !> One expansion and its projected coefficients (i: equation, l: the dz factor, a, b: the
+  !> zd factors).
+  type :: expansion_t
+    logical :: valid = .false.
+    integer :: nr = 0, k = 0, m = 0
+    real(wp) :: tol = 1.0e-3_wp
+    real(wp), allocatable :: z0(:), x0(:), xr(:)     !< xr = DF_dy q_ref (error norm)
+    real(wp), allocatable :: x1(:, :), x2(:, :, :)   !< (n_x, m), (n_x, m, m)
+    real(wp), allocatable :: x3(:, :, :, :)          !< (n_x, m, m, m)
+    real(wp), allocatable :: a(:, :), b(:, :, :)     !< mass: a + sum_l b(:, :, l) dz_l
+    real(wp), allocatable :: g0(:, :, :), g1(:, :, :, :)  !< inertia forces (i, [l,] a, b)
+    real(wp), allocatable :: f1(:), f2(:, :)         !< loads and weights: f1 + f2 dz
+    real(wp), allocatable :: s0(:), kz(:, :), dz(:, :)    !< stresses: s0 + kz dz + dz zd
+    real(wp), allocatable :: s1(:), s2(:, :)         !< largest nodal translation per column
+    !> Potential energy: strain of the modes es0 + es1 dz + dz es2 dz / 2 and the elements'
+    !> weights vg0 - gw1 dz - dz gw2 dz / 2 (loads at outputs: -f x).
+    real(wp) :: es0 = 0.0_wp, vg0 = 0.0_wp
+    real(wp), allocatable :: es1(:), es2(:, :), gw1(:), gw2(:, :)
+    logical :: loads_vary = .false.                  !< loads with motion laws: projected per call
+    real(wp), allocatable :: load0(:)                !< the constant loads in f1, f2
+  contains
+    procedure :: build => exp_build
+    procedure :: needs_update => exp_needs_update
+    procedure :: accel => exp_accel
+    procedure :: coordinates => exp_coordinates
+    procedure :: energy => exp_energy
+    procedure :: error_norm => exp_error_norm
+  end type expansion_t
+
+  !> The expansions kept during a run, the one in use and the counts for the output.
+  type :: expansion_set_t
+    real(wp) :: tol = 1.0e-3_wp
+    type(expansion_t) :: item(MAX_KEPT)
+    integer :: current = 0
+    integer :: last_use(MAX_KEPT) = 0, clock = 0
+    integer :: n_expansions = 0, n_switches = 0
+    !> Largest nodal translation [m] between the exact kinematics and the expansion in use,
+    !> measured at every new expansion (where that one has gone stale).
+    real(wp) :: manifold_error = 0.0_wp
+  contains
+    procedure :: find => set_find
+    procedure :: expand => set_expand
+    procedure :: forget => set_forget
+  end type expansion_set_t
+
+  interface
+    !> Expand about the state (t, eta) (reduction_expansion_build).
+    module subroutine exp_build(this, dyn, basis, t, eta, err)
+      class(expansion_t), intent(inout) :: this
+      type(dynamics_t), intent(inout) :: dyn
+      type(basis_t), intent(in) :: basis
+      real(wp), intent(in) :: t, eta(:)
+      type(error_t), intent(out) :: err
+    end subroutine exp_build
+  end interface
+
+contains
+
+  !> Why the expanded evaluation cannot represent this model ('' when it can).
+  function expansion_unsupported(model) result(why)
+    type(model_t), intent(in) :: model
+    character(len=:), allocatable :: why
+    why = ''
+    if (model%n_elastic > 0) why = 'elastic (calculable) element modes'
+    if (size(model%moment_lambda) > 0) why = 'moments on spatial nodes'
+    if (size(model%actuator_element) > 0) why = 'actuators'
+  end function expansion_unsupported
+
+  !> Make an expansion that serves (p, eta) current, if one is kept; false if none is.
+  logical function set_find(this, p, eta) result(found)
+    class(expansion_set_t), intent(inout) :: this
+    real(wp), intent(in) :: p(:), eta(:)
+    integer :: i
+    found = .false.
+    if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta)
+    if (found) return
+    do i = 1, MAX_KEPT
+      if (i == this%current) cycle
+      if (this%item(i)%needs_update(p, eta)) cycle
+      this%current = i
+      this%n_switches = this%n_switches + 1
+      found = .true.
+      exit
+    end do
+    if (found) then
+      this%clock = this%clock + 1
+      this%last_use(this%current) = this%clock
+    end if
+  end function set_find
+
+  !> A new expansion about (t, eta), in an empty slot or the one used longest ago.
+  subroutine set_expand(this, dyn, basis, t, eta, err)
+    class(expansion_set_t), intent(inout) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    type(basis_t), intent(in) :: basis
+    real(wp), intent(in) :: t, eta(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: p(dyn%model%n_rh), pd(dyn%model%n_rh), pdd(dyn%model%n_rh)
+    real(wp), allocatable :: x_stale(:)
+    integer :: slot
+    call dyn%prescribed(t, p, pd, pdd)
+    if (this%current > 0) x_stale = this%item(this%current)%coordinates([p, eta])
+    slot = minloc(merge(this%last_use, -1, this%item%valid), 1)
+    this%item(slot)%tol = this%tol
+    call this%item(slot)%build(dyn, basis, t, eta, err)
+    if (.not. err%ok()) return
+    if (allocated(x_stale)) this%manifold_error = max(this%manifold_error, &
+      largest_translation(dyn%model, this%item(slot)%x0 - x_stale))
+    this%current = slot
+    this%clock = this%clock + 1
+    this%last_use(slot) = this%clock
+    this%n_expansions = this%n_expansions + 1
+  end subroutine set_expand
+
+  !> Drop every expansion (a new basis).
+  subroutine set_forget(this)
+    class(expansion_set_t), intent(inout) :: this
+    this%item%valid = .false.
+    this%current = 0
+    this%last_use = 0
+  end subroutine set_forget
+
+  !> Whether the state (p, eta) is outside this expansion's range (see the module).
+  logical function exp_needs_update(this, p, eta)
+    class(expansion_t), intent(in) :: this
+    real(wp), intent(in) :: p(:), eta(:)
+    real(wp) :: dz(this%m), d1, d2
+    integer :: a
+    if (.not. this%valid) then
+      exp_needs_update = .true.
+      return
+    end if
+    dz = abs([p, eta] - this%z0)
+    d1 = dot_product(this%s1, dz)
+    d2 = 0.0_wp
+    do a = 1, this%m
+      d2 = d2 + dz(a) * dot_product(this%s2(:, a), dz)
+    end do
+    d2 = 0.5_wp * d2
+    exp_needs_update = d2**2 > this%tol * d1**2
+  end function exp_needs_update
+
+  !> The reduced mass a + sum_l b(:, :, l) dz_l (m x m).
+  pure function mass_at(this, dz) result(mz)
+    type(expansion_t), intent(in) :: this
+    real(wp), intent(in) :: dz(:)
+    real(wp) :: mz(this%m, this%m)
+    integer :: l
+    mz = this%a
+    do l = 1, this%m
+      mz = mz + dz(l) * this%b(:, :, l)
+    end do
+  end function mass_at
+
+  !> Modal accelerations at (t, eta, eta_dot) from the expansion: O(m^4), no model pass.
+  subroutine exp_accel(this, dyn, t, eta, eta_dot, acc, err)
+    class(expansion_t), intent(in) :: this
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: t, eta(:), eta_dot(:)
+    real(wp), intent(out) :: acc(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: p(this%nr), pd(this%nr), pdd(this%nr), dz(this%m), zd(this%m)
+    real(wp) :: mz(this%m, this%m), quad(this%m, this%m), f(this%m), g(this%m, this%m)
+    real(wp) :: rhs(this%k), mee(this%k, this%k)
+    integer :: l, i, info, nr
+    nr = this%nr
+    call dyn%prescribed(t, p, pd, pdd)
+    dz = [p, eta] - this%z0
+    zd = [pd, eta_dot]
+    mz = mass_at(this, dz)
+    f = this%f1 + matmul(this%f2, dz)
+    if (this%loads_vary) f = f + projected_load(this, dyn%load_factor * dyn%loads_at(t) - &
+      this%load0, dz)
+    do l = 1, this%m
+      quad(:, l) = zd * zd(l)
+    end do
+    do i = nr + 1, this%m
+      g = this%g0(i, :, :)
+      do l = 1, this%m
+        g = g + dz(l) * this%g1(i, l, :, :)
+      end do
+      f(i) = f(i) - sum(g * quad)
+    end do
+    rhs = f(nr + 1:) - this%s0 - matmul(this%kz, dz) - matmul(this%dz, zd)
+    do l = 1, nr
+      rhs = rhs - mz(nr + 1:, l) * pdd(l)
+    end do
+    mee = mz(nr + 1:, nr + 1:)
+    call chol_factor(mee, info)
+    if (info /= 0) then
+      call err%set(ERR_MODEL, 'the expanded reduced mass matrix is not positive definite')
+      return
+    end if
+    call chol_solve(mee, rhs)
+    acc = rhs
+  end subroutine exp_accel
+
+  !> W^T f for loads f that change in time: O(n m^2).
+  function projected_load(this, f, dz) result(g)
+    type(expansion_t), intent(in) :: this
+    real(wp), intent(in) :: f(:), dz(:)
+    real(wp) :: g(this%m)
+    integer :: l, i
+    do i = 1, this%m
+      g(i) = dot_product(f, this%x1(:, i))
+      do l = 1, this%m
+        g(i) = g(i) + dz(l) * dot_product(f, this%x2(:, i, l))
+      end do
+    end do
+  end function projected_load
+
+  !> Nodal coordinates on the expansion at z = (p, eta): O(n m^3) / 6 with X3's symmetry.
+  function exp_coordinates(this, z) result(x)
+    class(expansion_t), intent(in) :: this
+    real(wp), intent(in) :: z(:)
+    real(wp) :: x(size(this%x0))
+    real(wp) :: dz(this%m), c
+    integer :: a, b, l
+    dz = z - this%z0
+    x = this%x0 + matmul(this%x1, dz)
+    do b = 1, this%m
+      do a = 1, b
+        c = merge(1.0_wp, 0.5_wp, a /= b) * dz(a) * dz(b)
+        x = x + c * this%x2(:, a, b)
+        ! X3[dz, dz, dz] / 6 over l <= a <= b: each distinct triple with its multiplicity
+        do l = 1, a
+          x = x + (dz(l) * dz(a) * dz(b) * triple_weight(l, a, b)) * this%x3(:, l, a, b)
+        end do
+      end do
+    end do
+  end function exp_coordinates
+
+  !> Permutations of the triple (l, a, b), l <= a <= b, over 6 (X3's term of the series).
+  pure real(wp) function triple_weight(l, a, b) result(w)
+    integer, intent(in) :: l, a, b
+    if (l == a .and. a == b) then
+      w = 1.0_wp / 6
+    else if (l == a .or. a == b) then
+      w = 0.5_wp
+    else
+      w = 1.0_wp
+    end if
+  end function triple_weight
+
+  !> Kinetic and potential energy at (z, zd) from the expansion; the loads' potential -f x
+  !> from the nodal coordinates x (O(n)).
+  function exp_energy(this, z, zd, f, x) result(en)
+    class(expansion_t), intent(in) :: this
+    real(wp), intent(in) :: z(:), zd(:), f(:), x(:)
+    real(wp) :: en(2)
+    real(wp) :: dz(this%m), mz(this%m, this%m)
+    dz = z - this%z0
+    mz = mass_at(this, dz)
+    en(1) = 0.5_wp * dot_product(zd, matmul(mz, zd))
+    en(2) = this%es0 + dot_product(this%es1, dz) + 0.5_wp * dot_product(dz, &
+      matmul(this%es2, dz)) + this%vg0 - dot_product(this%gw1, dz) - 0.5_wp * &
+      dot_product(dz, matmul(this%gw2, dz)) - dot_product(f, x)
+  end function exp_energy
+
+  !> The full model's error norm (dynamics_t%error_norm) with DF_dy V = X1's modal columns.
+  subroutine exp_error_norm(this, model, dq, eta_old, eta_new, rtol, atol, norm)
+    class(expansion_t), intent(in) :: this
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: dq(:), eta_old(:), eta_new(:), rtol, atol
+    real(wp), intent(out) :: norm
+    real(wp) :: dx(size(this%x0)), motion(size(this%x0)), scale(size(this%x0))
+    integer :: nr
+    nr = this%nr
+    dx = matmul(this%x1(:, nr + 1:), dq)
+    motion = max(abs(this%xr + matmul(this%x1(:, nr + 1:), eta_old)), &
+      abs(this%xr + matmul(this%x1(:, nr + 1:), eta_new)))
+    associate (rotation => model%coord_kind == COORD_PHI .or. &
+               model%coord_kind == COORD_EULER)
+      where (rotation)
+        scale = maxval(motion, mask=rotation)
+      elsewhere
+        scale = maxval(motion, mask=.not. rotation)
+      end where
+    end associate
+    norm = maxval(abs(dx) / (atol + rtol * scale))
+  end subroutine exp_error_norm
+
+  !> Largest translation over the nodes of a nodal displacement dx.
+  pure real(wp) function largest_translation(model, dx) result(d)
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: dx(:)
+    integer :: i
+    d = 0.0_wp
+    do i = 1, size(model%node_coord, 2)
+      d = max(d, model%translation(i, dx))
+    end do
+  end function largest_translation
+end module reduction_expansion

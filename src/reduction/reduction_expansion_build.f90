@@ -1,0 +1,375 @@
+!> Making an expansion (reduction_expansion): the exact kinematics at z0, the series terms X1,
+!> X2, X3 and the projected coefficients. O(n m^3) work and about m^3 / 6 + m^2 solves with the
+!> kinematic factors, so an expansion costs tens of full evaluations.
+submodule (reduction_expansion) reduction_expansion_build
+  use dynamics_augmented, only: element_mass_t
+  use model_kinematics, only: kin_state_t
+  implicit none
+
+  !> Nodal motion of the difference steps, relative to the model's size: the masses' first
+  !> derivatives (truncation 1e-7 relative, round-off 1e-9) and X3 (1e-6 and the kinematic
+  !> solve's tolerance over the step).
+  real(wp), parameter :: MASS_STEP = 1.0e-7_wp, THIRD_STEP = 1.0e-6_wp
+
+contains
+
+  module procedure exp_build
+    real(wp), allocatable :: tz(:, :), mx1(:, :), mx2(:, :), mx3(:, :), dmx(:, :), gh(:, :)
+    real(wp), allocatable :: xl(:), fw0(:), fwl(:), x12(:, :), conv_l(:, :), zero(:)
+    real(wp) :: p(dyn%model%n_rh), pd(dyn%model%n_rh), pdd(dyn%model%n_rh), hl, size_x, vg
+    type(element_mass_t) :: mass_l
+    integer :: n, nr, k, m, l, i
+    nr = dyn%model%n_rh
+    k = size(eta)
+    m = nr + k
+    n = dyn%model%n_x
+    call dyn%prescribed(t, p, pd, pdd)
+    allocate(zero(dyn%model%n_dy))
+    zero = 0.0_wp
+    call dyn%prepare(t, basis%q_ref + matmul(basis%v, eta), zero, err)
+    if (.not. err%ok()) return
+    this%nr = nr
+    this%k = k
+    this%m = m
+    this%z0 = [p, eta]
+    this%x0 = dyn%kin%x
+    size_x = max(1.0e-3_wp, maxval(abs(this%x0)))
+    allocate(tz(dyn%model%n_q, m))
+    tz = 0.0_wp
+    do i = 1, nr
+      tz(i, i) = 1.0_wp
+    end do
+    tz(nr + 1:, nr + 1:) = basis%v
+    if (allocated(this%x1)) deallocate(this%x1, this%x2, this%xr)
+    allocate(this%x1(n, m), this%x2(n, m, m), this%xr(n))
+    call dyn%kin%apply_df_many(dyn%model, tz, this%x1)
+    call second_terms(dyn, tz, 1, this%x2)
+    block
+      real(wp) :: qr(dyn%model%n_q)
+      qr(1:nr) = 0.0_wp
+      qr(nr + 1:) = basis%q_ref
+      call dyn%kin%apply_df(dyn%model, qr, this%xr)
+    end block
+    call third_terms(this, dyn, tz, size_x, err)
+    if (.not. err%ok()) return
+    ! Mass products at z0 and the quadratic velocity forces of the elements there.
+    mx1 = mass_product(dyn, dyn%mass, this%x1)
+    mx2 = mass_product(dyn, dyn%mass, reshape(this%x2, [n, m * m]))
+    ! X1^T M X3 = (M X1)^T X3: M is symmetric.
+    mx3 = matmul(transpose(mx1), reshape(this%x3, [n, m * m * m]))
+    allocate(gh(n, m * m))
+    call velocity_forces(dyn, this%x0, this%x1, gh)
+    ! Loads: the constant part (with the lumped masses' weights) and the element weights.
+    this%loads_vary = size(dyn%model%load_motion) > 0
+    this%load0 = dyn%load_factor * dyn%loads_at(t)
+    if (this%loads_vary) this%load0 = dyn%load_factor * dyn%load
+    fw0 = element_weights(dyn, this%x0, this%vg0)
+    this%a = matmul(transpose(this%x1), mx1)
+    this%f1 = matmul(this%load0 + fw0, this%x1)
+    this%gw1 = matmul(fw0, this%x1)
+    this%g0 = reshape(matmul(transpose(this%x1), mx2 + gh), [m, m, m])
+    if (allocated(this%b)) deallocate(this%b, this%g1, this%f2, this%gw2)
+    allocate(this%b(m, m, m), this%g1(m, m, m, m), this%f2(m, m), this%gw2(m, m))
+    ! First-order changes along each column of X1: of W (X2), of the element masses and
+    ! weights (differences), of the convective term (X3).
+    mass_l = dyn%mass
+    x12 = reshape([this%x1, this%x2], [n, m + m * m])
+    allocate(xl(n))
+    do l = 1, m
+      hl = MASS_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
+      xl = this%x0 + hl * this%x1(:, l)
+      call element_masses(dyn, xl, mass_l)
+      ! X1^T dM [X1, X2] along X1_l, element block by element block
+      dmx = matmul(transpose(this%x1), difference_product(dyn, mass_l, x12)) / hl
+      fwl = (element_weights(dyn, xl, vg) - fw0) / hl
+      this%b(:, :, l) = matmul(transpose(this%x1), mx2(:, (l - 1) * m + 1:l * m))
+      this%b(:, :, l) = this%b(:, :, l) + transpose(this%b(:, :, l)) + dmx(:, 1:m)
+      conv_l = dmx(:, m + 1:) + mx3(:, (l - 1) * m * m + 1:l * m * m)
+      do i = 1, m
+        this%g1(i, l, :, :) = reshape(matmul(this%x2(:, i, l), mx2) + conv_l(i, :), [m, m])
+        this%gw2(i, l) = dot_product(this%x2(:, i, l), fw0) + dot_product(this%x1(:, i), fwl)
+        this%f2(i, l) = dot_product(this%x2(:, i, l), this%load0) + this%gw2(i, l)
+      end do
+    end do
+    call stress_terms(this, dyn, basis, tz)
+    call strain_terms(this, dyn, tz, dyn%kin%q)
+    if (allocated(this%s1)) deallocate(this%s1, this%s2)
+    allocate(this%s1(m), this%s2(m, m))
+    do l = 1, m
+      this%s1(l) = largest_translation(dyn%model, this%x1(:, l))
+      do i = 1, m
+        this%s2(i, l) = largest_translation(dyn%model, this%x2(:, i, l))
+      end do
+    end do
+    this%valid = .true.
+  end procedure exp_build
+
+  !> x2(:, a, b) = D2F[T_a, T_b] for first <= a <= b (and its mirror), by polarisation of the
+  !> second-order solves along T_a and T_a + T_b at the kinematics' current solution.
+  subroutine second_terms(dyn, tz, first, x2)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: tz(:, :)
+    integer, intent(in) :: first
+    real(wp), intent(inout) :: x2(:, :, :)
+    integer :: a, b
+    do a = first, size(tz, 2)
+      call dyn%kin%second(dyn%model, tz(:, a), x2(:, a, a))
+    end do
+    do a = first, size(tz, 2)
+      do b = a + 1, size(tz, 2)
+        call dyn%kin%second(dyn%model, tz(:, a) + tz(:, b), x2(:, a, b))
+        x2(:, a, b) = 0.5_wp * (x2(:, a, b) - x2(:, a, a) - x2(:, b, b))
+        x2(:, b, a) = x2(:, a, b)
+      end do
+    end do
+  end subroutine second_terms
+
+  !> X3(:, l, a, b) = d X2(:, a, b) / d z_l for l <= a <= b by one-sided differences (X2 anew
+  !> at z0 + h e_l, nodal motion THIRD_STEP of the model's size), mirrored to every order of
+  !> the indices. The kinematics is left at z0's solution.
+  subroutine third_terms(this, dyn, tz, size_x, err)
+    type(expansion_t), intent(inout) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: tz(:, :), size_x
+    type(error_t), intent(out) :: err
+    type(kin_state_t) :: at_z0
+    real(wp) :: x2p(size(this%x2, 1), this%m, this%m), q0(dyn%model%n_q), h
+    integer :: l, a, b
+    if (allocated(this%x3)) deallocate(this%x3)
+    allocate(this%x3(size(this%x2, 1), this%m, this%m, this%m))
+    call dyn%kin%save_state(at_z0)
+    q0 = dyn%kin%q
+    do l = 1, this%m
+      h = THIRD_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
+      call dyn%kin%solve(dyn%model, q0 + h * tz(:, l), err)
+      if (.not. err%ok()) return
+      call second_terms(dyn, tz, l, x2p)
+      do b = l, this%m
+        do a = l, b
+          associate (d => this%x3(:, l, a, b))
+            d = (x2p(:, a, b) - this%x2(:, a, b)) / h
+            this%x3(:, l, b, a) = d
+            this%x3(:, a, l, b) = d
+            this%x3(:, a, b, l) = d
+            this%x3(:, b, l, a) = d
+            this%x3(:, b, a, l) = d
+          end associate
+        end do
+      end do
+      call dyn%kin%restore_state(at_z0)
+    end do
+    call dyn%kin%solve(dyn%model, q0, err)
+  end subroutine third_terms
+
+  !> M w for the mass blocks of dyn%mass and the lumped masses, element block by element block.
+  function mass_product(dyn, mass, w) result(mw)
+    type(dynamics_t), intent(in) :: dyn
+    type(element_mass_t), intent(in) :: mass
+    real(wp), intent(in) :: w(:, :)
+    real(wp) :: mw(size(w, 1), size(w, 2))
+    integer :: iel, nd, c, first, d0, i, j
+    do c = 1, size(w, 2)
+      mw(:, c) = dyn%model%lumped * w(:, c)
+    end do
+    do iel = 1, dyn%model%n_elements
+      first = mass%offset(iel)
+      if (first == 0) cycle
+      d0 = mass%dof_first(iel) - 1
+      nd = mass%dof_first(iel + 1) - 1 - d0
+      do c = 1, size(w, 2)
+        do j = 1, nd
+          do i = 1, nd
+            mw(mass%dofs(d0 + i), c) = mw(mass%dofs(d0 + i), c) + &
+              mass%val(first + (j - 1) * nd + i - 1) * w(mass%dofs(d0 + j), c)
+          end do
+        end do
+      end do
+    end do
+  end function mass_product
+
+  !> (M_l - M) w for the element mass blocks M_l of mass_l and M of dyn%mass (the lumped
+  !> masses cancel), element block by element block.
+  function difference_product(dyn, mass_l, w) result(dw)
+    type(dynamics_t), intent(in) :: dyn
+    type(element_mass_t), intent(in) :: mass_l
+    real(wp), intent(in) :: w(:, :)
+    real(wp) :: dw(size(w, 1), size(w, 2))
+    real(wp) :: dm(dyn%model%max_dofs, dyn%model%max_dofs), we(dyn%model%max_dofs)
+    real(wp) :: dwe(dyn%model%max_dofs)
+    integer :: iel, nd, first, d0, i, j, c
+    dw = 0.0_wp
+    do iel = 1, dyn%model%n_elements
+      first = dyn%mass%offset(iel)
+      if (first == 0) cycle
+      d0 = dyn%mass%dof_first(iel) - 1
+      nd = dyn%mass%dof_first(iel + 1) - 1 - d0
+      do j = 1, nd
+        do i = 1, nd
+          dm(i, j) = mass_l%val(first + (j - 1) * nd + i - 1) - &
+            dyn%mass%val(first + (j - 1) * nd + i - 1)
+        end do
+      end do
+      associate (dofs => dyn%mass%dofs(d0 + 1:d0 + nd))
+        do c = 1, size(w, 2)
+          do j = 1, nd
+            we(j) = w(dofs(j), c)
+          end do
+          do i = 1, nd
+            dwe(i) = 0.0_wp
+          end do
+          do j = 1, nd
+            do i = 1, nd
+              dwe(i) = dwe(i) + dm(i, j) * we(j)
+            end do
+          end do
+          do i = 1, nd
+            dw(dofs(i), c) = dw(dofs(i), c) + dwe(i)
+          end do
+        end do
+      end associate
+    end do
+  end function difference_product
+
+  !> The elements' quadratic velocity forces h(x0, .) as a bilinear form on the columns of
+  !> X1: gh(:, (b - 1) m + a) = h[X1_a, X1_b], by polarisation.
+  subroutine velocity_forces(dyn, x0, x1, gh)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: x0(:), x1(:, :)
+    real(wp), intent(out) :: gh(:, :)
+    integer :: a, b, m
+    m = size(x1, 2)
+    do a = 1, m
+      gh(:, (a - 1) * m + a) = nodal_h(dyn, x0, x1(:, a))
+    end do
+    do a = 1, m
+      do b = a + 1, m
+        gh(:, (b - 1) * m + a) = 0.5_wp * (nodal_h(dyn, x0, x1(:, a) + x1(:, b)) - &
+          gh(:, (a - 1) * m + a) - gh(:, (b - 1) * m + b))
+        gh(:, (a - 1) * m + b) = gh(:, (b - 1) * m + a)
+      end do
+    end do
+  end subroutine velocity_forces
+
+  !> Assembled quadratic velocity forces h(x, xd) of the elements with inertia.
+  function nodal_h(dyn, x, xd) result(h)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: x(:), xd(:)
+    real(wp) :: h(size(x))
+    real(wp) :: me(dyn%model%max_dofs, dyn%model%max_dofs), he(dyn%model%max_dofs)
+    integer :: iel, nd
+    h = 0.0_wp
+    do iel = 1, dyn%model%n_elements
+      if (dyn%mass%offset(iel) == 0) cycle
+      associate (el => dyn%model%elements(iel)%e)
+        nd = size(el%dofs)
+        call el%inertia(x(el%dofs), xd(el%dofs), me(1:nd, 1:nd), he(1:nd))
+        h(el%dofs) = h(el%dofs) + he(1:nd)
+      end associate
+    end do
+  end function nodal_h
+
+  !> The element mass blocks at x, in dyn%mass's layout.
+  subroutine element_masses(dyn, x, mass)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: x(:)
+    type(element_mass_t), intent(inout) :: mass
+    real(wp) :: me(dyn%model%max_dofs, dyn%model%max_dofs), he(dyn%model%max_dofs)
+    real(wp) :: zero(dyn%model%max_dofs)
+    integer :: iel, nd, first
+    zero = 0.0_wp
+    do iel = 1, dyn%model%n_elements
+      first = mass%offset(iel)
+      if (first == 0) cycle
+      associate (el => dyn%model%elements(iel)%e)
+        nd = size(el%dofs)
+        call el%inertia(x(el%dofs), zero(1:nd), me(1:nd, 1:nd), he(1:nd))
+        mass%val(first:first + nd * nd - 1) = reshape(me(1:nd, 1:nd), [nd * nd])
+      end associate
+    end do
+  end subroutine element_masses
+
+  !> Assembled element weights at x and their potential (lumped masses' weights are loads).
+  function element_weights(dyn, x, potential) result(f)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: x(:)
+    real(wp), intent(out) :: potential
+    real(wp) :: f(size(x))
+    real(wp) :: fe(dyn%model%max_dofs), g(3), pot
+    integer :: iel, nd
+    f = 0.0_wp
+    potential = 0.0_wp
+    if (all(dyn%model%gravity == 0)) return
+    g = dyn%load_factor * dyn%model%gravity
+    do iel = 1, dyn%model%n_elements
+      associate (el => dyn%model%elements(iel)%e)
+        nd = size(el%dofs)
+        call el%weight(x(el%dofs), g(1:dyn%model%dim), fe(1:nd), pot)
+        f(el%dofs) = f(el%dofs) + fe(1:nd)
+        potential = potential + pot
+      end associate
+    end do
+  end function element_weights
+
+  !> V^T sigma at z0 and its (exact, linear) dependence on dz and zd.
+  subroutine stress_terms(this, dyn, basis, tz)
+    type(expansion_t), intent(inout) :: this
+    type(dynamics_t), intent(in) :: dyn
+    type(basis_t), intent(in) :: basis
+    real(wp), intent(in) :: tz(:, :)
+    real(wp) :: zero(dyn%model%n_q), sigma(dyn%model%n_dy)
+    integer :: l
+    zero = 0.0_wp
+    ! sigma is linear and homogeneous in (q, q_dot): its columns along T are exact.
+    sigma = dyn%stresses(dyn%kin%q, zero)
+    this%s0 = matmul(sigma, basis%v)
+    if (allocated(this%kz)) deallocate(this%kz, this%dz)
+    allocate(this%kz(this%k, this%m), this%dz(this%k, this%m))
+    do l = 1, this%m
+      sigma = dyn%stresses(tz(:, l), zero)
+      this%kz(:, l) = matmul(sigma, basis%v)
+      sigma = dyn%stresses(zero, tz(:, l))
+      this%dz(:, l) = matmul(sigma, basis%v)
+    end do
+  end subroutine stress_terms
+
+  !> The modes' strain energy E(q0 + T dz) = es0 + es1 dz + dz es2 dz / 2: E is a quadratic
+  !> form in q (mode values are coordinates or zero), so polarisation is exact.
+  subroutine strain_terms(this, dyn, tz, q0)
+    type(expansion_t), intent(inout) :: this
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: tz(:, :), q0(:)
+    real(wp) :: e_t(this%m)
+    integer :: a, b
+    if (allocated(this%es1)) deallocate(this%es1, this%es2)
+    allocate(this%es1(this%m), this%es2(this%m, this%m))
+    this%es0 = strain_energy(dyn, q0)
+    do a = 1, this%m
+      e_t(a) = strain_energy(dyn, tz(:, a))
+      this%es1(a) = strain_energy(dyn, q0 + tz(:, a)) - this%es0 - e_t(a)
+      this%es2(a, a) = 2 * e_t(a)
+    end do
+    do a = 1, this%m
+      do b = a + 1, this%m
+        this%es2(a, b) = strain_energy(dyn, tz(:, a) + tz(:, b)) - e_t(a) - e_t(b)
+        this%es2(b, a) = this%es2(a, b)
+      end do
+    end do
+  end subroutine strain_terms
+
+  !> Strain energy sum e^T S e / 2 of the elements at q (no elastic elements here).
+  real(wp) function strain_energy(dyn, q) result(en)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: q(:)
+    real(wp) :: e(dyn%model%max_modes), s(dyn%model%max_modes, dyn%model%max_modes)
+    integer :: iel, nm
+    en = 0.0_wp
+    do iel = 1, dyn%model%n_elements
+      associate (el => dyn%model%elements(iel)%e)
+        nm = el%n_modes()
+        call dyn%model%mode_values(iel, q, e(:nm))
+        call el%stiffness(s(:nm, :nm))
+        en = en + 0.5_wp * dot_product(e(:nm), matmul(s(:nm, :nm), e(:nm)))
+      end associate
+    end do
+  end function strain_energy
+end submodule reduction_expansion_build
