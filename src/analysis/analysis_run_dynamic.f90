@@ -197,15 +197,15 @@ contains
     character(len=:), allocatable :: why
     character(len=*), parameter :: g = "group &reduction: evaluation = 'expanded' "
     why = expansion_unsupported(this%dyn%model)
-    if (len(why) > 0) then
-      call err%set(ERR_INPUT, g // 'does not represent ' // why // &
-        "; use evaluation = 'full'")
+    if (this%dyn%controls_on) then
+      call err%set(ERR_INPUT, g // 'does not take &controller groups (their sensors read ' // &
+        "the full model); use evaluation = 'full'")
     else if (this%scene%reduction%static_correction) then
       call err%set(ERR_INPUT, g // 'has no static_correction (it needs a model pass at ' // &
         "every output); use evaluation = 'full'")
-    else if (this%dyn%controls_on) then
-      call err%set(ERR_INPUT, g // 'does not take &controller groups (their sensors read ' // &
-        "the full model); use evaluation = 'full'")
+    else if (len(why) > 0) then
+      call err%set(ERR_INPUT, g // 'does not represent ' // why // &
+        "; use evaluation = 'full'")
     end if
   end subroutine check_expanded
 

@@ -1,5 +1,5 @@
-!> The expanded evaluation of a reduced model (docs/theory.md section 9.5): a cost per
-!> evaluation independent of the model's size.
+!> The expanded evaluation of a reduced model (docs/theory.md section 9, "Expanded
+!> evaluation"): a cost per evaluation independent of the model's size.
 !>
 !> In z = (q_rh, eta), the prescribed coordinates and the modal ones, the nodal coordinates are
 !> expanded to third order about a point z0,

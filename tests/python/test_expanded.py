@@ -1,0 +1,135 @@
+"""Reduced runs with &reduction evaluation = 'expanded' against evaluation = 'full', end to
+end: the difference is proportional to expansion_tol, the outputs and attributes are there,
+and what the expansion cannot represent is refused with a clear error."""
+import h5py
+import numpy as np
+import pytest
+
+from helpers import BIN, ROOT, assert_clean_error, run_scene
+
+pytestmark = pytest.mark.skipif(not BIN.is_file(), reason="flexmor binary not built")
+
+TWO_LINK = (ROOT / "input" / "two_link.nml").read_text()
+L1, L2 = 0.545, 0.675
+
+
+def two_link(reduction, t_end=0.3, dynamic=""):
+    """input/two_link.nml to t_end with k = 4 and the given &reduction settings."""
+    text = TWO_LINK.replace("&modal n_modes = 12 /", "")
+    text = text.replace("t_end = 0.7", f"t_end = {t_end}")
+    if dynamic:
+        text = text.replace("rtol = 1.0e-6, atol = 1.0e-8", dynamic)
+    return text + f"&reduction n_modes = 4{reduction} /\n"
+
+
+def tip(path):
+    with h5py.File(path) as f:
+        return f["time"][:], f["nodes/tip/position"][:, :2]
+
+
+def rigid_tip(t):
+    """The tip of the rigid arm under the scene's two cubic quarter turns in 0.5 s."""
+    s = np.clip(t / 0.5, 0, 1)
+    p = 0.5 * np.pi * (3 * s**2 - 2 * s**3)
+    return np.stack([L1 * np.cos(p) + L2 * np.cos(2 * p),
+                     L1 * np.sin(p) + L2 * np.sin(2 * p)], axis=-1)
+
+
+def test_difference_proportional_to_the_tolerance(tmp_path):
+    proc, full = run_scene(tmp_path, two_link(""), "full")
+    assert proc.returncode == 0, proc.stderr
+    t, x_full = tip(full)
+    # The scale of the elastic response the expansion's equations act on.
+    elastic = np.max(np.linalg.norm(x_full - rigid_tip(t), axis=-1))
+    errors = {}
+    for tol in (1e-3, 1e-4):
+        proc, out = run_scene(tmp_path, two_link(
+            f", evaluation = 'expanded', expansion_tol = {tol}"), f"e{tol}")
+        assert proc.returncode == 0, proc.stderr
+        errors[tol] = np.max(np.linalg.norm(tip(out)[1] - x_full, axis=-1))
+        with h5py.File(out) as f:
+            red = f["reduction"].attrs
+            assert red["evaluation"] == "expanded" and red["n_expansions"] > 1
+            # The series stops at the third order: what it leaves is about (d2 / d1)^3 of the
+            # nodal motion, at most tol^1.5 of the arm's length where an expansion is replaced.
+            assert 0 < red["manifold_error_max"] < 10 * (L1 + L2) * tol**1.5
+            assert np.all(np.isfinite(f["energy/kinetic"][:]))
+    # The coefficients err by about tol relative, the elastic response with them (observed:
+    # 1.2 and 0.12 of tol * elastic at 3 el/link).
+    for tol, err in errors.items():
+        assert err < 10 * tol * elastic, (tol, err, elastic)
+    assert errors[1e-4] < errors[1e-3] / 3, errors
+
+
+def test_energies_and_integrators_agree(tmp_path):
+    """The energies from the expansion's coefficients and a run with BDF (its Jacobian by
+    differences of the expanded accelerations) against the full evaluation."""
+    dyn = "integrator = 'bdf', rtol = 1.0e-8, atol = 1.0e-10"
+    runs = {}
+    for name, red in (("full", ""), ("expanded", ", evaluation = 'expanded', "
+                                                 "expansion_tol = 1e-5")):
+        proc, out = run_scene(tmp_path, two_link(red, t_end=0.2, dynamic=dyn), name)
+        assert proc.returncode == 0, proc.stderr
+        with h5py.File(out) as f:
+            runs[name] = (f["energy/kinetic"][:], f["nodes/tip/position"][:, :2])
+    kinetic_full, tip_full = runs["full"]
+    kinetic, tip_exp = runs["expanded"]
+    # Relative errors of order tol = 1e-5 in the coefficients (bounds 10x that).
+    assert np.max(np.abs(kinetic - kinetic_full)) < 1e-4 * np.max(kinetic_full)
+    assert np.max(np.linalg.norm(tip_exp - tip_full, axis=-1)) < 1e-4 * (L1 + L2)
+
+
+def test_spatial_with_gravity_and_updates(tmp_path):
+    base = (ROOT / "input" / "two_link_spatial_reduced.nml").read_text()
+    base = base.replace("t_end = 0.7", "t_end = 0.3")
+    proc, full = run_scene(tmp_path, base, "full")
+    assert proc.returncode == 0, proc.stderr
+    text = base.replace("update_interval = 0.01 /",
+                        "update_interval = 0.01, evaluation = 'expanded' /")
+    proc, out = run_scene(tmp_path, text, "expanded")
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(full) as f:
+        t, x_full = f["time"][:], f["nodes/tip/position"][:]
+    with h5py.File(out) as f:
+        x = f["nodes/tip/position"][:]
+        assert f["reduction"].attrs["n_updates"] > 0
+    rigid = rigid_tip(t)
+    elastic = np.max(np.linalg.norm(x_full[:, :2] - rigid, axis=-1))
+    # The default tolerance 1e-3 (as above: the error about tol times the elastic response,
+    # here with the sag under gravity).
+    assert np.max(np.linalg.norm(x - x_full, axis=-1)) < 10 * 1e-3 * elastic
+
+
+@pytest.mark.parametrize("extra, fragments", [
+    (", expansion_tol = 1e-3", ("expansion_tol", "evaluation = 'expanded'")),
+    (", evaluation = 'fast'", ("evaluation", "fast")),
+    (", evaluation = 'expanded', expansion_tol = 0", ("expansion_tol",)),
+    (", evaluation = 'expanded', expansion_tol = 2", ("expansion_tol",)),
+    (", evaluation = 'expanded', static_correction = .true.",
+     ("evaluation = 'expanded'", "static_correction")),
+])
+def test_bad_settings(tmp_path, extra, fragments):
+    proc, out = run_scene(tmp_path, two_link(extra))
+    assert_clean_error(proc, out, "&reduction", *fragments)
+
+
+def test_controllers_refused(tmp_path):
+    text = (ROOT / "input" / "stage_pid.nml").read_text()
+    text += "&reduction n_modes = 2, evaluation = 'expanded' /\n"
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, "evaluation = 'expanded'", "&controller")
+
+
+def test_actuators_refused(tmp_path):
+    text = (ROOT / "input" / "two_link_pd.nml").read_text()
+    text += "&reduction n_modes = 4, evaluation = 'expanded' /\n"
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, "evaluation = 'expanded'", "actuators")
+
+
+def test_elastic_modes_refused(tmp_path):
+    text = (ROOT / "input" / "leaf_spring_guide.nml").read_text()
+    text += ("&dynamic t_end = 0.01 /\n"
+             "&reduction n_modes = 1, evaluation = 'expanded' /\n")
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, "evaluation = 'expanded'", "elastic")

@@ -1,0 +1,166 @@
+!> The expanded evaluation of a reduced model (reduction_expansion) against the exact one on a
+!> small two-link arm under gravity and a time-varying tip force (2 beams per link, k = 3):
+!> at the expansion point the accelerations agree to round-off; away from it the nodal
+!> coordinates converge at order 4 (a third-order series) and the accelerations and kinetic
+!> energy at order 2 (coefficients to first order), for steps that mix the prescribed and modal
+!> coordinates.
+program test_expansion
+  use core_kinds, only: wp
+  use core_error, only: error_t
+  use analysis_run, only: run_t
+  use reduction_expansion, only: expansion_t
+  use testing, only: suite_t
+  implicit none
+  type(suite_t) :: suite
+  type(run_t) :: run
+  type(expansion_t) :: ex
+  type(error_t) :: err
+  real(wp), parameter :: T0 = 0.2_wp, TAU = 0.01_wp
+  real(wp) :: eta0(3), eta_dot(3), d_eta(3), d_p(2)
+  integer :: u
+
+  call suite%init('expansion: expanded reduced model against the exact one')
+  open(newunit=u, file='test_expansion.nml', status='replace', action='write')
+  write(u, '(a)') scene()
+  close(u)
+  run%verbose = .false.
+  call run%load('test_expansion.nml', err)
+  if (err%ok()) call run%execute(err)
+  call suite%check(err%ok(), 'reduced run (full evaluation) runs')
+  if (.not. err%ok()) then
+    write(*, '(a)') '    ' // err%message
+    call suite%finish()
+  end if
+  eta0 = [0.02_wp, -0.01_wp, 0.004_wp]
+  eta_dot = [0.3_wp, -0.2_wp, 0.05_wp]
+  d_eta = [0.02_wp, 0.01_wp, 0.001_wp]
+  d_p = [0.04_wp, -0.03_wp]
+  call ex%build(run%red%dyn, run%red%basis, T0, eta0, err)
+  call suite%check(err%ok(), 'expansion builds')
+  if (.not. err%ok()) call suite%finish()
+  call check_at_point()
+  call check_coordinates()
+  call check_accelerations()
+  call check_energies()
+  call suite%finish()
+
+contains
+
+  function scene() result(text)
+    character(len=:), allocatable :: text
+    character(len=*), parameter :: nl = new_line('a')
+    text = "&scene gravity = 0, -9.81 /" // nl // &
+      "&node label = 'base', x = 0, y = 0, fixed = .true. /" // nl // &
+      "&node label = 'elbow', x = 0.545, y = 0 /" // nl // &
+      "&node label = 'tip', x = 1.22, y = 0 /" // nl // &
+      "&link label = 'l1', from = 'base', to = 'elbow', n_elements = 2, E = 7.3e10, " // &
+      "A = 9e-4, I = 1.69e-8, rho = 2700 /" // nl // &
+      "&link label = 'l2', from = 'elbow', to = 'tip', n_elements = 2, E = 7.3e10, " // &
+      "A = 4e-4, I = 3.33e-9, rho = 2700 /" // nl // &
+      "&hinge label = 'j1', node = 'base', link = 'l1', mode = 'prescribed', motion = 'p1' /" &
+      // nl // &
+      "&hinge label = 'j2', node = 'elbow', link = 'l2', mode = 'prescribed', motion = 'p2' /" &
+      // nl // &
+      "&motion label = 'p1', law = 'cubic', end = 1.5707963, duration = 0.4 /" // nl // &
+      "&motion label = 'p2', law = 'cubic', end = 1.5707963, duration = 0.4 /" // nl // &
+      "&motion label = 'f', law = 'harmonic', frequency = 3, amplitude = 1 /" // nl // &
+      "&force node = 'tip', fx = 2, fy = -1, time_law = 'f' /" // nl // &
+      "&mass node = 'elbow', m = 1 /" // nl // "&mass node = 'tip', m = 3 /" // nl // &
+      "&output nodes = 'tip' /" // nl // &
+      "&dynamic t_end = 0.01, output_dt = 5e-3, integrator = 'bdf' /" // nl // &
+      "&reduction n_modes = 3 /" // nl
+  end function scene
+
+  !> Exact reduced accelerations (the full model evaluated) at (t, eta, eta_dot).
+  function exact_accel(t, eta) result(a)
+    real(wp), intent(in) :: t, eta(:)
+    real(wp) :: a(size(eta))
+    integer :: status
+    call run%red%accel(t, eta, eta_dot, a, status)
+    call suite%check(status == 0, 'exact evaluation')
+  end function exact_accel
+
+  function expanded_accel(t, eta) result(a)
+    real(wp), intent(in) :: t, eta(:)
+    real(wp) :: a(size(eta))
+    call ex%accel(run%red%dyn, t, eta, eta_dot, a, err)
+    call suite%check(err%ok(), 'expanded evaluation')
+  end function expanded_accel
+
+  !> At z0 the series is exact: only the projections' round-off differs.
+  subroutine check_at_point()
+    real(wp) :: a(3), b(3)
+    a = exact_accel(T0, eta0)
+    b = expanded_accel(T0, eta0)
+    call suite%check(maxval(abs(a - b)) <= 1.0e-9_wp * maxval(abs(a)), &
+      'accelerations at the expansion point (round-off: 1e-9 relative)')
+  end subroutine check_at_point
+
+  !> Largest nodal distance between the series and the exact kinematics at z0 + s (d_p, d_eta).
+  real(wp) function coordinate_error(s) result(e)
+    real(wp), intent(in) :: s
+    real(wp) :: z(5), q(run%red%dyn%model%n_q), x(run%red%dyn%model%n_x)
+    integer :: i
+    z = ex%z0 + s * [d_p, d_eta]
+    q(1:2) = z(1:2)
+    q(3:) = run%red%basis%q_ref + matmul(run%red%basis%v, z(3:))
+    x = ex%coordinates(z)
+    call run%red%dyn%kin%solve(run%red%dyn%model, q, err)
+    call suite%check(err%ok(), 'exact kinematics')
+    e = 0.0_wp
+    do i = 1, size(run%red%dyn%model%node_coord, 2)
+      e = max(e, run%red%dyn%model%translation(i, x - run%red%dyn%kin%x))
+    end do
+  end function coordinate_error
+
+  subroutine check_coordinates()
+    ! At s = 1 the step turns the joints by 0.04 rad: the fourth-order term, about
+    ! 1.2 m * 0.04^4 / 24 = 1e-7 m, is far above X3's difference error (1e-6 * 0.04^3 m).
+    call suite%order(coordinate_error(1.0_wp), coordinate_error(0.5_wp), 4, &
+      'nodal coordinates of the series')
+  end subroutine check_coordinates
+
+  !> Relative error of the expanded accelerations at time T0 + s TAU, eta0 + s d_eta: the
+  !> joints move by about 0.06 s rad (their rate at T0 is near 5.9 rad/s). d_eta is small
+  !> against eta0, so that the stiffness forces, large and exact in both, stay near their
+  !> value and the error (of the mass and inertia coefficients) shows its order.
+  real(wp) function accel_error(s) result(e)
+    real(wp), intent(in) :: s
+    real(wp) :: a(3)
+    a = exact_accel(T0 + s * TAU, eta0 + s * d_eta)
+    e = maxval(abs(expanded_accel(T0 + s * TAU, eta0 + s * d_eta) - a)) / maxval(abs(a))
+  end function accel_error
+
+  subroutine check_accelerations()
+    call suite%order(accel_error(0.5_wp), accel_error(0.25_wp), 2, &
+      'accelerations (mass, inertia, weight and load terms to first order)')
+  end subroutine check_accelerations
+
+  !> Errors of the expanded kinetic and potential energy at the state of accel_error.
+  function energy_error(s) result(e)
+    real(wp), intent(in) :: s
+    real(wp) :: e(2)
+    real(wp) :: t, p(2), pd(2), pdd(2), eta(3), q(run%red%dyn%model%n_q), exact(2), z(5)
+    t = T0 + s * TAU
+    eta = eta0 + s * d_eta
+    call run%red%dyn%prescribed(t, p, pd, pdd)
+    q(1:2) = p
+    q(3:) = run%red%basis%q_ref + matmul(run%red%basis%v, eta)
+    call run%red%dyn%kin%solve(run%red%dyn%model, q, err)
+    call suite%check(err%ok(), 'exact kinematics')
+    exact = run%red%dyn%energy(t, q(3:), matmul(run%red%basis%v, eta_dot))
+    z = [p, eta]
+    e = abs(ex%energy(z, [pd, eta_dot], run%red%dyn%load_factor * &
+      run%red%dyn%loads_at(t), ex%coordinates(z)) - exact)
+  end function energy_error
+
+  !> The kinetic energy from the first-order mass; the potential exact in the strain, to
+  !> fourth order in the loads' work and to third in the elements' weights.
+  subroutine check_energies()
+    real(wp) :: coarse(2), fine(2)
+    coarse = energy_error(0.5_wp)
+    fine = energy_error(0.25_wp)
+    call suite%order(coarse(1), fine(1), 2, 'kinetic energy')
+    call suite%order(coarse(2), fine(2), 3, 'potential energy')
+  end subroutine check_energies
+end program test_expansion
