@@ -30,7 +30,7 @@ module reduction_expansion
   private
   public :: expansion_t, expansion_set_t, expansion_unsupported, largest_translation
 
-  integer, parameter :: MAX_KEPT = 16
+  integer, parameter :: MAX_KEPT = 64
 
   !> One expansion and its projected coefficients (i: equation, l: the dz factor, a, b: the
   !> zd factors).
@@ -40,7 +40,10 @@ module reduction_expansion
     real(wp) :: tol = 1.0e-3_wp
     real(wp), allocatable :: z0(:), x0(:), xr(:)     !< xr = DF_dy q_ref (error norm)
     real(wp), allocatable :: x1(:, :), x2(:, :, :)   !< (n_x, m), (n_x, m, m)
-    real(wp), allocatable :: x3(:, :, :, :)          !< (n_x, m, m, m)
+    !> X3's distinct columns (n_x, m (m + 1) (m + 2) / 6): X3(:, l, a, b) for l <= a <= b is
+    !> column tri(l, a, b) (X3 is symmetric in its three indices).
+    real(wp), allocatable :: x3(:, :)
+    integer, allocatable :: tri(:, :, :)
     real(wp), allocatable :: a(:, :), b(:, :, :)     !< mass: a + sum_l b(:, :, l) dz_l
     real(wp), allocatable :: g0(:, :, :), g1(:, :, :, :)  !< inertia forces (i, [l,] a, b)
     real(wp), allocatable :: f1(:), f2(:, :)         !< loads and weights: f1 + f2 dz
@@ -64,7 +67,7 @@ module reduction_expansion
   !> The expansions kept during a run, the one in use and the counts for the output.
   type :: expansion_set_t
     real(wp) :: tol = 1.0e-3_wp
-    type(expansion_t) :: item(MAX_KEPT)
+    type(expansion_t), allocatable :: item(:)        !< MAX_KEPT slots once one is made
     integer :: current = 0
     integer :: last_use(MAX_KEPT) = 0, clock = 0
     integer :: n_expansions = 0, n_switches = 0
@@ -106,6 +109,7 @@ contains
     real(wp), intent(in) :: p(:), eta(:)
     integer :: i
     found = .false.
+    if (.not. allocated(this%item)) return
     if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta)
     if (found) return
     do i = 1, MAX_KEPT
@@ -133,6 +137,7 @@ contains
     real(wp), allocatable :: x_stale(:)
     integer :: slot
     call dyn%prescribed(t, p, pd, pdd)
+    if (.not. allocated(this%item)) allocate(this%item(MAX_KEPT))
     if (this%current > 0) x_stale = this%item(this%current)%coordinates([p, eta])
     slot = minloc(merge(this%last_use, -1, this%item%valid), 1)
     this%item(slot)%tol = this%tol
@@ -149,7 +154,7 @@ contains
   !> Drop every expansion (a new basis).
   subroutine set_forget(this)
     class(expansion_set_t), intent(inout) :: this
-    this%item%valid = .false.
+    if (allocated(this%item)) this%item%valid = .false.
     this%current = 0
     this%last_use = 0
   end subroutine set_forget
@@ -258,7 +263,8 @@ contains
         x = x + c * this%x2(:, a, b)
         ! X3[dz, dz, dz] / 6 over l <= a <= b: each distinct triple with its multiplicity
         do l = 1, a
-          x = x + (dz(l) * dz(a) * dz(b) * triple_weight(l, a, b)) * this%x3(:, l, a, b)
+          x = x + (dz(l) * dz(a) * dz(b) * triple_weight(l, a, b)) * &
+            this%x3(:, this%tri(l, a, b))
         end do
       end do
     end do

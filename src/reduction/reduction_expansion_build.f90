@@ -56,7 +56,7 @@ contains
     mx1 = mass_product(dyn, dyn%mass, this%x1)
     mx2 = mass_product(dyn, dyn%mass, reshape(this%x2, [n, m * m]))
     ! X1^T M X3 = (M X1)^T X3: M is symmetric.
-    mx3 = matmul(transpose(mx1), reshape(this%x3, [n, m * m * m]))
+    mx3 = third_projection(this, mx1)
     allocate(gh(n, m * m))
     call velocity_forces(dyn, this%x0, this%x1, gh)
     ! Loads: the constant part (with the lumped masses' weights) and the element weights.
@@ -125,8 +125,8 @@ contains
   end subroutine second_terms
 
   !> X3(:, l, a, b) = d X2(:, a, b) / d z_l for l <= a <= b by one-sided differences (X2 anew
-  !> at z0 + h e_l, nodal motion THIRD_STEP of the model's size), mirrored to every order of
-  !> the indices. The kinematics is left at z0's solution.
+  !> at z0 + h e_l, nodal motion THIRD_STEP of the model's size): the distinct columns of the
+  !> symmetric X3. The kinematics is left at z0's solution.
   subroutine third_terms(this, dyn, tz, size_x, err)
     type(expansion_t), intent(inout) :: this
     type(dynamics_t), intent(inout) :: dyn
@@ -134,11 +134,14 @@ contains
     type(error_t), intent(out) :: err
     type(kin_state_t) :: at_z0
     real(wp) :: x2p(size(this%x2, 1), this%m, this%m), q0(dyn%model%n_q), h
-    integer :: l, a, b
-    if (allocated(this%x3)) deallocate(this%x3)
-    allocate(this%x3(size(this%x2, 1), this%m, this%m, this%m))
+    integer :: l, a, b, c
+    if (allocated(this%x3)) deallocate(this%x3, this%tri)
+    allocate(this%x3(size(this%x2, 1), this%m * (this%m + 1) * (this%m + 2) / 6))
+    allocate(this%tri(this%m, this%m, this%m))
+    this%tri = 0
     call dyn%kin%save_state(at_z0)
     q0 = dyn%kin%q
+    c = 0
     do l = 1, this%m
       h = THIRD_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
       call dyn%kin%solve(dyn%model, q0 + h * tz(:, l), err)
@@ -146,20 +149,43 @@ contains
       call second_terms(dyn, tz, l, x2p)
       do b = l, this%m
         do a = l, b
-          associate (d => this%x3(:, l, a, b))
-            d = (x2p(:, a, b) - this%x2(:, a, b)) / h
-            this%x3(:, l, b, a) = d
-            this%x3(:, a, l, b) = d
-            this%x3(:, a, b, l) = d
-            this%x3(:, b, l, a) = d
-            this%x3(:, b, a, l) = d
-          end associate
+          c = c + 1
+          this%tri(l, a, b) = c
+          this%x3(:, c) = (x2p(:, a, b) - this%x2(:, a, b)) / h
         end do
       end do
       call dyn%kin%restore_state(at_z0)
     end do
     call dyn%kin%solve(dyn%model, q0, err)
   end subroutine third_terms
+
+  !> (M X1)^T X3 as (m, m^2 m), column (b - 1) m + a of block l holding X1_i^T M X3(:, a, b, l):
+  !> M is symmetric, and X3's columns are looked up with their indices sorted.
+  function third_projection(this, mx1) result(p)
+    type(expansion_t), intent(in) :: this
+    real(wp), intent(in) :: mx1(:, :)
+    real(wp) :: p(this%m, this%m**3)
+    real(wp) :: distinct(this%m, size(this%x3, 2))
+    integer :: a, b, l, s(3)
+    distinct = matmul(transpose(mx1), this%x3)
+    do l = 1, this%m
+      do b = 1, this%m
+        do a = 1, this%m
+          s = sorted([l, a, b])
+          p(:, (l - 1) * this%m**2 + (b - 1) * this%m + a) = distinct(:, this%tri(s(1), s(2), &
+            s(3)))
+        end do
+      end do
+    end do
+  end function third_projection
+
+  pure function sorted(i) result(s)
+    integer, intent(in) :: i(3)
+    integer :: s(3)
+    s(1) = minval(i)
+    s(3) = maxval(i)
+    s(2) = sum(i) - s(1) - s(3)
+  end function sorted
 
   !> M w for the mass blocks of dyn%mass and the lumped masses, element block by element block.
   function mass_product(dyn, mass, w) result(mw)
@@ -194,9 +220,9 @@ contains
     type(element_mass_t), intent(in) :: mass_l
     real(wp), intent(in) :: w(:, :)
     real(wp) :: dw(size(w, 1), size(w, 2))
-    real(wp) :: dm(dyn%model%max_dofs, dyn%model%max_dofs), we(dyn%model%max_dofs)
-    real(wp) :: dwe(dyn%model%max_dofs)
-    integer :: iel, nd, first, d0, i, j, c
+    real(wp) :: dm(dyn%model%max_dofs, dyn%model%max_dofs), we(dyn%model%max_dofs, size(w, 2))
+    real(wp) :: dwe(dyn%model%max_dofs, size(w, 2))
+    integer :: iel, nd, first, d0, i, j
     dw = 0.0_wp
     do iel = 1, dyn%model%n_elements
       first = dyn%mass%offset(iel)
@@ -209,24 +235,13 @@ contains
             dyn%mass%val(first + (j - 1) * nd + i - 1)
         end do
       end do
-      associate (dofs => dyn%mass%dofs(d0 + 1:d0 + nd))
-        do c = 1, size(w, 2)
-          do j = 1, nd
-            we(j) = w(dofs(j), c)
-          end do
-          do i = 1, nd
-            dwe(i) = 0.0_wp
-          end do
-          do j = 1, nd
-            do i = 1, nd
-              dwe(i) = dwe(i) + dm(i, j) * we(j)
-            end do
-          end do
-          do i = 1, nd
-            dw(dofs(i), c) = dw(dofs(i), c) + dwe(i)
-          end do
-        end do
-      end associate
+      do j = 1, nd
+        we(j, :) = w(dyn%mass%dofs(d0 + j), :)
+      end do
+      dwe(1:nd, :) = matmul(dm(1:nd, 1:nd), we(1:nd, :))
+      do j = 1, nd
+        dw(dyn%mass%dofs(d0 + j), :) = dw(dyn%mass%dofs(d0 + j), :) + dwe(j, :)
+      end do
     end do
   end function difference_product
 
