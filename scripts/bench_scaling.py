@@ -4,7 +4,8 @@
 
 Part 1, scaling: time per step for n = 2, 4, ..., 128 elements per link of
 
-- the full model and the reduced models k = 2 and 4 (``&reduction n_modes = k``), flexmor's
+- the full model and the reduced models k = 2 and 4 (``&reduction n_modes = k``) and k = 4
+  with ``evaluation = 'expanded'``, flexmor's
   fixed-step generalized-alpha at dt = 1e-4 s (rho_inf 0.8);
 - Exudyn's model of the same benchmark (python/flexmor/exudyn_two_link.py: planar
   geometrically exact beams, generalized-alpha at h = 1e-4 s, its sparse solver), when Exudyn
@@ -18,6 +19,10 @@ process time of SolveDynamic: both are what other jobs on the machine do not inf
 (/usr/bin/time). The exponent p of time ~ n^p is fitted by least squares in log-log over
 8 <= n <= 128.
 
+Whole runs (--whole-runs): the scene's own 0.7 s analysis (galpha_adaptive, rtol 1e-6) at
+--whole-meshes, full against k = 4 with the full and with the expanded evaluation: times, steps,
+expansions and the reduced tips' distance from the full one (whole_runs.csv/.md).
+
 Part 2, work-precision (--work-precision): the largest distance over 0 <= t <= 0.7 s of the tip
 from a converged solution (flexmor, 32 elements per link, generalized-alpha at dt = 2e-5 s;
 the same at 16 elements per link shows how converged it is) against solve time, for flexmor
@@ -29,8 +34,8 @@ each code and their ratio.
 Usage (the flexmor Python package installed, or PYTHONPATH=python):
 
     python3 scripts/bench_scaling.py [--bin build/bin/flexmor] [--out-dir docs/bench] \\
-        [--meshes 2,4,8,16,32,64,128] [--t-end 0.1] [--exudyn-max 64] [--no-exudyn] \\
-        [--work-precision] [--repeat 3] [--quick]
+        [--meshes 2,3,4,8,16,32,64,128] [--t-end 0.1] [--exudyn-max 64] [--no-exudyn] \\
+        [--whole-runs] [--whole-meshes 3,8,16,32,64] [--work-precision] [--repeat 3] [--quick]
 
 Every timing is the least of --repeat runs (the one other jobs disturbed least). Writes scaling.csv, scaling.md and scaling.png (and work_precision.csv/.md/.png) into
 --out-dir, each with the command, date, machine, flexmor version and commit. --quick: meshes
@@ -49,6 +54,7 @@ import tempfile
 from datetime import datetime
 from pathlib import Path
 
+import h5py
 import numpy as np
 
 from flexmor import exudyn_two_link
@@ -61,15 +67,18 @@ DT = 1.0e-4
 TARGETS = (1.0e-3, 1.0e-4, 1.0e-5)
 
 
-def scene(n: int, dynamic: str, k: int = 0, t_end: float = 0.02, output_dt: float = 1e-3) -> str:
-    """The benchmark with n elements per link, the given &dynamic settings and, for k > 0, a
-    reduced model of k modes."""
+def scene(n: int, dynamic: str, k: int = 0, t_end: float = 0.02, output_dt: float = 1e-3,
+          expanded: bool = False) -> str:
+    """The benchmark with n elements per link, the given &dynamic settings (none: the scene's
+    own) and, for k > 0, a reduced model of k modes (with the expanded evaluation if asked)."""
     text = BASE.replace("n_elements = 3", f"n_elements = {n}")
     text = re.sub(r"&modal[^/]*/", "", text)
-    text = re.sub(r"&dynamic[^/]*/",
-                  f"&dynamic t_end = {t_end!r}, output_dt = {output_dt!r}, {dynamic} /", text)
+    if dynamic:
+        text = re.sub(r"&dynamic[^/]*/",
+                      f"&dynamic t_end = {t_end!r}, output_dt = {output_dt!r}, {dynamic} /", text)
     if k:
-        text += f"\n&reduction n_modes = {k} /\n"
+        text += f"\n&reduction n_modes = {k}" + (", evaluation = 'expanded'" if expanded
+                                                  else "") + " /\n"
     return text
 
 
@@ -94,12 +103,14 @@ def run_flexmor(binary: Path, work: Path, name: str, text: str, timeout: float =
     return run_attributes(out), rss, out
 
 
-def per_step_flexmor(binary, work, name, n, dynamic, k, t1, repeat=1):
+def per_step_flexmor(binary, work, name, n, dynamic, k, t1, repeat=1, expanded=False):
     """Time per step from the least times of `repeat` runs to t1 and to 2 t1 (the least is the
     one other jobs disturbed least)."""
-    a1 = min((run_flexmor(binary, work, f"{name}_1", scene(n, dynamic, k, t1))[0]
+    a1 = min((run_flexmor(binary, work, f"{name}_1", scene(n, dynamic, k, t1,
+                                                           expanded=expanded))[0]
               for _ in range(repeat)), key=solve_time)
-    runs = [run_flexmor(binary, work, f"{name}_2", scene(n, dynamic, k, 2 * t1))
+    runs = [run_flexmor(binary, work, f"{name}_2", scene(n, dynamic, k, 2 * t1,
+                                                         expanded=expanded))
             for _ in range(repeat)]
     a2 = min((r[0] for r in runs), key=solve_time)
     rss = max(r[1] for r in runs)
@@ -159,10 +170,10 @@ def scaling(args, binary, work, argv):
     galpha = f"integrator = 'galpha', dt = {DT!r}"
     for n in args.meshes:
         row = {"elements_per_link": n}
-        for k, label in ((0, "full"), (2, "k2"), (4, "k4")):
+        for k, label in ((0, "full"), (2, "k2"), (4, "k4"), (4, "k4x")):
             try:
                 t, rss, n_dy = per_step_flexmor(binary, work, f"s{n}_{label}", n, galpha, k,
-                                                args.t_end, args.repeat)
+                                                args.t_end, args.repeat, label == "k4x")
                 row[f"{label}_ms"] = 1e3 * t
                 row[f"{label}_rss_mib"] = rss
                 row["n_dy"] = n_dy
@@ -180,14 +191,15 @@ def scaling(args, binary, work, argv):
             row["exudyn_ms"]) else float("nan")
         rows.append(row)
         print(f"n = {n:4d}: full {row['full_ms']:.4f} ms, k=2 {row.get('k2_ms', math.nan):.4f}, "
-              f"k=4 {row.get('k4_ms', math.nan):.4f}, Exudyn {row['exudyn_ms']:.4f} ms/step",
+              f"k=4 {row.get('k4_ms', math.nan):.4f}, k=4 expanded "
+              f"{row.get('k4x_ms', math.nan):.4f}, Exudyn {row['exudyn_ms']:.4f} ms/step",
               flush=True)
     ns = [r["elements_per_link"] for r in rows]
     expo = {key: fit_exponent(ns, [r.get(f"{key}_ms", math.nan) for r in rows])
-            for key in ("full", "k2", "k4", "exudyn")}
-    columns = ["elements_per_link", "n_dy", "full_ms", "k2_ms", "k4_ms", "exudyn_ms",
-               "full_over_exudyn", "full_rss_mib", "k2_rss_mib", "k4_rss_mib", "full_error",
-               "k2_error", "k4_error", "exudyn_error"]
+            for key in ("full", "k2", "k4", "k4x", "exudyn")}
+    columns = ["elements_per_link", "n_dy", "full_ms", "k2_ms", "k4_ms", "k4x_ms", "exudyn_ms",
+               "full_over_exudyn", "full_rss_mib", "k2_rss_mib", "k4_rss_mib", "k4x_rss_mib",
+               "full_error", "k2_error", "k4_error", "k4x_error", "exudyn_error"]
     write_csv(rows, columns, args.out_dir / "scaling.csv")
     lines = ["# Time per step against model size (two-link benchmark)", "", *header(args, argv),
              "", f"Generalized-alpha, fixed step {DT} s, rho_inf 0.8; processor time per step from runs "
@@ -195,12 +207,16 @@ def scaling(args, binary, work, argv):
              "exact beams, its generalized-alpha at the same step, sparse solver "
              "(python/flexmor/exudyn_two_link.py); its Newton relative tolerance is 1e-6, "
              "loosened to 1e-5 or 1e-4 where it stalls (from 32 elements per link).", "",
-             "| elements per link | n_dy | full [ms] | k = 2 [ms] | k = 4 [ms] | Exudyn [ms] | "
-             "full / Exudyn | peak RSS full [MiB] |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "k = 4 expanded: `&reduction evaluation = 'expanded'` (docs/theory.md section 9); "
+             "its time per step includes the expansions made in the window.", "",
+             "| elements per link | n_dy | full [ms] | k = 2 [ms] | k = 4 [ms] | "
+             "k = 4 expanded [ms] | Exudyn [ms] | full / Exudyn | peak RSS full [MiB] |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in rows:
         ratio = r["full_over_exudyn"]
         lines.append(f"| {r['elements_per_link']} | {r.get('n_dy', '–')} | {ms(r['full_ms'] / 1e3)} | "
                      f"{ms(r.get('k2_ms', math.nan) / 1e3)} | {ms(r.get('k4_ms', math.nan) / 1e3)} | "
+                     f"{ms(r.get('k4x_ms', math.nan) / 1e3)} | "
                      f"{ms(r['exudyn_ms'] / 1e3)} | "
                      f"{'–' if not math.isfinite(ratio) else f'{ratio:.2f}'} | "
                      f"{r.get('full_rss_mib', math.nan):.0f} |")
@@ -221,7 +237,8 @@ def plot_scaling(rows, path):
     fig, ax = plt.subplots(figsize=(6, 4.2))
     ns = [r["elements_per_link"] for r in rows]
     for key, label in (("full_ms", "flexmor full"), ("k2_ms", "flexmor k = 2"),
-                       ("k4_ms", "flexmor k = 4"), ("exudyn_ms", "Exudyn")):
+                       ("k4_ms", "flexmor k = 4"), ("k4x_ms", "flexmor k = 4 expanded"),
+                       ("exudyn_ms", "Exudyn")):
         ys = [r.get(key, math.nan) for r in rows]
         if any(math.isfinite(y) for y in ys):
             ax.loglog(ns, ys, "o-", label=label)
@@ -232,6 +249,64 @@ def plot_scaling(rows, path):
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def whole_runs(args, binary, work, argv):
+    """Whole runs of the scene's own analysis (0.7 s, generalized-alpha with error control at
+    rtol 1e-6) at each mesh: the full model, k = 4 with the full evaluation and k = 4 expanded;
+    times, steps, expansions and the reduced runs' tip distance from the full run."""
+    rows, failed = [], False
+    t_end = 0.02 if args.quick else 0.7
+    for n in args.whole_meshes:
+        row = {"elements_per_link": n}
+        paths = {}
+        for k, label in ((0, "full"), (4, "k4"), (4, "k4x")):
+            text = scene(n, "", k, expanded=label == "k4x").replace("t_end = 0.7",
+                                                                    f"t_end = {t_end!r}")
+            try:
+                attrs, _, paths[label] = min((run_flexmor(binary, work, f"w{n}_{label}", text)
+                                              for _ in range(args.repeat)),
+                                             key=lambda r: solve_time(r[0]))
+                row[f"{label}_s"] = solve_time(attrs)
+                row[f"{label}_steps"] = int(attrs["n_steps"])
+            except (RunFailed, subprocess.TimeoutExpired) as e:
+                row[f"{label}_s"] = float("nan")
+                row[f"{label}_error"] = str(e)
+                failed = True
+        if "full" in paths:
+            t_full, xyz_full = load_node_path(paths["full"], "tip")
+            for label in ("k4", "k4x"):
+                if label in paths:
+                    t, xyz = load_node_path(paths[label], "tip")
+                    row[f"{label}_tip_m"] = tip_error(t_full, xyz_full[:, :2], t, xyz[:, :2])
+        if "k4x" in paths:
+            with h5py.File(paths["k4x"]) as f:
+                row["n_expansions"] = int(f["reduction"].attrs["n_expansions"])
+        row["full_over_k4x"] = row["full_s"] / row["k4x_s"]
+        rows.append(row)
+        print(f"n = {n:4d}: whole run full {row['full_s']:.3f} s, k=4 {row['k4_s']:.3f} s, "
+              f"k=4 expanded {row['k4x_s']:.3f} s", flush=True)
+    columns = ["elements_per_link", "full_s", "full_steps", "k4_s", "k4_steps", "k4_tip_m",
+               "k4x_s", "k4x_steps", "k4x_tip_m", "n_expansions", "full_over_k4x",
+               "full_error", "k4_error", "k4x_error"]
+    write_csv(rows, columns, args.out_dir / "whole_runs.csv")
+    lines = ["# Whole runs: full model, reduced (k = 4) and reduced with the expanded evaluation",
+             "", *header(args, argv), "",
+             f"input/two_link.nml with n beam elements per link and its own analysis ({t_end} s, "
+             "generalized-alpha with error control, rtol 1e-6); processor time of the analyses "
+             "(the basis included), least of the repeats. Tip: largest distance of the reduced "
+             "run's tip from the full run's at the same mesh.", "",
+             "| elements per link | full [s] | steps | k = 4 [s] | steps | tip [m] | "
+             "k = 4 expanded [s] | steps | tip [m] | expansions | full / expanded |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        lines.append(
+            f"| {r['elements_per_link']} | {r['full_s']:.3f} | {r.get('full_steps', '–')} | "
+            f"{r['k4_s']:.3f} | {r.get('k4_steps', '–')} | {r.get('k4_tip_m', math.nan):.1e} | "
+            f"{r['k4x_s']:.3f} | {r.get('k4x_steps', '–')} | {r.get('k4x_tip_m', math.nan):.1e} | "
+            f"{r.get('n_expansions', '–')} | {r['full_over_k4x']:.1f} |")
+    (args.out_dir / "whole_runs.md").write_text("\n".join(lines) + "\n")
+    return failed
 
 
 def tip_error(t_ref, xy_ref, t, xy):
@@ -358,7 +433,10 @@ def parse(argv):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--bin", type=Path, default=ROOT / "build" / "bin" / "flexmor")
     p.add_argument("--out-dir", type=Path, default=ROOT / "docs" / "bench")
-    p.add_argument("--meshes", default="2,4,8,16,32,64,128")
+    p.add_argument("--meshes", default="2,3,4,8,16,32,64,128")
+    p.add_argument("--whole-meshes", default="3,8,16,32,64",
+                   help="meshes of the whole-run comparison (--whole-runs)")
+    p.add_argument("--whole-runs", action="store_true")
     p.add_argument("--t-end", type=float, default=0.1)
     p.add_argument("--exudyn-max", type=int, default=64)
     p.add_argument("--no-exudyn", action="store_true")
@@ -369,15 +447,18 @@ def parse(argv):
     args = p.parse_args(argv)
     try:
         args.meshes = [int(m) for m in args.meshes.split(",")]
+        args.whole_meshes = [int(m) for m in args.whole_meshes.split(",")]
     except ValueError:
-        p.exit(2, f"bench_scaling.py: --meshes must be integers separated by commas, got "
-                  f"'{args.meshes}'\n")
-    if any(m < 1 for m in args.meshes) or not args.t_end > 0 or args.repeat < 1:
+        p.exit(2, f"bench_scaling.py: --meshes and --whole-meshes must be integers separated "
+                  f"by commas, got '{args.meshes}', '{args.whole_meshes}'\n")
+    if any(m < 1 for m in args.meshes + args.whole_meshes) or not args.t_end > 0 or \
+            args.repeat < 1:
         p.exit(2, "bench_scaling.py: meshes must be >= 1, --t-end > 0 and --repeat >= 1\n")
     if not args.bin.exists():
         p.exit(2, f"bench_scaling.py: no flexmor binary at {args.bin} (build it or give --bin)\n")
     if args.quick:
         args.meshes, args.t_end, args.work_precision, args.repeat = [2, 4], 0.004, False, 1
+        args.whole_meshes = [2]
     return args
 
 
@@ -387,6 +468,8 @@ def main(argv=None):
     with tempfile.TemporaryDirectory(prefix="flexmor_bench_") as tmp:
         work = Path(tmp)
         failed = scaling(args, args.bin, work, argv)
+        if args.whole_runs:
+            failed = whole_runs(args, args.bin, work, argv) or failed
         if args.work_precision:
             failed = work_precision(args, args.bin, work, argv) or failed
     return 1 if failed else 0

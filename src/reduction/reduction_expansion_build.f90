@@ -43,7 +43,7 @@ contains
     if (allocated(this%x1)) deallocate(this%x1, this%x2, this%xr)
     allocate(this%x1(n, m), this%x2(n, m, m), this%xr(n))
     call dyn%kin%apply_df_many(dyn%model, tz, this%x1)
-    call second_terms(dyn, tz, 1, this%x2)
+    call second_terms(dyn, this%x1, 1, this%x2)
     block
       real(wp) :: qr(dyn%model%n_q)
       qr(1:nr) = 0.0_wp
@@ -79,8 +79,8 @@ contains
       hl = MASS_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
       xl = this%x0 + hl * this%x1(:, l)
       call element_masses(dyn, xl, mass_l)
-      ! X1^T dM [X1, X2] along X1_l, element block by element block
-      dmx = matmul(transpose(this%x1), difference_product(dyn, mass_l, x12)) / hl
+      ! X1^T dM [X1, X2] along X1_l = (dM X1)^T [X1, X2]: dM is symmetric
+      dmx = matmul(transpose(difference_product(dyn, mass_l, this%x1)), x12) / hl
       fwl = (element_weights(dyn, xl, vg) - fw0) / hl
       this%b(:, :, l) = matmul(transpose(this%x1), mx2(:, (l - 1) * m + 1:l * m))
       this%b(:, :, l) = this%b(:, :, l) + transpose(this%b(:, :, l)) + dmx(:, 1:m)
@@ -104,25 +104,78 @@ contains
     this%valid = .true.
   end procedure exp_build
 
-  !> x2(:, a, b) = D2F[T_a, T_b] for first <= a <= b (and its mirror), by polarisation of the
-  !> second-order solves along T_a and T_a + T_b at the kinematics' current solution.
-  subroutine second_terms(dyn, tz, first, x2)
+  !> x2(:, a, b) = D2F[T_a, T_b] for first <= a <= b (and its mirror) from the nodal shapes
+  !> x1 = DF T at the kinematics' current solution, by polarisation of the second-order
+  !> terms along x1_a and x1_a + x1_b, all solved at once.
+  subroutine second_terms(dyn, x1, first, x2)
     type(dynamics_t), intent(inout) :: dyn
-    real(wp), intent(in) :: tz(:, :)
+    real(wp), intent(in) :: x1(:, :)
     integer, intent(in) :: first
     real(wp), intent(inout) :: x2(:, :, :)
-    integer :: a, b
-    do a = first, size(tz, 2)
-      call dyn%kin%second(dyn%model, tz(:, a), x2(:, a, a))
+    real(wp) :: xd(size(x1, 1), size(x1, 2) * (size(x1, 2) + 1) / 2)
+    real(wp) :: d2x(size(x1, 1), size(xd, 2))
+    integer :: a, b, c, m
+    m = size(x1, 2)
+    c = 0
+    do a = first, m
+      c = c + 1
+      xd(:, c) = x1(:, a)
     end do
-    do a = first, size(tz, 2)
-      do b = a + 1, size(tz, 2)
-        call dyn%kin%second(dyn%model, tz(:, a) + tz(:, b), x2(:, a, b))
-        x2(:, a, b) = 0.5_wp * (x2(:, a, b) - x2(:, a, a) - x2(:, b, b))
+    do a = first, m
+      do b = a + 1, m
+        c = c + 1
+        xd(:, c) = x1(:, a) + x1(:, b)
+      end do
+    end do
+    call second_many(dyn, xd(:, 1:c), d2x(:, 1:c))
+    c = 0
+    do a = first, m
+      c = c + 1
+      x2(:, a, a) = d2x(:, c)
+    end do
+    do a = first, m
+      do b = a + 1, m
+        c = c + 1
+        x2(:, a, b) = 0.5_wp * (d2x(:, c) - x2(:, a, a) - x2(:, b, b))
         x2(:, b, a) = x2(:, a, b)
       end do
     end do
   end subroutine second_terms
+
+  !> The second-order terms of the kinematics along nodal velocities xd(:, c): J_c d2x = -D2D[xd,
+  !> xd] (kinematics_t%second with the velocities known), one element pass per column and one
+  !> solve with every column.
+  subroutine second_many(dyn, xd, d2x)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: xd(:, :)
+    real(wp), intent(out) :: d2x(:, :)
+    real(wp) :: rhs(dyn%model%n_c, size(xd, 2)), d2e(size(dyn%model%modes))
+    real(wp) :: xe(dyn%model%max_dofs), xde(dyn%model%max_dofs)
+    integer :: c, iel, k, nd, first, mode, row
+    rhs = 0.0_wp
+    do c = 1, size(xd, 2)
+      do iel = 1, dyn%model%n_elements
+        first = dyn%model%mode_first(iel)
+        associate (el => dyn%model%elements(iel)%e)
+          nd = size(el%dofs)
+          do k = 1, nd
+            xe(k) = dyn%kin%x(el%dofs(k))
+            xde(k) = xd(el%dofs(k), c)
+          end do
+          call el%second(xe(1:nd), xde(1:nd), d2e(first:first + el%n_modes() - 1))
+        end associate
+      end do
+      do mode = 1, size(d2e)
+        row = dyn%kin%mode_row(mode)
+        if (row > 0) rhs(row, c) = rhs(row, c) - d2e(mode)
+      end do
+    end do
+    call dyn%kin%jacobian_solve(rhs)
+    d2x = 0.0_wp
+    do k = 1, dyn%model%n_c
+      d2x(dyn%model%calc_coord(k), :) = rhs(k, :)
+    end do
+  end subroutine second_many
 
   !> X3(:, l, a, b) = d X2(:, a, b) / d z_l for l <= a <= b by one-sided differences (X2 anew
   !> at z0 + h e_l, nodal motion THIRD_STEP of the model's size): the distinct columns of the
@@ -133,7 +186,8 @@ contains
     real(wp), intent(in) :: tz(:, :), size_x
     type(error_t), intent(out) :: err
     type(kin_state_t) :: at_z0
-    real(wp) :: x2p(size(this%x2, 1), this%m, this%m), q0(dyn%model%n_q), h
+    real(wp) :: x2p(size(this%x2, 1), this%m, this%m), x1p(size(this%x2, 1), this%m)
+    real(wp) :: q0(dyn%model%n_q), h
     integer :: l, a, b, c
     if (allocated(this%x3)) deallocate(this%x3, this%tri)
     allocate(this%x3(size(this%x2, 1), this%m * (this%m + 1) * (this%m + 2) / 6))
@@ -146,7 +200,8 @@ contains
       h = THIRD_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
       call dyn%kin%solve(dyn%model, q0 + h * tz(:, l), err)
       if (.not. err%ok()) return
-      call second_terms(dyn, tz, l, x2p)
+      call dyn%kin%apply_df_many(dyn%model, tz, x1p)
+      call second_terms(dyn, x1p, l, x2p)
       do b = l, this%m
         do a = l, b
           c = c + 1

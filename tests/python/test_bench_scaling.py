@@ -23,6 +23,9 @@ def test_scene_has_the_mesh_the_integrator_and_the_reduction():
     assert text.count("n_elements = 16") == 2 and "n_elements = 3" not in text
     assert "&dynamic t_end = 0.05, output_dt = 0.001, integrator = 'galpha', dt = 0.0001 /" in text
     assert "&modal" not in text and "&reduction n_modes = 4 /" in text
+    text = bsc.scene(3, "", k=4, expanded=True)
+    assert "&reduction n_modes = 4, evaluation = 'expanded' /" in text
+    assert "&dynamic t_end = 0.7" in text    # the scene's own analysis
 
 
 def test_exponent_of_a_power_law_over_8_to_128():
@@ -50,10 +53,25 @@ def test_quick_run_writes_tables_and_plot(tmp_path):
     # Finite, not positive: at --quick's 40-step runs the difference of two timings can fall
     # below a busy machine's noise.
     for r in rows:
-        for key in ("full_ms", "k2_ms", "k4_ms"):
+        for key in ("full_ms", "k2_ms", "k4_ms", "k4x_ms"):
             assert math.isfinite(float(r[key]))
     # 2 beams per link with bending dynamic: 2 x 2 x 2 modes.
     assert [int(r["n_dy"]) for r in rows] == [8, 16]
     text = (tmp_path / "scaling.md").read_text()
     assert "| 2 | 8 |" in text and "commit" in text
     assert (tmp_path / "scaling.png").stat().st_size > 5_000
+
+
+@pytest.mark.skipif(not BIN.is_file(), reason="flexmor binary not built")
+def test_quick_whole_runs(tmp_path):
+    proc = run_script("--bin", BIN, "--out-dir", tmp_path, "--quick", "--no-exudyn",
+                      "--whole-runs")
+    assert proc.returncode == 0, proc.stderr
+    with open(tmp_path / "whole_runs.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [int(r["elements_per_link"]) for r in rows] == [2]
+    r = rows[0]
+    assert int(r["n_expansions"]) >= 1 and int(r["k4x_steps"]) > 0
+    # Over the first 0.02 s the dropped modes barely respond (observed 5e-8 m for both).
+    assert float(r["k4_tip_m"]) < 1e-5 and float(r["k4x_tip_m"]) < 1e-5
+    assert "| 2 |" in (tmp_path / "whole_runs.md").read_text()
