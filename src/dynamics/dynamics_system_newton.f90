@@ -62,7 +62,6 @@ contains
 
   module procedure dyn_error_norm
     real(wp) :: dqf(this%model%n_q, 3), dx(this%model%n_x, 3), motion(this%model%n_x)
-    real(wp) :: scale(this%model%n_x)
     integer :: nr
     nr = this%model%n_rh
     dqf(1:nr, :) = 0.0_wp
@@ -71,14 +70,6 @@ contains
     dqf(nr + 1:, 3) = q_new
     call this%kin%apply_df_many(this%model, dqf, dx)
     motion = max(abs(dx(:, 2)), abs(dx(:, 3)))
-    associate (rotation => this%model%coord_kind == COORD_PHI .or. &
-               this%model%coord_kind == COORD_EULER)
-      where (rotation)
-        scale = maxval(motion, mask=rotation)
-      elsewhere
-        scale = maxval(motion, mask=.not. rotation)
-      end where
-    end associate
-    norm = maxval(abs(dx(:, 1)) / (atol + rtol * scale))
+    norm = this%model%error_norm(dx(:, 1), motion, rtol, atol)
   end procedure dyn_error_norm
 end submodule dynamics_system_newton

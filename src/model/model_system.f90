@@ -112,6 +112,8 @@ module model_system
     procedure :: add_node_label => model_add_node_label
     procedure :: find_node => model_find_node
     procedure :: translation => model_translation
+    procedure :: largest_translation => model_largest_translation
+    procedure :: error_norm => model_error_norm
     procedure :: finalize => model_finalize
     procedure :: count_message => model_count_message
     procedure :: mode_name => model_mode_name
@@ -324,6 +326,34 @@ contains
   end subroutine model_add_node_label
 
   !> Length of the translation of node i in a nodal displacement dx (x, y and, in space, z).
+  !> Largest translation over the nodes of a nodal displacement dx.
+  pure real(wp) function model_largest_translation(this, dx) result(d)
+    class(model_t), intent(in) :: this
+    real(wp), intent(in) :: dx(:)
+    integer :: i
+    d = 0.0_wp
+    do i = 1, size(this%node_coord, 2)
+      d = max(d, this%translation(i, dx))
+    end do
+  end function model_largest_translation
+
+  !> The integrators' error norm of a nodal error dx: its largest component over atol + rtol s,
+  !> s the largest nodal motion (`motion`, per coordinate) among the rotations for a rotation
+  !> and among the translations for a translation.
+  pure real(wp) function model_error_norm(this, dx, motion, rtol, atol) result(norm)
+    class(model_t), intent(in) :: this
+    real(wp), intent(in) :: dx(:), motion(:), rtol, atol
+    real(wp) :: scale(size(dx))
+    associate (rotation => this%coord_kind == COORD_PHI .or. this%coord_kind == COORD_EULER)
+      where (rotation)
+        scale = maxval(motion, mask=rotation)
+      elsewhere
+        scale = maxval(motion, mask=.not. rotation)
+      end where
+    end associate
+    norm = maxval(abs(dx) / (atol + rtol * scale))
+  end function model_error_norm
+
   pure real(wp) function model_translation(this, i, dx) result(d)
     class(model_t), intent(in) :: this
     integer, intent(in) :: i

@@ -23,12 +23,12 @@ module reduction_expansion
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_MODEL
   use core_linalg, only: chol_factor, chol_solve
-  use model_system, only: model_t, COORD_PHI, COORD_EULER
+  use model_system, only: model_t
   use dynamics_system, only: dynamics_t
   use reduction_basis, only: basis_t
   implicit none
   private
-  public :: expansion_t, expansion_set_t, expansion_unsupported, largest_translation
+  public :: expansion_t, expansion_set_t, expansion_unsupported
 
   integer, parameter :: MAX_KEPT = 64
 
@@ -144,7 +144,7 @@ contains
     call this%item(slot)%build(dyn, basis, t, eta, err)
     if (.not. err%ok()) return
     if (allocated(x_stale)) this%manifold_error = max(this%manifold_error, &
-      largest_translation(dyn%model, this%item(slot)%x0 - x_stale))
+      dyn%model%largest_translation(this%item(slot)%x0 - x_stale))
     this%current = slot
     this%clock = this%clock + 1
     this%last_use(slot) = this%clock
@@ -303,31 +303,13 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: dq(:), eta_old(:), eta_new(:), rtol, atol
     real(wp), intent(out) :: norm
-    real(wp) :: dx(size(this%x0)), motion(size(this%x0)), scale(size(this%x0))
+    real(wp) :: dx(size(this%x0)), motion(size(this%x0))
     integer :: nr
     nr = this%nr
     dx = matmul(this%x1(:, nr + 1:), dq)
     motion = max(abs(this%xr + matmul(this%x1(:, nr + 1:), eta_old)), &
       abs(this%xr + matmul(this%x1(:, nr + 1:), eta_new)))
-    associate (rotation => model%coord_kind == COORD_PHI .or. &
-               model%coord_kind == COORD_EULER)
-      where (rotation)
-        scale = maxval(motion, mask=rotation)
-      elsewhere
-        scale = maxval(motion, mask=.not. rotation)
-      end where
-    end associate
-    norm = maxval(abs(dx) / (atol + rtol * scale))
+    norm = model%error_norm(dx, motion, rtol, atol)
   end subroutine exp_error_norm
 
-  !> Largest translation over the nodes of a nodal displacement dx.
-  pure real(wp) function largest_translation(model, dx) result(d)
-    type(model_t), intent(in) :: model
-    real(wp), intent(in) :: dx(:)
-    integer :: i
-    d = 0.0_wp
-    do i = 1, size(model%node_coord, 2)
-      d = max(d, model%translation(i, dx))
-    end do
-  end function largest_translation
 end module reduction_expansion

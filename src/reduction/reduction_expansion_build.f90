@@ -53,8 +53,8 @@ contains
     call third_terms(this, dyn, tz, size_x, err)
     if (.not. err%ok()) return
     ! Mass products at z0 and the quadratic velocity forces of the elements there.
-    mx1 = mass_product(dyn, dyn%mass, this%x1)
-    mx2 = mass_product(dyn, dyn%mass, reshape(this%x2, [n, m * m]))
+    mx1 = dyn%mass%times(dyn%model, this%x1)
+    mx2 = dyn%mass%times(dyn%model, reshape(this%x2, [n, m * m]))
     ! X1^T M X3 = (M X1)^T X3: M is symmetric.
     mx3 = third_projection(this, mx1)
     allocate(gh(n, m * m))
@@ -96,9 +96,9 @@ contains
     if (allocated(this%s1)) deallocate(this%s1, this%s2)
     allocate(this%s1(m), this%s2(m, m))
     do l = 1, m
-      this%s1(l) = largest_translation(dyn%model, this%x1(:, l))
+      this%s1(l) = dyn%model%largest_translation(this%x1(:, l))
       do i = 1, m
-        this%s2(i, l) = largest_translation(dyn%model, this%x2(:, i, l))
+        this%s2(i, l) = dyn%model%largest_translation(this%x2(:, i, l))
       end do
     end do
     this%valid = .true.
@@ -241,32 +241,6 @@ contains
     s(3) = maxval(i)
     s(2) = sum(i) - s(1) - s(3)
   end function sorted
-
-  !> M w for the mass blocks of dyn%mass and the lumped masses, element block by element block.
-  function mass_product(dyn, mass, w) result(mw)
-    type(dynamics_t), intent(in) :: dyn
-    type(element_mass_t), intent(in) :: mass
-    real(wp), intent(in) :: w(:, :)
-    real(wp) :: mw(size(w, 1), size(w, 2))
-    integer :: iel, nd, c, first, d0, i, j
-    do c = 1, size(w, 2)
-      mw(:, c) = dyn%model%lumped * w(:, c)
-    end do
-    do iel = 1, dyn%model%n_elements
-      first = mass%offset(iel)
-      if (first == 0) cycle
-      d0 = mass%dof_first(iel) - 1
-      nd = mass%dof_first(iel + 1) - 1 - d0
-      do c = 1, size(w, 2)
-        do j = 1, nd
-          do i = 1, nd
-            mw(mass%dofs(d0 + i), c) = mw(mass%dofs(d0 + i), c) + &
-              mass%val(first + (j - 1) * nd + i - 1) * w(mass%dofs(d0 + j), c)
-          end do
-        end do
-      end do
-    end do
-  end function mass_product
 
   !> (M_l - M) w for the element mass blocks M_l of mass_l and M of dyn%mass (the lumped
   !> masses cancel), element block by element block.

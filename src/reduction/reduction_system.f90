@@ -272,7 +272,7 @@ contains
     if (allocated(this%basis%k_chol)) then
       dq = r
       call chol_solve(this%basis%k_chol, dq)
-      estimate = largest_translation(this%dyn%model, nodal_motion(this, dq))
+      estimate = this%dyn%model%largest_translation(nodal_motion(this, dq))
     else
       this%has_estimate = .false.
     end if
@@ -336,15 +336,4 @@ contains
     dq_full(this%dyn%model%n_rh + 1:) = dq
     call this%dyn%kin%apply_df(this%dyn%model, dq_full, dx)
   end function nodal_motion
-
-  !> Largest translation over the nodes of a nodal displacement dx.
-  pure real(wp) function largest_translation(model, dx) result(d)
-    type(model_t), intent(in) :: model
-    real(wp), intent(in) :: dx(:)
-    integer :: i
-    d = 0.0_wp
-    do i = 1, size(model%node_coord, 2)
-      d = max(d, model%translation(i, dx))
-    end do
-  end function largest_translation
 end module reduction_system
