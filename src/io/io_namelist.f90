@@ -46,6 +46,9 @@ module io_namelist
     procedure :: get_string_array => group_get_string_array
     procedure :: check_all_used => group_check_all_used
     procedure :: where => group_where
+    !> where for another line of the group (a variable's), and a variable's index (0: absent)
+    procedure :: where_line => where_at
+    procedure :: index_of => find_var
     procedure :: set_raw => group_set_raw
   end type nml_group_t
 
@@ -59,6 +62,59 @@ module io_namelist
     procedure :: group_index => file_group_index
     procedure :: check_known_groups => file_check_known_groups
   end type nml_file_t
+
+  interface
+    !> The typed getters (submodule io_namelist_getters).
+    module subroutine group_get_real(this, var, value, err, default)
+      class(nml_group_t), intent(inout) :: this
+      character(*), intent(in) :: var
+      real(wp), intent(out) :: value
+      type(error_t), intent(out) :: err
+      real(wp), intent(in), optional :: default
+    end subroutine group_get_real
+    module subroutine group_get_int(this, var, value, err, default)
+      class(nml_group_t), intent(inout) :: this
+      character(*), intent(in) :: var
+      integer, intent(out) :: value
+      type(error_t), intent(out) :: err
+      integer, intent(in), optional :: default
+    end subroutine group_get_int
+    module subroutine group_get_logical(this, var, value, err, default)
+      class(nml_group_t), intent(inout) :: this
+      character(*), intent(in) :: var
+      logical, intent(out) :: value
+      type(error_t), intent(out) :: err
+      logical, intent(in), optional :: default
+    end subroutine group_get_logical
+    module subroutine group_get_string(this, var, value, err, default)
+      class(nml_group_t), intent(inout) :: this
+      character(*), intent(in) :: var
+      character(:), allocatable, intent(out) :: value
+      type(error_t), intent(out) :: err
+      character(*), intent(in), optional :: default
+    end subroutine group_get_string
+    module subroutine group_get_real_array(this, var, values, err, default)
+      class(nml_group_t), intent(inout) :: this
+      character(*), intent(in) :: var
+      real(wp), allocatable, intent(out) :: values(:)
+      type(error_t), intent(out) :: err
+      real(wp), intent(in), optional :: default(:)
+    end subroutine group_get_real_array
+    module subroutine group_get_int_array(this, var, values, err, default)
+      class(nml_group_t), intent(inout) :: this
+      character(*), intent(in) :: var
+      integer, allocatable, intent(out) :: values(:)
+      type(error_t), intent(out) :: err
+      integer, intent(in), optional :: default(:)
+    end subroutine group_get_int_array
+    module subroutine group_get_string_array(this, var, values, err, default)
+      class(nml_group_t), intent(inout) :: this
+      character(*), intent(in) :: var
+      type(string_t), allocatable, intent(out) :: values(:)
+      type(error_t), intent(out) :: err
+      type(string_t), intent(in), optional :: default(:)
+    end subroutine group_get_string_array
+  end interface
 
 
 contains
@@ -309,219 +365,12 @@ contains
     s = at(g%path, line) // 'group &' // g%name // ' #' // itoa(g%occurrence)
   end function where_at
 
-  !> Prefix for messages about variable k: where it was written, or that an override set it.
-  function var_where(g, k) result(s)
-    class(nml_group_t), intent(in) :: g
-    integer, intent(in) :: k
-    character(:), allocatable :: s
-    s = where_at(g, g%vars(k)%line) // ": variable '" // g%vars(k)%name // "'"
-    if (g%vars(k)%overridden) s = s // ' (set by override)'
-    s = s // ': '
-  end function var_where
-
   logical function group_has(this, var)
     class(nml_group_t), intent(in) :: this
     character(*), intent(in) :: var
     group_has = find_var(this, lower_case(trim(var))) > 0
   end function group_has
 
-  !> Find `var` and mark it used. k = 0 when absent: an error unless a default exists.
-  subroutine lookup(g, var, has_default, scalar, k, err)
-    class(nml_group_t), intent(inout) :: g
-    character(*), intent(in) :: var
-    logical, intent(in) :: has_default, scalar
-    integer, intent(out) :: k
-    type(error_t), intent(inout) :: err
-    integer :: n
-    k = find_var(g, lower_case(trim(var)))
-    if (k == 0) then
-      if (.not. has_default) call err%set(ERR_INPUT, g%where() // &
-        ": missing required variable '" // lower_case(trim(var)) // "'")
-      return
-    end if
-    g%vars(k)%used = .true.
-    n = sum(g%vars(k)%items%rep)
-    if (scalar .and. n /= 1) then
-      call err%set(ERR_INPUT, var_where(g, k) // 'expected one value, got ' // itoa(n))
-      k = 0
-    end if
-  end subroutine lookup
-
-  subroutine group_get_real(this, var, value, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    real(wp), intent(out) :: value
-    type(error_t), intent(out) :: err
-    real(wp), intent(in), optional :: default
-    character(:), allocatable :: msg
-    integer :: k
-    value = 0
-    call lookup(this, var, present(default), .true., k, err)
-    if (k == 0) then
-      if (err%ok() .and. present(default)) value = default
-      return
-    end if
-    call to_real(this%vars(k)%items(1), value, msg)
-    if (len(msg) > 0) call err%set(ERR_INPUT, var_where(this, k) // msg)
-  end subroutine group_get_real
-
-  subroutine group_get_int(this, var, value, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    integer, intent(out) :: value
-    type(error_t), intent(out) :: err
-    integer, intent(in), optional :: default
-    character(:), allocatable :: msg
-    integer :: k
-    value = 0
-    call lookup(this, var, present(default), .true., k, err)
-    if (k == 0) then
-      if (err%ok() .and. present(default)) value = default
-      return
-    end if
-    call to_int(this%vars(k)%items(1), value, msg)
-    if (len(msg) > 0) call err%set(ERR_INPUT, var_where(this, k) // msg)
-  end subroutine group_get_int
-
-  subroutine group_get_logical(this, var, value, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    logical, intent(out) :: value
-    type(error_t), intent(out) :: err
-    logical, intent(in), optional :: default
-    type(item_t) :: it
-    integer :: k
-    value = .false.
-    call lookup(this, var, present(default), .true., k, err)
-    if (k == 0) then
-      if (err%ok() .and. present(default)) value = default
-      return
-    end if
-    it = this%vars(k)%items(1)
-    if (.not. it%quoted) then
-      select case (lower_case(it%text))
-      case ('.true.', '.t.', 't')
-        value = .true.
-        return
-      case ('.false.', '.f.', 'f')
-        return
-      end select
-    end if
-    call err%set(ERR_INPUT, var_where(this, k) // 'expected a logical (.true. or .false.), got ' &
-      // shown(it))
-  end subroutine group_get_logical
-
-  subroutine group_get_string(this, var, value, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    character(:), allocatable, intent(out) :: value
-    type(error_t), intent(out) :: err
-    character(*), intent(in), optional :: default
-    integer :: k
-    value = ''
-    call lookup(this, var, present(default), .true., k, err)
-    if (k == 0) then
-      if (err%ok() .and. present(default)) value = default
-      return
-    end if
-    if (.not. this%vars(k)%items(1)%quoted) then
-      call err%set(ERR_INPUT, var_where(this, k) // 'expected a quoted string, got ' // &
-        shown(this%vars(k)%items(1)))
-      return
-    end if
-    value = this%vars(k)%items(1)%text
-  end subroutine group_get_string
-
-  subroutine group_get_real_array(this, var, values, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    real(wp), allocatable, intent(out) :: values(:)
-    type(error_t), intent(out) :: err
-    real(wp), intent(in), optional :: default(:)
-    character(:), allocatable :: msg
-    real(wp) :: x
-    integer :: k, i, m
-    call lookup(this, var, present(default), .false., k, err)
-    if (k == 0) then
-      allocate(values(0))
-      if (err%ok() .and. present(default)) values = default
-      return
-    end if
-    associate (items => this%vars(k)%items)
-      allocate(values(sum(items%rep)))
-      m = 0
-      do i = 1, size(items)
-        call to_real(items(i), x, msg)
-        if (len(msg) > 0) then
-          call err%set(ERR_INPUT, var_where(this, k) // 'value ' // itoa(m + 1) // ': ' // msg)
-          return
-        end if
-        values(m + 1:m + items(i)%rep) = x
-        m = m + items(i)%rep
-      end do
-    end associate
-  end subroutine group_get_real_array
-
-  subroutine group_get_int_array(this, var, values, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    integer, allocatable, intent(out) :: values(:)
-    type(error_t), intent(out) :: err
-    integer, intent(in), optional :: default(:)
-    character(:), allocatable :: msg
-    integer :: k, i, m, x
-    call lookup(this, var, present(default), .false., k, err)
-    if (k == 0) then
-      allocate(values(0))
-      if (err%ok() .and. present(default)) values = default
-      return
-    end if
-    associate (items => this%vars(k)%items)
-      allocate(values(sum(items%rep)))
-      m = 0
-      do i = 1, size(items)
-        call to_int(items(i), x, msg)
-        if (len(msg) > 0) then
-          call err%set(ERR_INPUT, var_where(this, k) // 'value ' // itoa(m + 1) // ': ' // msg)
-          return
-        end if
-        values(m + 1:m + items(i)%rep) = x
-        m = m + items(i)%rep
-      end do
-    end associate
-  end subroutine group_get_int_array
-
-  subroutine group_get_string_array(this, var, values, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    type(string_t), allocatable, intent(out) :: values(:)
-    type(error_t), intent(out) :: err
-    type(string_t), intent(in), optional :: default(:)
-    integer :: k, i, j, m
-    call lookup(this, var, present(default), .false., k, err)
-    if (k == 0) then
-      allocate(values(0))
-      if (err%ok() .and. present(default)) values = default
-      return
-    end if
-    associate (items => this%vars(k)%items)
-      allocate(values(sum(items%rep)))
-      m = 0
-      do i = 1, size(items)
-        if (.not. items(i)%quoted) then
-          call err%set(ERR_INPUT, var_where(this, k) // 'value ' // itoa(m + 1) // &
-            ': expected a quoted string, got ' // shown(items(i)))
-          deallocate(values)
-          allocate(values(0))
-          return
-        end if
-        do j = 1, items(i)%rep
-          m = m + 1
-          values(m)%s = items(i)%text
-        end do
-      end do
-    end associate
-  end subroutine group_get_string_array
 
   subroutine group_check_all_used(this, err)
     class(nml_group_t), intent(in) :: this
@@ -579,7 +428,7 @@ contains
 
   ! ---------------------------------------------------------------- helpers
 
-  integer function find_var(g, name) result(k)
+  pure integer function find_var(g, name) result(k)
     class(nml_group_t), intent(in) :: g
     character(*), intent(in) :: name
     if (allocated(g%vars)) then
