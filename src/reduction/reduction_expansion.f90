@@ -9,13 +9,13 @@
 !> zd], so that the reduced mass W^T M W, the inertia forces W^T (M x_ddot + h), the loads
 !> W^T f and the stresses V^T sigma are polynomials in dz and zd whose coefficients (up to m^4
 !> numbers, m = n_rh + k) are projected once per expansion: an evaluation then costs O(m^4),
-!> not O(n). All of them are kept to first order in dz (the element masses and weights by a
-!> difference along X1; the elements' quadratic velocity forces h at z0); the stresses of the
-!> dynamic modes are linear, exact.
+!> not O(n). They are kept to first order in dz, the mass to second (the element masses and
+!> weights change by a difference along X1; the elements' quadratic velocity forces h are
+!> taken at z0); the stresses of the dynamic modes are linear, exact.
 !>
 !> An expansion serves while the quadratic term is small: with d1 and d2 bounds of the nodal
 !> translations of X1 dz and X2[dz, dz] / 2, while (d2 / d1)^2 <= tol, which for a rotation by
-!> an angle a is a^2 / 4, the relative size of the first term the mass matrix drops. Up to
+!> an angle a is a^2 / 4, the relative size of the first term the inertia forces drop. Up to
 !> MAX_KEPT expansions are kept: a state that leaves one is looked up among the others (a
 !> structure vibrating about a rest position goes back and forth between two) before a new
 !> one is made in place of the one used longest ago.
@@ -45,6 +45,7 @@ module reduction_expansion
     real(wp), allocatable :: x3(:, :)
     integer, allocatable :: tri(:, :, :)
     real(wp), allocatable :: a(:, :), b(:, :, :)     !< mass: a + sum_l b(:, :, l) dz_l
+    real(wp), allocatable :: c(:, :, :, :)           !< + sum_lr c(:, :, l, r) dz_l dz_r
     real(wp), allocatable :: g0(:, :, :), g1(:, :, :, :)  !< inertia forces (i, [l,] a, b)
     real(wp), allocatable :: f1(:), f2(:, :)         !< loads and weights: f1 + f2 dz
     real(wp), allocatable :: s0(:), kz(:, :), dz(:, :)    !< stresses: s0 + kz dz + dz zd
@@ -184,10 +185,13 @@ contains
     type(expansion_t), intent(in) :: this
     real(wp), intent(in) :: dz(:)
     real(wp) :: mz(this%m, this%m)
-    integer :: l
+    integer :: l, r
     mz = this%a
     do l = 1, this%m
       mz = mz + dz(l) * this%b(:, :, l)
+      do r = 1, this%m
+        mz = mz + (dz(l) * dz(r)) * this%c(:, :, l, r)
+      end do
     end do
   end function mass_at
 

@@ -57,6 +57,7 @@ contains
     mx2 = dyn%mass%times(dyn%model, reshape(this%x2, [n, m * m]))
     ! X1^T M X3 = (M X1)^T X3: M is symmetric.
     mx3 = third_projection(this, mx1)
+    call second_order_mass(this, mx2, mx3)
     allocate(gh(n, m * m))
     call velocity_forces(dyn, this%x0, this%x1, gh)
     ! Loads: the constant part (with the lumped masses' weights) and the element weights.
@@ -213,6 +214,28 @@ contains
     end do
     call dyn%kin%solve(dyn%model, q0, err)
   end subroutine third_terms
+
+  !> The mass's second-order terms with the element masses held: c(i, j, l, r) = X2_il^T M
+  !> X2_jr + (X1_i^T M X3_jlr + X1_j^T M X3_ilr) / 2.
+  subroutine second_order_mass(this, mx2, mx3)
+    type(expansion_t), intent(inout) :: this
+    real(wp), intent(in) :: mx2(:, :), mx3(:, :)
+    integer :: i, j, l, r, m
+    m = this%m
+    if (allocated(this%c)) deallocate(this%c)
+    allocate(this%c(m, m, m, m))
+    do r = 1, m
+      do l = 1, m
+        do j = 1, m
+          do i = 1, m
+            this%c(i, j, l, r) = dot_product(this%x2(:, i, l), mx2(:, j + (r - 1) * m)) + &
+              0.5_wp * (mx3(i, (r - 1) * m * m + (l - 1) * m + j) + &
+              mx3(j, (r - 1) * m * m + (l - 1) * m + i))
+          end do
+        end do
+      end do
+    end do
+  end subroutine second_order_mass
 
   !> (M X1)^T X3 as (m, m^2 m), column (b - 1) m + a of block l holding X1_i^T M X3(:, a, b, l):
   !> M is symmetric, and X3's columns are looked up with their indices sorted.
