@@ -1,0 +1,153 @@
+!> The Newton iteration of a generalized-alpha step and its iteration matrix.
+submodule (integrators_galpha) integrators_galpha_newton
+  implicit none
+
+contains
+
+  !> Evaluate the Jacobian when asked to, and refactor when it or the step has changed.
+  module subroutine refresh_iteration_matrix(this, sys, h, err)
+    type(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: h
+    type(error_t), intent(inout) :: err
+    real(wp) :: a(this%n), tolerance
+    integer :: status
+
+    if (this%refresh_jac .or. .not. this%have_jac) then
+      if (this%system_solver) then
+        ! The system factors at the state of its last evaluation: put it here.
+        call sys%accel(this%clamped(this%t), this%q, this%v, a, status)
+      else
+        call sys%jacobian(this%clamped(this%t), this%q, this%v, this%dadq, this%dadv, status)
+      end if
+      this%stats%n_jac_evals = this%stats%n_jac_evals + 1
+      if (status < 0 .or. (status > 0 .and. .not. this%have_jac)) then
+        call err%set(ERR_NUMERIC, 'galpha: jacobian returned status ' // int_str(status) // &
+          ' at t = ' // real_str(this%t))
+        return
+      end if
+      ! After a recoverable failure the previous Jacobian is still a usable Newton matrix.
+      if (status == 0) then
+        this%have_jac = .true.
+        this%lu_valid = .false.
+      end if
+      this%jac_is_current = .true.
+      this%refresh_jac = .false.
+    end if
+    tolerance = 1.0e-6_wp
+    if (this%adaptive) tolerance = refactor_ratio
+    if (.not. this%lu_valid .or. abs(h - this%h_lu) > tolerance * h) then
+      call factor_iteration_matrix(this, sys, h)
+    end if
+  end subroutine refresh_iteration_matrix
+
+  subroutine factor_iteration_matrix(this, sys, h)
+    type(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: h
+    real(wp) :: c_q, c_v
+    integer :: i, info
+    call newton_coefficients(this, h, c_q, c_v)
+    if (this%system_solver) then
+      call sys%iteration_factor(c_q, c_v, info)
+    else
+      this%lu = -c_q * this%dadq - c_v * this%dadv
+      do i = 1, this%n
+        this%lu(i, i) = this%lu(i, i) + 1
+      end do
+      call lu_factor(this%lu, this%pivots, info)
+    end if
+    this%lu_valid = info == 0
+    this%h_lu = h
+    ! A new matrix: no rate known for it yet.
+    this%newton_rate = 1
+  end subroutine factor_iteration_matrix
+
+  !> d(q+)/d(qdd+) and d(v+)/d(qdd+).
+  pure subroutine newton_coefficients(this, h, c_q, c_v)
+    type(galpha_solver_t), intent(in) :: this
+    real(wp), intent(in) :: h
+    real(wp), intent(out) :: c_q, c_v
+    real(wp) :: ratio
+    ratio = (1 - this%alpha_f) / (1 - this%alpha_m)
+    c_q = h**2 * this%beta * ratio
+    c_v = h * this%gamma * ratio
+  end subroutine newton_coefficients
+
+  !> One step from this%t to t_new = this%t + h; the state is updated only on success.
+  module subroutine take_step(this, sys, h, t_new, outcome)
+    type(galpha_solver_t), intent(inout) :: this
+    class(ode2_system_t), intent(inout) :: sys
+    real(wp), intent(in) :: h, t_new
+    integer, intent(out) :: outcome
+    real(wp), dimension(this%n) :: acc0, acc_known, q_known, v_known, x, q1, v1, f, dx
+    real(wp) :: c_q, c_v, dnorm, dnorm_old, rate
+    integer :: iter, status
+
+    outcome = STEP_NEWTON_FAILED
+    if (.not. this%lu_valid) return
+    ! acc lags qdd by (alpha_m - alpha_f) h_last; a new step size needs the lag for h.
+    acc0 = this%qdd + (h / this%h_last) * (this%acc - this%qdd)
+    acc_known = (this%alpha_f * this%qdd - this%alpha_m * acc0) / (1 - this%alpha_m)
+    q_known = this%q + h * this%v + h**2 * ((0.5_wp - this%beta) * acc0 + this%beta * acc_known)
+    v_known = this%v + h * ((1 - this%gamma) * acc0 + this%gamma * acc_known)
+    call newton_coefficients(this, h, c_q, c_v)
+
+    ! Smooth accelerations: the linear extrapolation leaves a first correction O(h^2) smaller
+    ! than the constant one, so that more steps stop after one correction.
+    x = this%qdd
+    if (this%h_old > 0) x = x + (h / this%h_old) * (this%qdd - this%qdd_old)
+    dnorm_old = huge(1.0_wp)
+    do iter = 1, max_newton_iters
+      q1 = q_known + c_q * x
+      v1 = v_known + c_v * x
+      if (this%system_solver) then
+        call sys%newton_correction(this%clamped(t_new), q1, v1, x, dx, status)
+      else
+        call sys%accel(this%clamped(t_new), q1, v1, f, status)
+        if (status == 0) then
+          dx = f - x
+          call lu_solve_vector(this%lu, this%pivots, dx)
+        end if
+      end if
+      this%stats%n_rhs_evals = this%stats%n_rhs_evals + 1
+      if (status /= 0) then
+        this%bad_status = status
+        outcome = merge(STEP_FATAL, STEP_RECOVERABLE, status < 0)
+        return
+      end if
+      x = x + dx
+      dnorm = max(weighted_norm(this, c_q * dx, q1), weighted_norm(this, c_v * dx, v1))
+      if (iter > 1) then
+        rate = dnorm / dnorm_old
+        if (rate > max_newton_rate) return
+        this%newton_rate = max(rate_decay * this%newton_rate, rate)
+        this%rate_age = 0
+      end if
+      ! The error left after this correction is about rate * dnorm (linear convergence of
+      ! the chord iteration); the first correction uses the rate of earlier steps.
+      if (dnorm * min(1.0_wp, this%newton_rate) <= newton_tol) exit
+      dnorm_old = dnorm
+    end do
+    if (dnorm * min(1.0_wp, this%newton_rate) > newton_tol) return
+
+    if (iter > slow_newton_iters) this%refresh_jac = .true.
+    this%rate_age = this%rate_age + 1
+    if (this%rate_age >= rate_lifetime) this%newton_rate = 1
+    this%q = q_known + c_q * x
+    this%v = v_known + c_v * x
+    this%acc = acc_known + (1 - this%alpha_f) / (1 - this%alpha_m) * x
+    this%qdd = x
+    this%t = t_new
+    this%h_last = h
+    outcome = STEP_OK
+  end subroutine take_step
+
+  !> max |d_i| / (atol + rtol |x_i|)
+  pure real(wp) function weighted_norm(this, d, x)
+    type(galpha_solver_t), intent(in) :: this
+    real(wp), intent(in) :: d(:), x(:)
+    weighted_norm = maxval(abs(d) / (this%atol + this%rtol * abs(x)))
+  end function weighted_norm
+
+end submodule integrators_galpha_newton
