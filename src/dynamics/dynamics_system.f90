@@ -294,6 +294,29 @@ module dynamics_system
     end subroutine dyn_assemble
   end interface
 
+  interface
+    !> The terms of sigma_dy = S (e + beta e_dot) over q (dyn_stresses), element by element
+    !> in the order of S's rows and columns (elements with elastic modes excluded).
+    !> dynamics_system_stresses.
+    module subroutine stress_entries(this)
+      class(dynamics_t), intent(inout) :: this
+    end subroutine stress_entries
+    !> Stress resultants of the dynamic modes, sigma_dy = S (e + beta e_dot), in q_dy order,
+    !> for full q = (q_rh, q_dy) (elements with elastic modes excluded: their stresses act as
+    !> nodal forces).
+    module function dyn_stresses(this, q, qd) result(sigma)
+      class(dynamics_t), intent(in) :: this
+      real(wp), intent(in) :: q(:), qd(:)
+      real(wp) :: sigma(this%model%n_dy)
+    end function dyn_stresses
+    !> The constant part of K0 and D0: dsigma_dy/dq_dy and dsigma_dy/dv_dy of the dynamic
+    !> modes (block diagonal by element).
+    module subroutine dyn_mode_stiffness(this, k0, d0)
+      class(dynamics_t), intent(in) :: this
+      real(wp), intent(out) :: k0(:, :), d0(:, :)
+    end subroutine dyn_mode_stiffness
+  end interface
+
 contains
 
   !> Take ownership of a finalised model and solve the kinematics in its initial state, which
@@ -376,93 +399,6 @@ contains
     f = this%load
     if (size(this%model%load_motion) > 0) f = f + this%model%loads_at(t) - this%model%force
   end function dyn_loads_at
-
-  !> The terms of sigma_dy = S (e + beta e_dot) over q (dyn_stresses), element by element
-  !> in the order of S's rows and columns (elements with elastic modes excluded).
-  subroutine stress_entries(this)
-    class(dynamics_t), intent(inout) :: this
-    integer :: iel, i, j, nm, n, pass
-    associate (m => this%model)
-      if (allocated(this%st_first)) deallocate(this%st_first, this%st_row, this%st_col, &
-        this%st_i, this%st_j)
-      allocate(this%st_first(m%n_elements + 1))
-      do pass = 1, 2
-        n = 0
-        do iel = 1, m%n_elements
-          this%st_first(iel) = n + 1
-          if (m%elastic_element(iel)) cycle
-          nm = m%elements(iel)%e%n_modes()
-          do i = 1, nm
-            associate (row => m%modes(m%mode_first(iel) + i - 1))
-              if (row%class /= MODE_DYNAMIC) cycle
-              do j = 1, nm
-                associate (col => m%modes(m%mode_first(iel) + j - 1))
-                  if (col%q <= 0) cycle
-                  n = n + 1
-                  if (pass == 1) cycle
-                  this%st_row(n) = row%q - m%n_rh
-                  this%st_col(n) = col%q
-                  this%st_i(n) = i
-                  this%st_j(n) = j
-                end associate
-              end do
-            end associate
-          end do
-        end do
-        this%st_first(m%n_elements + 1) = n + 1
-        if (pass == 1) allocate(this%st_row(n), this%st_col(n), this%st_i(n), this%st_j(n))
-      end do
-    end associate
-  end subroutine stress_entries
-
-  !> Stress resultants of the dynamic modes, sigma_dy = S (e + beta e_dot), in q_dy order, for
-  !> full q = (q_rh, q_dy), from the terms of stress_entries (elements with elastic modes
-  !> excluded: their stresses act as nodal forces).
-  function dyn_stresses(this, q, qd) result(sigma)
-    class(dynamics_t), intent(in) :: this
-    real(wp), intent(in) :: q(:), qd(:)
-    real(wp) :: sigma(this%model%n_dy)
-    real(wp) :: s(this%model%max_modes, this%model%max_modes), beta
-    integer :: iel, k, nm
-    sigma = 0.0_wp
-    do iel = 1, this%model%n_elements
-      if (this%st_first(iel + 1) == this%st_first(iel)) cycle
-      associate (el => this%model%elements(iel)%e)
-        nm = el%n_modes()
-        call el%stiffness(s(1:nm, 1:nm))
-        beta = el%damping
-      end associate
-      do k = this%st_first(iel), this%st_first(iel + 1) - 1
-        sigma(this%st_row(k)) = sigma(this%st_row(k)) + &
-          s(this%st_i(k), this%st_j(k)) * (q(this%st_col(k)) + beta * qd(this%st_col(k)))
-      end do
-    end do
-  end function dyn_stresses
-
-  !> The constant part of K0 and D0: dsigma_dy/dq_dy and dsigma_dy/dv_dy of the dynamic
-  !> modes (block diagonal by element).
-  subroutine dyn_mode_stiffness(this, k0, d0)
-    class(dynamics_t), intent(in) :: this
-    real(wp), intent(out) :: k0(:, :), d0(:, :)
-    real(wp) :: s(this%model%max_modes, this%model%max_modes)
-    integer :: iel, k, nm, nr
-    ! The dynamic-dynamic terms of stress_entries' list (a prescribed column has q <= n_rh).
-    k0 = 0.0_wp
-    d0 = 0.0_wp
-    nr = this%model%n_rh
-    do iel = 1, this%model%n_elements
-      if (this%st_first(iel + 1) == this%st_first(iel)) cycle
-      associate (el => this%model%elements(iel)%e)
-        nm = el%n_modes()
-        call el%stiffness(s(1:nm, 1:nm))
-        do k = this%st_first(iel), this%st_first(iel + 1) - 1
-          if (this%st_col(k) <= nr) cycle
-          k0(this%st_row(k), this%st_col(k) - nr) = s(this%st_i(k), this%st_j(k))
-          d0(this%st_row(k), this%st_col(k) - nr) = el%damping * s(this%st_i(k), this%st_j(k))
-        end do
-      end associate
-    end do
-  end subroutine dyn_mode_stiffness
 
   !> Accelerations of the dynamic coordinates, by the sparse or the dense path.
   subroutine dyn_evaluate(this, t, q_dy, v_dy, a, err)
