@@ -5,7 +5,8 @@
 !>
 !> With B = A(P, Q) (rows scaled) = D (I + G), D the diagonal blocks and G = D^-1 C for the
 !> entries C above them, each block k keeps the dense m x nc matrix [D_k^-1, -G_k] over its
-!> own m columns and the nc - m other columns its rows touch: a solve is then, block by block
+!> own m columns and the nc - m other columns its rows touch (D_k^-1 with the row scaling of
+!> b folded in): a solve is then, block by block
 !> from the last, one gather and m dot products, x_k = D_k^-1 b_k - G_k x (the transposed
 !> solve runs forward with the transposed products). [D_k^-1, -G_k] comes from D_k's LU
 !> factors (partial pivoting) applied to [I, -C_k] at each factorisation.
@@ -33,20 +34,21 @@ module core_sparse_block
     integer :: n = 0, n_blocks = 0
     integer, allocatable :: block_start(:)   !< block k: permuted indices start(k):start(k+1)-1
     integer, allocatable :: prow(:), pcol(:) !< permuted index -> row, column of the matrix
-    !> Block k's diagonal block D_k (scaled, column-major) from dia(dia_offset(k) + 1).
-    integer, allocatable :: dia_offset(:)
-    real(wp), allocatable :: dia(:)
-    !> Block k's columns (permuted indices: its own m, then the others its rows touch) from
-    !> cols(col_ptr(k)) to cols(col_ptr(k + 1) - 1), and [D_k^-1, -G_k] transposed (nc x m,
-    !> column-major) from mt(mt_offset(k) + 1).
-    integer, allocatable :: col_ptr(:), cols(:), mt_offset(:)
-    real(wp), allocatable :: mt(:)
-    !> The places in mt of -C_k that the pattern leaves zero, zeroed before each assembly.
+    !> The factors in one array fac: block k's diagonal block D_k (scaled, column-major) from
+    !> fac(dia_offset(k) + 1), negated as it is assembled; its columns (permuted indices: its
+    !> own m, then the others its rows touch) from cols(col_ptr(k)) to cols(col_ptr(k + 1) - 1)
+    !> and [D_k^-1 R_k^-1, -G_k] transposed (nc x m, column-major) from fac(mt_offset(k) + 1).
+    integer, allocatable :: dia_offset(:), col_ptr(:), cols(:), mt_offset(:)
+    real(wp), allocatable :: fac(:)
+    !> The places in fac of -C_k that the pattern leaves zero, zeroed before each assembly.
     integer, allocatable :: mt_zero(:)
-    !> The matrix's value slots by permuted row (row i's from row_ptr(i)): slot and its place,
-    !> dia(dest) or mt(-dest), so that scaling and assembly are one pass per row.
-    integer, allocatable :: row_ptr(:), row_slot(:), row_dest(:)
-    real(wp), allocatable :: rs_perm(:)      !< row scale factors by permuted row
+    !> Per value slot of the matrix its row and its place in fac: the assembly is one pass in
+    !> slot order, every value stored as -(a_ij / r_i).
+    integer, allocatable :: slot_row(:), slot_dest(:)
+    real(wp), allocatable :: rs(:)           !< row scale factors (matrix rows)
+    !> The same by permuted row; a solve needs none of them: D_k^-1 is kept with the scaling
+    !> of b_k folded in, as D_k^-1 R_k^-1 (and G_k = D_k^-1 C_k is free of it).
+    real(wp), allocatable :: rs_perm(:)
     logical :: factored = .false.
   contains
     procedure :: setup => block_setup
@@ -76,41 +78,41 @@ contains
     integer, intent(out) :: info
     real(wp), intent(out) :: rcond
     real(wp) :: umin, umax, r
-    integer :: i, p, d, k, m, nc
+    integer :: i, p, k, m, nc
     this%factored = .false.
     info = 1
     rcond = 0.0_wp
-    do p = 1, size(this%mt_zero)
-      this%mt(this%mt_zero(p)) = 0.0_wp
+    ! KLU's rule: each row divided by its largest magnitude (1 for a zero row).
+    do i = 1, this%n
+      this%rs(i) = 0.0_wp
+    end do
+    do p = 1, size(val)
+      r = abs(val(p))
+      if (r > this%rs(this%slot_row(p))) this%rs(this%slot_row(p)) = r
     end do
     do i = 1, this%n
-      ! KLU's rule: the row divided by its largest magnitude (1 for a zero row).
-      r = 0.0_wp
-      do p = this%row_ptr(i), this%row_ptr(i + 1) - 1
-        r = max(r, abs(val(this%row_slot(p))))
-      end do
-      if (r == 0.0_wp) r = 1.0_wp
-      this%rs_perm(i) = r
-      do p = this%row_ptr(i), this%row_ptr(i + 1) - 1
-        d = this%row_dest(p)
-        if (d > 0) then
-          this%dia(d) = val(this%row_slot(p)) / r
-        else
-          this%mt(-d) = -(val(this%row_slot(p)) / r)
-        end if
-      end do
+      if (this%rs(i) == 0.0_wp) this%rs(i) = 1.0_wp
+    end do
+    do p = 1, size(this%mt_zero)
+      this%fac(this%mt_zero(p)) = 0.0_wp
+    end do
+    do p = 1, size(val)
+      this%fac(this%slot_dest(p)) = -(val(p) / this%rs(this%slot_row(p)))
+    end do
+    do i = 1, this%n
+      this%rs_perm(i) = this%rs(this%prow(i))
     end do
     umin = huge(1.0_wp)
     umax = 0.0_wp
     do k = 1, this%n_blocks
       m = this%block_start(k + 1) - this%block_start(k)
       nc = this%col_ptr(k + 1) - this%col_ptr(k)
-      associate (d => this%dia(this%dia_offset(k) + 1:), x => this%mt(this%mt_offset(k) + 1:))
+      associate (d => this%fac(this%dia_offset(k) + 1:), x => this%fac(this%mt_offset(k) + 1:))
         select case (m)
         case (3)
-          call solution_3(nc, d, x, umin, umax, info)
+          call solution_3(nc, d, this%rs_perm(this%block_start(k):), x, umin, umax, info)
         case default
-          call solution_m(m, nc, d, x, umin, umax, info)
+          call solution_m(m, nc, d, this%rs_perm(this%block_start(k):), x, umin, umax, info)
         end select
       end associate
       if (info /= 0) return
@@ -141,11 +143,11 @@ contains
         end do
         call forward_transposed(this, y)
         do i = 1, this%n
-          b(this%prow(i), c) = y(i) / this%rs_perm(i)
+          b(this%prow(i), c) = y(i)
         end do
       else
         do i = 1, this%n
-          y(i) = b(this%prow(i), c) / this%rs_perm(i)
+          y(i) = b(this%prow(i), c)
         end do
         call backward(this, y)
         do i = 1, this%n
@@ -166,7 +168,7 @@ contains
       m = this%block_start(k + 1) - i0
       c0 = this%col_ptr(k)
       nc = this%col_ptr(k + 1) - c0
-      associate (mt => this%mt(this%mt_offset(k) + 1:), cols => this%cols(c0:))
+      associate (mt => this%fac(this%mt_offset(k) + 1:), cols => this%cols(c0:))
         select case (m)
         case (3)
           call apply_3(nc, mt, cols, i0, y)
@@ -189,7 +191,7 @@ contains
       m = this%block_start(k + 1) - i0
       c0 = this%col_ptr(k)
       nc = this%col_ptr(k + 1) - c0
-      associate (mt => this%mt(this%mt_offset(k) + 1:), cols => this%cols(c0:))
+      associate (mt => this%fac(this%mt_offset(k) + 1:), cols => this%cols(c0:))
         select case (m)
         case (3)
           call apply_t_3(nc, mt, cols, i0, y)
@@ -205,12 +207,12 @@ contains
   ! more than their arithmetic (the solve and factorisation of the two-link benchmark at 64
   ! elements per link took 2.2 times the instructions).
 
-  pure subroutine solution_3(nc, d, x, umin, umax, info)
+  pure subroutine solution_3(nc, d, rs, x, umin, umax, info)
     integer, parameter :: m = 3
     include 'core_sparse_block_solution.inc'
   end subroutine solution_3
 
-  pure subroutine solution_m(m, nc, d, x, umin, umax, info)
+  pure subroutine solution_m(m, nc, d, rs, x, umin, umax, info)
     integer, intent(in) :: m
     include 'core_sparse_block_solution.inc'
   end subroutine solution_m

@@ -6,7 +6,7 @@ contains
 
   module procedure block_setup
     integer :: pinv(n), qinv(n), blk(n), row_count(n + 1), mark(n), colpos(n)
-    integer, allocatable :: ent_col(:), list(:)
+    integer, allocatable :: ent_col(:), list(:), row_ptr(:), row_mid(:), row_slot(:), row_dest(:)
     integer :: k, j, s, pi, pj, m, i0, nc, e, i, n_cols, n_mt, n_dia, fill(n)
     logical, allocatable :: used(:)
     ok = .false.
@@ -42,13 +42,13 @@ contains
     do k = 1, n
       row_count(k + 1) = row_count(k) + row_count(k + 1)
     end do
-    this%row_ptr = row_count
-    allocate(this%row_slot(colptr(n + 1)), this%row_dest(colptr(n + 1)), ent_col(colptr(n + 1)))
+    row_ptr = row_count
+    allocate(row_slot(colptr(n + 1)), row_dest(colptr(n + 1)), ent_col(colptr(n + 1)))
     fill = row_count(1:n)
     do j = 1, n
       do s = colptr(j) + 1, colptr(j + 1)
         pi = pinv(rowind(s) + 1)
-        this%row_slot(fill(pi)) = s
+        row_slot(fill(pi)) = s
         ent_col(fill(pi)) = qinv(j)
         fill(pi) = fill(pi) + 1
       end do
@@ -64,7 +64,7 @@ contains
       m = this%block_start(k + 1) - i0
       n_cols = 0
       do pi = i0, i0 + m - 1
-        do e = this%row_ptr(pi), this%row_ptr(pi + 1) - 1
+        do e = row_ptr(pi), row_ptr(pi + 1) - 1
           pj = ent_col(e)
           if (blk(pj) == k .or. mark(pj) == k) cycle
           mark(pj) = k
@@ -81,22 +81,45 @@ contains
       end do
       this%mt_offset(k) = n_mt
       do pi = i0, i0 + m - 1
-        do e = this%row_ptr(pi), this%row_ptr(pi + 1) - 1
+        do e = row_ptr(pi), row_ptr(pi + 1) - 1
           pj = ent_col(e)
           if (blk(pj) == k) then
-            this%row_dest(e) = this%dia_offset(k) + 1 + (pi - i0) + (pj - i0) * m
+            row_dest(e) = this%dia_offset(k) + 1 + (pi - i0) + (pj - i0) * m
           else
-            this%row_dest(e) = -(n_mt + colpos(pj) + (pi - i0) * nc)
+            row_dest(e) = -(n_mt + colpos(pj) + (pi - i0) * nc)
           end if
         end do
       end do
       n_mt = n_mt + nc * m
     end do
-    allocate(this%dia(n_dia), this%mt(n_mt), this%rs_perm(n), used(n_mt))
-    this%dia = 0.0_wp
-    this%mt = 0.0_wp
+    ! Each row's entries in D_k first (dest > 0), then the others (mt places, made positive).
+    allocate(row_mid(n))
+    do pi = 1, n
+      associate (first => row_ptr(pi), last => row_ptr(pi + 1) - 1)
+        s = count(row_dest(first:last) > 0)
+        row_mid(pi) = first + s
+        row_slot(first:last) = [pack(row_slot(first:last), &
+          row_dest(first:last) > 0), pack(row_slot(first:last), &
+          row_dest(first:last) < 0)]
+        row_dest(first:last) = abs([pack(row_dest(first:last), &
+          row_dest(first:last) > 0), pack(row_dest(first:last), &
+          row_dest(first:last) < 0)])
+      end associate
+    end do
+    ! One array for the factors: the diagonal blocks, then the [D_k^-1 R_k^-1, -G_k].
+    this%mt_offset = this%mt_offset + n_dia
+    allocate(this%fac(n_dia + n_mt), this%rs(n), this%rs_perm(n), used(n_dia + n_mt))
+    allocate(this%slot_row(colptr(n + 1)), this%slot_dest(colptr(n + 1)))
+    this%fac = 0.0_wp
+    do pi = 1, n
+      do e = row_ptr(pi), row_ptr(pi + 1) - 1
+        this%slot_row(row_slot(e)) = this%prow(pi)
+        this%slot_dest(row_slot(e)) = row_dest(e) + merge(n_dia, 0, e >= row_mid(pi))
+      end do
+    end do
     ! The places of -C_k no entry writes (the own columns are set in every factorisation).
     used = .false.
+    used(1:n_dia) = .true.
     do k = 1, n_blocks
       m = this%block_start(k + 1) - this%block_start(k)
       nc = this%col_ptr(k + 1) - this%col_ptr(k)
@@ -104,10 +127,8 @@ contains
         used(this%mt_offset(k) + i * nc + 1:this%mt_offset(k) + i * nc + m) = .true.
       end do
     end do
-    do e = 1, size(this%row_dest)
-      if (this%row_dest(e) < 0) used(-this%row_dest(e)) = .true.
-    end do
-    this%mt_zero = pack([(i, i = 1, n_mt)], .not. used)
+    used(this%slot_dest) = .true.
+    this%mt_zero = pack([(i, i = 1, n_dia + n_mt)], .not. used)
     ok = .true.
   end procedure block_setup
 
