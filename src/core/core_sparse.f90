@@ -7,10 +7,12 @@
 !>
 !> When KLU's block triangular ordering leaves no diagonal block larger than MAX_BLOCK (8)
 !> (the kinematic Jacobian of an open chain), the factors and solves are core_sparse_block's
-!> instead, with KLU's ordering, scaling and pivot rule: one pass over the blocks in plain
-!> loops where KLU's per-block overhead dominates (its solves were 28 % of a step of the
-!> two-link benchmark at 64 elements per link). The choice is made per pattern at the first
-!> factorisation.
+!> instead, in KLU's ordering with its row scaling and pivot rule: each block keeps its inverse
+!> and its product with the entries above it, so that a solve is a gather and a few dot
+!> products per block, where KLU's per-block overhead dominated (its solves were 28 % of a
+!> step of the two-link benchmark at 64 elements per link). The choice is made per pattern at
+!> the first factorisation. After a factorisation that reports a singular matrix, the block
+!> solver's solves leave b unchanged.
 !>
 !> The C handle belongs to the object that made it, recognised by its address: an intrinsic copy
 !> of a containing object (which Fortran cannot prevent) neither uses nor frees the original's
@@ -23,7 +25,6 @@ module core_sparse
   implicit none
   private
   public :: sparse_lu_t, entries_t
-
 
   !> A growing list of (row, column) entries, for building patterns in one pass (capacity
   !> doubles, so n entries cost O(n)).

@@ -6,10 +6,10 @@
 !> With B = A(P, Q) (rows scaled) = D (I + G), D the diagonal blocks and G = D^-1 C for the
 !> entries C above them, each block k keeps the dense m x nc matrix [D_k^-1, -G_k] over its
 !> own m columns and the nc - m other columns its rows touch (D_k^-1 with the row scaling of
-!> b folded in): a solve is then, block by block
-!> from the last, one gather and m dot products, x_k = D_k^-1 b_k - G_k x (the transposed
-!> solve runs forward with the transposed products). [D_k^-1, -G_k] comes from D_k's LU
-!> factors (partial pivoting) applied to [I, -C_k] at each factorisation.
+!> b folded in): a solve is then, block by block from the last, one gather and m dot
+!> products, x_k = D_k^-1 b_k - G_k x (the transposed solve runs forward with the transposed
+!> products). [D_k^-1, -G_k] comes from D_k's LU factors (partial pivoting) applied to
+!> [R_k^-1, -C_k] at each factorisation.
 !>
 !> The ordering (rows P, columns Q, block starts R) is KLU's (core_sparse takes it from its
 !> symbolic analysis), and so is the rest of the numerics: rows scaled by their largest
@@ -157,8 +157,8 @@ contains
     end do
   end subroutine block_solve
 
-  !> y := B^-1 y for the permuted, scaled matrix B, the last block first: x_k = [D_k^-1, -G_k]
-  !> applied to (b_k, x of the later columns).
+  !> y := A(P, Q)^-1 y (y in permuted order, unscaled), the last block first: x_k =
+  !> [D_k^-1 R_k^-1, -G_k] applied to (b_k, x of the later columns).
   pure subroutine backward(this, y)
     type(block_lu_t), intent(in) :: this
     real(wp), intent(inout) :: y(:)
@@ -179,9 +179,9 @@ contains
     end do
   end subroutine backward
 
-  !> y := B^-T y, the first block first: u = [D_k^-1, -G_k]^T z_k for the block's part z_k
-  !> (complete once the blocks before it are done), x_k = u's first m entries and the rest
-  !> added to the later columns.
+  !> y := A(P, Q)^-T y, the first block first: u = [D_k^-1 R_k^-1, -G_k]^T z_k for the
+  !> block's part z_k (complete once the blocks before it are done), x_k = u's first m entries
+  !> and the rest added to the later columns.
   pure subroutine forward_transposed(this, y)
     type(block_lu_t), intent(in) :: this
     real(wp), intent(inout) :: y(:)
