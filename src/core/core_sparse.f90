@@ -5,6 +5,15 @@
 !> pattern; each `factor` refactors the current values (KLU keeps the pivot order while it stays
 !> well conditioned).
 !>
+!> When KLU's block triangular ordering leaves no diagonal block larger than MAX_BLOCK (8)
+!> (the kinematic Jacobian of an open chain), the factors and solves are core_sparse_block's
+!> instead, in KLU's ordering with its row scaling and pivot rule: each block keeps its inverse
+!> and its product with the entries above it, so that a solve is a gather and a few dot
+!> products per block, where KLU's per-block overhead dominated (its solves were 28 % of a
+!> step of the two-link benchmark at 64 elements per link). The choice is made per pattern at
+!> the first factorisation. After a factorisation that reports a singular matrix, the block
+!> solver's solves leave b unchanged.
+!>
 !> The C handle belongs to the object that made it, recognised by its address: an intrinsic copy
 !> of a containing object (which Fortran cannot prevent) neither uses nor frees the original's
 !> factors but analyses its own pattern on its first factorisation.
@@ -12,6 +21,7 @@ module core_sparse
   use, intrinsic :: iso_c_binding, only: c_ptr, c_null_ptr, c_int, c_double, c_associated, &
     c_loc, c_intptr_t
   use core_kinds, only: wp
+  use core_sparse_block, only: block_lu_t, MAX_BLOCK
   implicit none
   private
   public :: sparse_lu_t, entries_t
@@ -33,12 +43,16 @@ module core_sparse
     integer(c_int), allocatable, private :: colptr(:), rowind(:)   ! 0-based for KLU
     type(c_ptr), private :: handle = c_null_ptr
     integer(c_intptr_t), private :: owner = 0
+    !> Block solver in use (analysed: a copy keeps it, factors included, being plain data)
+    logical, private :: blocked = .false.
+    type(block_lu_t), private :: blocks
   contains
     procedure :: setup => sparse_setup
     procedure :: factor => sparse_factor
     procedure :: solve => sparse_solve
     procedure :: solve_many => sparse_solve_many
     procedure :: multiply => sparse_multiply
+    procedure :: uses_blocks => sparse_uses_blocks
     final :: sparse_final
   end type sparse_lu_t
 
@@ -63,6 +77,13 @@ module core_sparse
       real(c_double), intent(inout) :: b(*)
       integer(c_int) :: info
     end function klu_solve
+    function klu_ordering(h, p, q, r, maxblock) result(nblocks) &
+        bind(C, name='flexmor_klu_ordering')
+      import :: c_ptr, c_int
+      type(c_ptr), value :: h
+      integer(c_int), intent(out) :: p(*), q(*), r(*), maxblock
+      integer(c_int) :: nblocks
+    end function klu_ordering
     subroutine klu_free(h) bind(C, name='flexmor_klu_free')
       import :: c_ptr
       type(c_ptr), value :: h
@@ -170,13 +191,43 @@ contains
     real(wp), intent(out) :: rcond
     rcond = 0.0_wp
     info = 1
-    if (.not. owns_handle(this)) then
+    if (.not. this%blocked .and. .not. owns_handle(this)) then
       this%handle = klu_new(int(this%n, c_int), this%colptr, this%rowind)
       if (.not. c_associated(this%handle)) return
       this%owner = address_of(this)
+      call choose_blocks(this)
     end if
-    info = klu_factor(this%handle, this%val, rcond)
+    if (this%blocked) then
+      call this%blocks%factor(this%val, info, rcond)
+    else
+      info = klu_factor(this%handle, this%val, rcond)
+    end if
   end subroutine sparse_factor
+
+  !> Take KLU's ordering for the block solver when its diagonal blocks are all small (KLU's
+  !> handle is then freed: the block solver is plain data).
+  subroutine choose_blocks(this)
+    type(sparse_lu_t), intent(inout) :: this
+    integer(c_int) :: p(this%n), q(this%n), r(this%n + 1), maxblock, nblocks
+    logical :: ok
+    nblocks = klu_ordering(this%handle, p, q, r, maxblock)
+    if (maxblock > MAX_BLOCK) return
+    call this%blocks%setup(this%n, this%colptr, this%rowind, p, q, r, nblocks, ok)
+    if (.not. ok) then
+      this%blocks = block_lu_t()
+      return
+    end if
+    call klu_free(this%handle)
+    this%handle = c_null_ptr
+    this%owner = 0
+    this%blocked = .true.
+  end subroutine choose_blocks
+
+  !> Whether the factors are the block solver's (known after the first factorisation).
+  pure logical function sparse_uses_blocks(this)
+    class(sparse_lu_t), intent(in) :: this
+    sparse_uses_blocks = this%blocked
+  end function sparse_uses_blocks
 
   !> b := A^-1 b (transposed: A^-T b) with the last factors.
   subroutine sparse_solve(this, b, transposed)
@@ -185,6 +236,10 @@ contains
     logical, intent(in), optional :: transposed
     integer :: info
     if (this%n == 0) return
+    if (this%blocked) then
+      call this%blocks%solve(1, b, optional_true(transposed))
+      return
+    end if
     call ensure_own_factors(this)
     info = klu_solve(this%handle, 1_c_int, b, merge(1_c_int, 0_c_int, optional_true(transposed)))
   end subroutine sparse_solve
@@ -195,6 +250,10 @@ contains
     logical, intent(in), optional :: transposed
     integer :: info
     if (this%n == 0 .or. size(b, 2) == 0) return
+    if (this%blocked) then
+      call this%blocks%solve(size(b, 2), b, optional_true(transposed))
+      return
+    end if
     call ensure_own_factors(this)
     info = klu_solve(this%handle, int(size(b, 2), c_int), b, &
       merge(1_c_int, 0_c_int, optional_true(transposed)))
@@ -249,6 +308,8 @@ contains
     if (owns_handle(this)) call klu_free(this%handle)
     this%handle = c_null_ptr
     this%owner = 0
+    this%blocked = .false.
+    this%blocks = block_lu_t()
     if (allocated(this%pos)) deallocate(this%pos, this%val, this%colptr, this%rowind)
   end subroutine release
 

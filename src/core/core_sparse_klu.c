@@ -125,3 +125,17 @@ int flexmor_klu_solve(void *handle, int nrhs, double *b, int transposed)
         for (i = 0; i < n; i++) b[(size_t)c * n + i] /= rs[i];
     return !klu_solve(h->symbolic, h->numeric, n, nrhs, b, &h->common);
 }
+
+/* KLU's ordering of the analysed pattern: A(P, Q) is block upper triangular with diagonal
+ * blocks r[k] .. r[k+1]-1 (0-based; p, q of size n, r of size n+1). Returns the number of
+ * blocks and the size of the largest in *maxblock. */
+int flexmor_klu_ordering(void *handle, int *p, int *q, int *r, int *maxblock)
+{
+    flexmor_klu_t *h = handle;
+    const klu_symbolic *s = h->symbolic;
+    memcpy(p, s->P, (size_t)h->n * sizeof(int));
+    memcpy(q, s->Q, (size_t)h->n * sizeof(int));
+    memcpy(r, s->R, (size_t)(s->nblocks + 1) * sizeof(int));
+    *maxblock = s->maxblock;
+    return s->nblocks;
+}
