@@ -7,8 +7,7 @@ contains
 
   !> The terms of sigma_dy = S (e + beta e_dot) over q (dyn_stresses), element by element
   !> in the order of S's rows and columns (elements with elastic modes excluded).
-  module subroutine stress_entries(this)
-    class(dynamics_t), intent(inout) :: this
+  module procedure stress_entries
     integer :: iel, i, j, nm, n, pass
     associate (m => this%model)
       if (allocated(this%st_first)) deallocate(this%st_first, this%st_row, this%st_col, &
@@ -41,15 +40,12 @@ contains
         if (pass == 1) allocate(this%st_row(n), this%st_col(n), this%st_i(n), this%st_j(n))
       end do
     end associate
-  end subroutine stress_entries
+  end procedure stress_entries
 
   !> Stress resultants of the dynamic modes, sigma_dy = S (e + beta e_dot), in q_dy order, for
   !> full q = (q_rh, q_dy), from the terms of stress_entries (elements with elastic modes
   !> excluded: their stresses act as nodal forces).
-  module function dyn_stresses(this, q, qd) result(sigma)
-    class(dynamics_t), intent(in) :: this
-    real(wp), intent(in) :: q(:), qd(:)
-    real(wp) :: sigma(this%model%n_dy)
+  module procedure dyn_stresses
     real(wp) :: s(this%model%max_modes, this%model%max_modes), beta
     integer :: iel, k, nm
     sigma = 0.0_wp
@@ -65,13 +61,11 @@ contains
           s(this%st_i(k), this%st_j(k)) * (q(this%st_col(k)) + beta * qd(this%st_col(k)))
       end do
     end do
-  end function dyn_stresses
+  end procedure dyn_stresses
 
   !> The constant part of K0 and D0: dsigma_dy/dq_dy and dsigma_dy/dv_dy of the dynamic
   !> modes (block diagonal by element).
-  module subroutine dyn_mode_stiffness(this, k0, d0)
-    class(dynamics_t), intent(in) :: this
-    real(wp), intent(out) :: k0(:, :), d0(:, :)
+  module procedure dyn_mode_stiffness
     real(wp) :: s(this%model%max_modes, this%model%max_modes)
     integer :: iel, k, nm, nr
     ! The dynamic-dynamic terms of stress_entries' list (a prescribed column has q <= n_rh).
@@ -90,6 +84,6 @@ contains
         end do
       end associate
     end do
-  end subroutine dyn_mode_stiffness
+  end procedure dyn_mode_stiffness
 
 end submodule dynamics_system_stresses

@@ -5,11 +5,7 @@ submodule (integrators_galpha) integrators_galpha_newton
 contains
 
   !> Evaluate the Jacobian when asked to, and refactor when it or the step has changed.
-  module subroutine refresh_iteration_matrix(this, sys, h, err)
-    type(galpha_solver_t), intent(inout) :: this
-    class(ode2_system_t), intent(inout) :: sys
-    real(wp), intent(in) :: h
-    type(error_t), intent(inout) :: err
+  module procedure refresh_iteration_matrix
     real(wp) :: a(this%n), tolerance
     integer :: status
 
@@ -39,7 +35,7 @@ contains
     if (.not. this%lu_valid .or. abs(h - this%h_lu) > tolerance * h) then
       call factor_iteration_matrix(this, sys, h)
     end if
-  end subroutine refresh_iteration_matrix
+  end procedure refresh_iteration_matrix
 
   subroutine factor_iteration_matrix(this, sys, h)
     type(galpha_solver_t), intent(inout) :: this
@@ -75,11 +71,7 @@ contains
   end subroutine newton_coefficients
 
   !> One step from this%t to t_new = this%t + h; the state is updated only on success.
-  module subroutine take_step(this, sys, h, t_new, outcome)
-    type(galpha_solver_t), intent(inout) :: this
-    class(ode2_system_t), intent(inout) :: sys
-    real(wp), intent(in) :: h, t_new
-    integer, intent(out) :: outcome
+  module procedure take_step
     real(wp), dimension(this%n) :: acc0, acc_known, q_known, v_known, x, q1, v1, f, dx
     real(wp) :: c_q, c_v, dnorm, dnorm_old, rate
     integer :: iter, status
@@ -141,7 +133,7 @@ contains
     this%t = t_new
     this%h_last = h
     outcome = STEP_OK
-  end subroutine take_step
+  end procedure take_step
 
   !> max |d_i| / (atol + rtol |x_i|)
   pure real(wp) function weighted_norm(this, d, x)

@@ -37,12 +37,7 @@ contains
     end if
   end subroutine lookup
 
-  module subroutine group_get_real(this, var, value, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    real(wp), intent(out) :: value
-    type(error_t), intent(out) :: err
-    real(wp), intent(in), optional :: default
+  module procedure group_get_real
     character(:), allocatable :: msg
     integer :: k
     value = 0
@@ -53,14 +48,9 @@ contains
     end if
     call to_real(this%vars(k)%items(1), value, msg)
     if (len(msg) > 0) call err%set(ERR_INPUT, var_where(this, k) // msg)
-  end subroutine group_get_real
+  end procedure group_get_real
 
-  module subroutine group_get_int(this, var, value, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    integer, intent(out) :: value
-    type(error_t), intent(out) :: err
-    integer, intent(in), optional :: default
+  module procedure group_get_int
     character(:), allocatable :: msg
     integer :: k
     value = 0
@@ -71,14 +61,9 @@ contains
     end if
     call to_int(this%vars(k)%items(1), value, msg)
     if (len(msg) > 0) call err%set(ERR_INPUT, var_where(this, k) // msg)
-  end subroutine group_get_int
+  end procedure group_get_int
 
-  module subroutine group_get_logical(this, var, value, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    logical, intent(out) :: value
-    type(error_t), intent(out) :: err
-    logical, intent(in), optional :: default
+  module procedure group_get_logical
     type(item_t) :: it
     integer :: k
     value = .false.
@@ -99,14 +84,9 @@ contains
     end if
     call err%set(ERR_INPUT, var_where(this, k) // 'expected a logical (.true. or .false.), got ' &
       // shown(it))
-  end subroutine group_get_logical
+  end procedure group_get_logical
 
-  module subroutine group_get_string(this, var, value, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    character(:), allocatable, intent(out) :: value
-    type(error_t), intent(out) :: err
-    character(*), intent(in), optional :: default
+  module procedure group_get_string
     integer :: k
     value = ''
     call lookup(this, var, present(default), .true., k, err)
@@ -120,14 +100,9 @@ contains
       return
     end if
     value = this%vars(k)%items(1)%text
-  end subroutine group_get_string
+  end procedure group_get_string
 
-  module subroutine group_get_real_array(this, var, values, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    real(wp), allocatable, intent(out) :: values(:)
-    type(error_t), intent(out) :: err
-    real(wp), intent(in), optional :: default(:)
+  module procedure group_get_real_array
     character(:), allocatable :: msg
     real(wp) :: x
     integer :: k, i, m
@@ -150,14 +125,9 @@ contains
         m = m + items(i)%rep
       end do
     end associate
-  end subroutine group_get_real_array
+  end procedure group_get_real_array
 
-  module subroutine group_get_int_array(this, var, values, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    integer, allocatable, intent(out) :: values(:)
-    type(error_t), intent(out) :: err
-    integer, intent(in), optional :: default(:)
+  module procedure group_get_int_array
     character(:), allocatable :: msg
     integer :: k, i, m, x
     call lookup(this, var, present(default), .false., k, err)
@@ -179,14 +149,9 @@ contains
         m = m + items(i)%rep
       end do
     end associate
-  end subroutine group_get_int_array
+  end procedure group_get_int_array
 
-  module subroutine group_get_string_array(this, var, values, err, default)
-    class(nml_group_t), intent(inout) :: this
-    character(*), intent(in) :: var
-    type(string_t), allocatable, intent(out) :: values(:)
-    type(error_t), intent(out) :: err
-    type(string_t), intent(in), optional :: default(:)
+  module procedure group_get_string_array
     integer :: k, i, j, m
     call lookup(this, var, present(default), .false., k, err)
     if (k == 0) then
@@ -211,5 +176,5 @@ contains
         end do
       end do
     end associate
-  end subroutine group_get_string_array
+  end procedure group_get_string_array
 end submodule io_namelist_getters
