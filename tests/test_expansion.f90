@@ -96,7 +96,9 @@ contains
   function expanded_accel(t, eta) result(a)
     real(wp), intent(in) :: t, eta(:)
     real(wp) :: a(size(eta))
-    call ex%accel(run%red%dyn, t, eta, eta_dot, a, err)
+    real(wp) :: p(2), pd(2), pdd(2)
+    call run%red%dyn%prescribed(t, p, pd, pdd)
+    call ex%accel(run%red%dyn, t, p, pd, pdd, eta, eta_dot, a, err)
     call suite%check(err%ok(), 'expanded evaluation')
   end function expanded_accel
 

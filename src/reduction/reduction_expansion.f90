@@ -37,7 +37,6 @@ module reduction_expansion
   type :: expansion_t
     logical :: valid = .false.
     integer :: nr = 0, k = 0, m = 0
-    real(wp) :: tol = 1.0e-3_wp
     real(wp), allocatable :: z0(:), x0(:), xr(:)     !< xr = DF_dy q_ref (error norm)
     real(wp), allocatable :: x1(:, :), x2(:, :, :)   !< (n_x, m), (n_x, m, m)
     !> X3's distinct columns (n_x, m (m + 1) (m + 2) / 6): X3(:, l, a, b) for l <= a <= b is
@@ -71,7 +70,7 @@ module reduction_expansion
     type(expansion_t), allocatable :: item(:)        !< MAX_KEPT slots once one is made
     integer :: current = 0
     integer :: last_use(MAX_KEPT) = 0, clock = 0
-    integer :: n_expansions = 0, n_switches = 0
+    integer :: n_expansions = 0
     !> Largest nodal translation [m] between the exact kinematics and the expansion in use,
     !> measured at every new expansion (where that one has gone stale).
     real(wp) :: manifold_error = 0.0_wp
@@ -111,13 +110,13 @@ contains
     integer :: i
     found = .false.
     if (.not. allocated(this%item)) return
-    if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta)
+    if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta, &
+      this%tol)
     if (found) return
     do i = 1, MAX_KEPT
       if (i == this%current) cycle
-      if (this%item(i)%needs_update(p, eta)) cycle
+      if (this%item(i)%needs_update(p, eta, this%tol)) cycle
       this%current = i
-      this%n_switches = this%n_switches + 1
       found = .true.
       exit
     end do
@@ -127,21 +126,19 @@ contains
     end if
   end function set_find
 
-  !> A new expansion about (t, eta), in an empty slot or the one used longest ago.
-  subroutine set_expand(this, dyn, basis, t, eta, err)
+  !> A new expansion about (t, eta), p the prescribed coordinates at t, in an empty slot or the
+  !> one used longest ago.
+  subroutine set_expand(this, dyn, basis, t, p, eta, err)
     class(expansion_set_t), intent(inout) :: this
     type(dynamics_t), intent(inout) :: dyn
     type(basis_t), intent(in) :: basis
-    real(wp), intent(in) :: t, eta(:)
+    real(wp), intent(in) :: t, p(:), eta(:)
     type(error_t), intent(out) :: err
-    real(wp) :: p(dyn%model%n_rh), pd(dyn%model%n_rh), pdd(dyn%model%n_rh)
     real(wp), allocatable :: x_stale(:)
     integer :: slot
-    call dyn%prescribed(t, p, pd, pdd)
     if (.not. allocated(this%item)) allocate(this%item(MAX_KEPT))
     if (this%current > 0) x_stale = this%item(this%current)%coordinates([p, eta])
     slot = minloc(merge(this%last_use, -1, this%item%valid), 1)
-    this%item(slot)%tol = this%tol
     call this%item(slot)%build(dyn, basis, t, eta, err)
     if (.not. err%ok()) return
     if (allocated(x_stale)) this%manifold_error = max(this%manifold_error, &
@@ -161,9 +158,9 @@ contains
   end subroutine set_forget
 
   !> Whether the state (p, eta) is outside this expansion's range (see the module).
-  logical function exp_needs_update(this, p, eta)
+  logical function exp_needs_update(this, p, eta, tol)
     class(expansion_t), intent(in) :: this
-    real(wp), intent(in) :: p(:), eta(:)
+    real(wp), intent(in) :: p(:), eta(:), tol
     real(wp) :: dz(this%m), d1, d2
     integer :: a
     if (.not. this%valid) then
@@ -177,7 +174,7 @@ contains
       d2 = d2 + dz(a) * dot_product(this%s2(:, a), dz)
     end do
     d2 = 0.5_wp * d2
-    exp_needs_update = d2**2 > this%tol * d1**2
+    exp_needs_update = d2**2 > tol * d1**2
   end function exp_needs_update
 
   !> The reduced mass a + sum_l b(:, :, l) dz_l (m x m).
@@ -196,18 +193,18 @@ contains
   end function mass_at
 
   !> Modal accelerations at (t, eta, eta_dot) from the expansion: O(m^4), no model pass.
-  subroutine exp_accel(this, dyn, t, eta, eta_dot, acc, err)
+  !> p, pd, pdd: the prescribed coordinates and their rates at t (dynamics_t%prescribed).
+  subroutine exp_accel(this, dyn, t, p, pd, pdd, eta, eta_dot, acc, err)
     class(expansion_t), intent(in) :: this
     type(dynamics_t), intent(in) :: dyn
-    real(wp), intent(in) :: t, eta(:), eta_dot(:)
+    real(wp), intent(in) :: t, p(:), pd(:), pdd(:), eta(:), eta_dot(:)
     real(wp), intent(out) :: acc(:)
     type(error_t), intent(out) :: err
-    real(wp) :: p(this%nr), pd(this%nr), pdd(this%nr), dz(this%m), zd(this%m)
+    real(wp) :: dz(this%m), zd(this%m)
     real(wp) :: mz(this%m, this%m), quad(this%m, this%m), f(this%m), g(this%m, this%m)
     real(wp) :: rhs(this%k), mee(this%k, this%k)
     integer :: l, i, info, nr
     nr = this%nr
-    call dyn%prescribed(t, p, pd, pdd)
     dz = [p, eta] - this%z0
     zd = [pd, eta_dot]
     mz = mass_at(this, dz)
@@ -315,5 +312,4 @@ contains
       abs(this%xr + matmul(this%x1(:, nr + 1:), eta_new)))
     norm = model%error_norm(dx, motion, rtol, atol)
   end subroutine exp_error_norm
-
 end module reduction_expansion

@@ -62,8 +62,8 @@ contains
     call velocity_forces(dyn, this%x0, this%x1, gh)
     ! Loads: the constant part (with the lumped masses' weights) and the element weights.
     this%loads_vary = size(dyn%model%load_motion) > 0
-    this%load0 = dyn%load_factor * dyn%loads_at(t)
-    if (this%loads_vary) this%load0 = dyn%load_factor * dyn%load
+    ! dyn%load is what loads_at(t) holds without the loads' motion laws.
+    this%load0 = dyn%load_factor * dyn%load
     fw0 = element_weights(dyn, this%x0, this%vg0)
     this%a = matmul(transpose(this%x1), mx1)
     this%f1 = matmul(this%load0 + fw0, this%x1)

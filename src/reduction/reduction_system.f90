@@ -180,10 +180,11 @@ contains
     if (.not. this%expansions%find(p, eta)) then
       call indicators(this, t, eta, eta_dot, this%expansion_residual, &
         this%expansion_estimate, dq, err)
-      if (err%ok()) call this%expansions%expand(this%dyn, this%basis, t, eta, err)
+      if (err%ok()) call this%expansions%expand(this%dyn, this%basis, t, p, eta, err)
       if (.not. err%ok()) return
     end if
-    call this%expansions%item(this%expansions%current)%accel(this%dyn, t, eta, eta_dot, a, err)
+    call this%expansions%item(this%expansions%current)%accel(this%dyn, t, p, pd, pdd, eta, &
+      eta_dot, a, err)
     if (err%ok()) call check_finite(a, t, err)
   end subroutine expanded_accel
 
