@@ -240,10 +240,13 @@ module dynamics_system
       integer, intent(out) :: status
     end subroutine dyn_record
     !> Output k from the last kinematic solution, which must belong to (t, q).
-    module subroutine dyn_store(this, k, t, q, v)
+    module subroutine dyn_store(this, k, t, q, v, x, energy)
       class(dynamics_t), intent(inout) :: this
       integer, intent(in) :: k
       real(wp), intent(in) :: t, q(:), v(:)
+      !> The nodal coordinates and energies when the caller has them (a reduced model's
+      !> expansion); otherwise the last kinematic solution's and dyn_energy's.
+      real(wp), intent(in), optional :: x(:), energy(2)
     end subroutine dyn_store
     !> Kinetic and potential energy (elastic, loads and gravity) at the last kinematic solution,
     !> which must belong to (t, q_dy).

@@ -22,10 +22,18 @@ contains
   end procedure dyn_record
 
   module procedure dyn_store
-    this%x_hist(:, k) = this%kin%x
+    if (present(x)) then
+      this%x_hist(:, k) = x
+    else
+      this%x_hist(:, k) = this%kin%x
+    end if
     this%q_hist(:, k) = q
     this%v_hist(:, k) = v
-    this%energy_hist(:, k) = this%energy(t, q, v)
+    if (present(energy)) then
+      this%energy_hist(:, k) = energy
+    else
+      this%energy_hist(:, k) = this%energy(t, q, v)
+    end if
     this%chart_hist(:, k) = this%charts()
   end procedure dyn_store
 

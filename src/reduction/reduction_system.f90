@@ -175,10 +175,11 @@ contains
     real(wp), intent(out) :: a(:)
     type(error_t), intent(out) :: err
     real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
-    real(wp) :: dq(this%dyn%model%n_dy)
+    real(wp) :: dq(this%dyn%model%n_dy), q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
     call this%dyn%prescribed(t, p, pd, pdd)
     if (.not. this%expansions%find(p, eta)) then
-      call indicators(this, t, eta, eta_dot, this%expansion_residual, &
+      call this%full_state(eta, eta_dot, q_dy, v_dy)
+      call indicators(this, t, eta, eta_dot, q_dy, v_dy, this%expansion_residual, &
         this%expansion_estimate, dq, err)
       if (err%ok()) call this%expansions%expand(this%dyn, this%basis, t, p, eta, err)
       if (.not. err%ok()) return
@@ -245,7 +246,7 @@ contains
       call this%dyn%report(err, status)
       return
     end if
-    call indicators(this, t, q, v, this%residual(kg), this%estimate(kg), dq, err)
+    call indicators(this, t, q, v, q_dy, v_dy, this%residual(kg), this%estimate(kg), dq, err)
     call this%dyn%report(err, status)
     if (status /= 0) return
     if (this%static_correction) then
@@ -258,13 +259,12 @@ contains
   !> The error indicators at a reduced state, exactly: the residual's norm and, with a definite
   !> K0, the estimate from dq = K0^-1 r (the static correction). Leaves the full model
   !> evaluated at the state.
-  subroutine indicators(this, t, eta, eta_dot, residual, estimate, dq, err)
+  subroutine indicators(this, t, eta, eta_dot, q_dy, v_dy, residual, estimate, dq, err)
     type(reduced_t), intent(inout) :: this
-    real(wp), intent(in) :: t, eta(:), eta_dot(:)
+    real(wp), intent(in) :: t, eta(:), eta_dot(:), q_dy(:), v_dy(:)
     real(wp), intent(out) :: residual, estimate, dq(:)
     type(error_t), intent(out) :: err
-    real(wp) :: a(size(eta)), q_dy(size(dq)), v_dy(size(dq)), r(size(dq))
-    call this%full_state(eta, eta_dot, q_dy, v_dy)
+    real(wp) :: a(size(eta)), r(size(dq))
     call reduced_accel(this, t, eta, eta_dot, a, err)
     if (err%ok()) call full_residual(this, t, q_dy, v_dy, a, r, residual, err)
     if (.not. err%ok()) return
@@ -295,15 +295,11 @@ contains
     end if
     associate (ex => this%expansions%item(this%expansions%current))
       x = ex%coordinates([p, eta])
-      this%dyn%energy_hist(:, kg) = ex%energy([p, eta], [pd, eta_dot], &
-        this%dyn%load_factor * this%dyn%loads_at(t), x)
+      call this%dyn%store(kg, t, q_dy, v_dy, x, ex%energy([p, eta], [pd, eta_dot], &
+        this%dyn%load_factor * this%dyn%loads_at(t), x))
     end associate
     this%residual(kg) = this%expansion_residual
     this%estimate(kg) = this%expansion_estimate
-    this%dyn%x_hist(:, kg) = x
-    this%dyn%q_hist(:, kg) = q_dy
-    this%dyn%v_hist(:, kg) = v_dy
-    this%dyn%chart_hist(:, kg) = this%dyn%charts()
   end subroutine expanded_store
 
   !> The residual of the full equations r = DF_dy^T (f - M W a_eta) - sigma_dy (W = DF_dy V)
