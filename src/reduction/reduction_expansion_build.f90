@@ -16,6 +16,7 @@ contains
   module procedure exp_build
     real(wp), allocatable :: tz(:, :), mx1(:, :), mx2(:, :), mx3(:, :), dmx(:, :), gh(:, :)
     real(wp), allocatable :: xl(:), fw0(:), fwl(:), x12(:, :), conv_l(:, :), zero(:)
+    real(wp), allocatable :: x2mx2(:, :)
     real(wp) :: p(dyn%model%n_rh), pd(dyn%model%n_rh), pdd(dyn%model%n_rh), hl, size_x, vg
     type(element_mass_t) :: mass_l
     integer :: n, nr, k, m, l, i
@@ -57,7 +58,9 @@ contains
     mx2 = dyn%mass%times(dyn%model, reshape(this%x2, [n, m * m]))
     ! X1^T M X3 = (M X1)^T X3: M is symmetric.
     mx3 = third_projection(this, mx1)
-    call second_order_mass(this, mx2, mx3)
+    ! X2_il^T M X2_ab, row i + (l - 1) m, column a + (b - 1) m
+    x2mx2 = matmul(transpose(reshape(this%x2, [n, m * m])), mx2)
+    call second_order_mass(this, x2mx2, mx3)
     allocate(gh(n, m * m))
     call velocity_forces(dyn, this%x0, this%x1, gh)
     ! Loads: the constant part (with the lumped masses' weights) and the element weights.
@@ -87,7 +90,7 @@ contains
       this%b(:, :, l) = this%b(:, :, l) + transpose(this%b(:, :, l)) + dmx(:, 1:m)
       conv_l = dmx(:, m + 1:) + mx3(:, (l - 1) * m * m + 1:l * m * m)
       do i = 1, m
-        this%g1(i, l, :, :) = reshape(matmul(this%x2(:, i, l), mx2) + conv_l(i, :), [m, m])
+        this%g1(i, l, :, :) = reshape(x2mx2(i + (l - 1) * m, :) + conv_l(i, :), [m, m])
         this%gw2(i, l) = dot_product(this%x2(:, i, l), fw0) + dot_product(this%x1(:, i), fwl)
         this%f2(i, l) = dot_product(this%x2(:, i, l), this%load0) + this%gw2(i, l)
       end do
@@ -216,10 +219,10 @@ contains
   end subroutine third_terms
 
   !> The mass's second-order terms with the element masses held: c(i, j, l, r) = X2_il^T M
-  !> X2_jr + (X1_i^T M X3_jlr + X1_j^T M X3_ilr) / 2.
-  subroutine second_order_mass(this, mx2, mx3)
+  !> X2_jr + (X1_i^T M X3_jlr + X1_j^T M X3_ilr) / 2, from x2mx2 = X2^T M X2 and mx3.
+  subroutine second_order_mass(this, x2mx2, mx3)
     type(expansion_t), intent(inout) :: this
-    real(wp), intent(in) :: mx2(:, :), mx3(:, :)
+    real(wp), intent(in) :: x2mx2(:, :), mx3(:, :)
     integer :: i, j, l, r, m
     m = this%m
     if (allocated(this%c)) deallocate(this%c)
@@ -228,7 +231,7 @@ contains
       do l = 1, m
         do j = 1, m
           do i = 1, m
-            this%c(i, j, l, r) = dot_product(this%x2(:, i, l), mx2(:, j + (r - 1) * m)) + &
+            this%c(i, j, l, r) = x2mx2(i + (l - 1) * m, j + (r - 1) * m) + &
               0.5_wp * (mx3(i, (r - 1) * m * m + (l - 1) * m + j) + &
               mx3(j, (r - 1) * m * m + (l - 1) * m + i))
           end do
