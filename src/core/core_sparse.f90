@@ -22,6 +22,7 @@ module core_sparse
     c_loc, c_intptr_t
   use core_kinds, only: wp
   use core_sparse_block, only: block_lu_t, MAX_BLOCK
+  use core_sort, only: sort_by_key
   implicit none
   private
   public :: sparse_lu_t, entries_t
@@ -138,7 +139,7 @@ contains
         fill(cols(k)) = fill(cols(k)) + 1
       end do
       do j = 1, n
-        call sort_by_row(order(start(j):start(j + 1) - 1), rows)
+        call sort_by_key(order(start(j):start(j + 1) - 1), rows)
       end do
     end block
     allocate(this%pos(size(rows)), this%colptr(n + 1), this%rowind(size(rows)))
@@ -166,22 +167,6 @@ contains
     allocate(this%val(slot))
     this%val = 0.0_wp
   end subroutine sparse_setup
-
-  pure subroutine sort_by_row(idx, rows)
-    integer, intent(inout) :: idx(:)
-    integer, intent(in) :: rows(:)
-    integer :: i, j, key
-    do i = 2, size(idx)
-      key = idx(i)
-      j = i - 1
-      do while (j >= 1)
-        if (rows(idx(j)) <= rows(key)) exit
-        idx(j + 1) = idx(j)
-        j = j - 1
-      end do
-      idx(j + 1) = key
-    end do
-  end subroutine sort_by_row
 
   !> LU factors of the current values. info = 0 on success, 1 if singular (or the pattern
   !> could not be analysed); rcond is min|u_ii| / max|u_ii|.

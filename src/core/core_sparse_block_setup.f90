@@ -1,11 +1,12 @@
 !> The structure of core_sparse_block's factors from KLU's ordering of a pattern.
 submodule (core_sparse_block) core_sparse_block_setup
+  use core_sort, only: sort_by_key
   implicit none
 
 contains
 
   module procedure block_setup
-    integer :: pinv(n), qinv(n), blk(n), row_count(n + 1), mark(n), colpos(n)
+    integer :: pinv(n), qinv(n), blk(n), row_count(n + 1), mark(n), colpos(n), order(n)
     integer, allocatable :: ent_col(:), list(:), row_ptr(:), row_mid(:), row_slot(:), row_dest(:)
     integer :: k, j, s, pi, pj, m, i0, nc, e, i, n_cols, n_mt, n_dia, fill(n)
     logical, allocatable :: used(:)
@@ -72,7 +73,9 @@ contains
           list(n_cols) = pj
         end do
       end do
-      call sort_ascending(list(1:n_cols))
+      order(1:n_cols) = [(i, i = 1, n_cols)]
+      call sort_by_key(order(1:n_cols), list)
+      list(1:n_cols) = list(order(1:n_cols))
       this%cols = [this%cols, [(i0 + i, i = 0, m - 1)], list(1:n_cols)]
       nc = m + n_cols
       this%col_ptr(k + 1) = this%col_ptr(k) + nc
@@ -131,19 +134,4 @@ contains
     this%mt_zero = pack([(i, i = 1, n_dia + n_mt)], .not. used)
     ok = .true.
   end procedure block_setup
-
-  pure subroutine sort_ascending(a)
-    integer, intent(inout) :: a(:)
-    integer :: i, j, key
-    do i = 2, size(a)
-      key = a(i)
-      j = i - 1
-      do while (j >= 1)
-        if (a(j) <= key) exit
-        a(j + 1) = a(j)
-        j = j - 1
-      end do
-      a(j + 1) = key
-    end do
-  end subroutine sort_ascending
 end submodule core_sparse_block_setup
