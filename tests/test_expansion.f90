@@ -8,7 +8,7 @@ program test_expansion
   use core_kinds, only: wp
   use core_error, only: error_t
   use analysis_run, only: run_t
-  use reduction_expansion, only: expansion_t
+  use reduction_expansion, only: expansion_t, expansion_set_t, AHEAD_FRACTION
   use testing, only: suite_t
   implicit none
   type(suite_t) :: suite
@@ -28,6 +28,7 @@ program test_expansion
   call check_coordinates()
   call check_accelerations()
   call check_energies(2, 3)
+  call check_centre_time()
   ! With lumped masses the mass matrix is constant: its second-order terms are all there, and
   ! the kinetic energy converges at order 3; the weights are nodal loads, whose work follows
   ! the coordinates' series (order 4).
@@ -101,6 +102,29 @@ contains
     call ex%accel(run%red%dyn, t, p, pd, pdd, eta, eta_dot, a, err)
     call suite%check(err%ok(), 'expanded evaluation')
   end function expanded_accel
+
+  !> A new expansion is centred ahead on the joints' path, where they alone use AHEAD_FRACTION
+  !> of the tolerance (bisection to round-off; 1 % allowed), and it still serves the state it
+  !> was made for; at rest (after the motions' 0.4 s) it is centred at the state.
+  subroutine check_centre_time()
+    type(expansion_set_t) :: set
+    real(wp) :: p(2), pd(2), pdd(2), pc(2), tc, d(2), use
+    call set%expand(run%red%dyn, run%red%basis, T0, eta0, err)
+    call suite%check(err%ok(), 'expansion set builds')
+    call run%red%dyn%prescribed(T0, p, pd, pdd)
+    tc = set%centre_time(run%red%dyn, T0, p)
+    call run%red%dyn%prescribed(tc, pc, pd, pdd)
+    d = set%item(set%current)%spread([pc - p, 0.0_wp, 0.0_wp, 0.0_wp])
+    use = d(2)**2 / (set%tol * d(1)**2)
+    call suite%check(tc > T0 .and. use <= AHEAD_FRACTION .and. use > 0.99_wp * &
+      AHEAD_FRACTION, 'centre ahead where the joints use the set fraction of the tolerance')
+    call set%expand(run%red%dyn, run%red%basis, tc, eta0, err)
+    call suite%check(err%ok() .and. .not. set%item(set%current)%needs_update(p, eta0, set%tol), &
+      'the expansion centred ahead serves the state')
+    call run%red%dyn%prescribed(0.5_wp, p, pd, pdd)
+    call suite%check(set%centre_time(run%red%dyn, 0.5_wp, p) == 0.5_wp, &
+      'centred at the state where the joints rest')
+  end subroutine check_centre_time
 
   !> At z0 the series is exact: only the projections' round-off differs.
   subroutine check_at_point()
