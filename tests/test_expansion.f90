@@ -29,6 +29,7 @@ program test_expansion
   call check_accelerations()
   call check_energies(2, 3)
   call check_centre_time()
+  call check_second_many()
   ! With lumped masses the mass matrix is constant: its second-order terms are all there, and
   ! the kinetic energy converges at order 3; the weights are nodal loads, whose work follows
   ! the coordinates' series (order 4).
@@ -125,6 +126,32 @@ contains
     call suite%check(set%centre_time(run%red%dyn, 0.5_wp, p) == 0.5_wp, &
       'centred at the state where the joints rest')
   end subroutine check_centre_time
+
+  !> Every element's second_many (the beams' from one chord) equals second column by column,
+  !> to round-off (the same arithmetic, perhaps contracted differently).
+  subroutine check_second_many()
+    real(wp) :: v(6, 3), d2e(3, 3), one(3), worst, scale
+    integer :: iel, c, j, nd, nm
+    worst = 0.0_wp
+    scale = 0.0_wp
+    do iel = 1, run%red%dyn%model%n_elements
+      associate (el => run%red%dyn%model%elements(iel)%e)
+        nd = size(el%dofs)
+        nm = el%n_modes()
+        do c = 1, 3
+          v(1:nd, c) = [(sin(1.3_wp * c + 0.7_wp * j), j = 1, nd)]
+        end do
+        call el%second_many(run%red%dyn%kin%x(el%dofs), v(1:nd, :), d2e(1:nm, :))
+        do c = 1, 3
+          call el%second(run%red%dyn%kin%x(el%dofs), v(1:nd, c), one(1:nm))
+          worst = max(worst, maxval(abs(one(1:nm) - d2e(1:nm, c))))
+          scale = max(scale, maxval(abs(one(1:nm))))
+        end do
+      end associate
+    end do
+    call suite%check(scale > 0 .and. worst <= 1.0e-13_wp * scale, &
+      'second_many equals second per column (round-off: 1e-13 relative)')
+  end subroutine check_second_many
 
   !> At z0 the series is exact: only the projections' round-off differs.
   subroutine check_at_point()

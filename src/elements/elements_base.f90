@@ -36,6 +36,7 @@ module elements_base
     procedure :: has_inertia => element_no_inertia
     procedure :: inertia => element_zero_inertia
     procedure :: second_inertia => element_second_inertia
+    procedure :: second_many => element_second_many
     procedure :: weight => element_zero_weight
     procedure :: lumped_mass => element_no_lumped_mass
     procedure :: has_limit => element_no_limit
@@ -119,6 +120,19 @@ contains
     call this%second(x, xd, d2e)
     call this%inertia(x, xd, m, h)
   end subroutine element_second_inertia
+
+  !> second along each column of v at the same x, into the columns of d2e (a reduced model's
+  !> expansion takes tens of directions at once). An element whose second derivatives share
+  !> their geometry overrides it to compute that once.
+  pure subroutine element_second_many(this, x, v, d2e)
+    class(element_t), intent(in) :: this
+    real(wp), intent(in) :: x(:), v(:, :)
+    real(wp), intent(out) :: d2e(:, :)
+    integer :: c
+    do c = 1, size(v, 2)
+      call this%second(x, v(:, c), d2e(:, c))
+    end do
+  end subroutine element_second_many
 
   !> Nodal forces f (n_coords) of gravity g (2 components in the plane, 3 in space) on a
   !> consistent mass, and its potential energy.

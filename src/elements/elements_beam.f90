@@ -56,6 +56,7 @@ module elements_beam
   contains
     procedure :: evaluate => beam_evaluate
     procedure :: second => beam_second
+    procedure :: second_many => beam_second_many
     procedure :: stiffness => beam_stiffness
     procedure, nopass :: type_name => beam_type_name
     procedure :: has_inertia => beam_has_inertia
@@ -176,6 +177,19 @@ contains
     real(wp), intent(out) :: d2e(:)
     call second_modes(this, chord(this, x), v, d2e)
   end subroutine beam_second
+
+  !> second along each column of v from one chord.
+  pure subroutine beam_second_many(this, x, v, d2e)
+    class(beam_t), intent(in) :: this
+    real(wp), intent(in) :: x(:), v(:, :)
+    real(wp), intent(out) :: d2e(:, :)
+    type(chord_t) :: c
+    integer :: col
+    c = chord(this, x)
+    do col = 1, size(v, 2)
+      call second_modes(this, c, v(:, col), d2e(:, col))
+    end do
+  end subroutine beam_second_many
 
   !> d2e along v from the chord, shared by second and inertia.
   pure subroutine second_modes(this, c, v, d2e)

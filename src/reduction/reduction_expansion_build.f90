@@ -147,31 +147,30 @@ contains
   end subroutine second_terms
 
   !> The second-order terms of the kinematics along nodal velocities xd(:, c): J_c d2x = -D2D[xd,
-  !> xd] (kinematics_t%second with the velocities known), one element pass per column and one
-  !> solve with every column.
+  !> xd] (kinematics_t%second with the velocities known), one element pass with every column
+  !> (el%second_many) and one solve with every column.
   subroutine second_many(dyn, xd, d2x)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: xd(:, :)
     real(wp), intent(out) :: d2x(:, :)
-    real(wp) :: rhs(dyn%model%n_c, size(xd, 2)), d2e(size(dyn%model%modes))
-    real(wp) :: xe(dyn%model%max_dofs), xde(dyn%model%max_dofs)
-    integer :: c, iel, k, nd, first, mode, row
+    real(wp) :: rhs(dyn%model%n_c, size(xd, 2)), d2e(dyn%model%max_modes, size(xd, 2))
+    real(wp) :: xe(dyn%model%max_dofs), xde(dyn%model%max_dofs, size(xd, 2))
+    integer :: iel, k, nd, nm, mode, row
     rhs = 0.0_wp
-    do c = 1, size(xd, 2)
-      do iel = 1, dyn%model%n_elements
-        first = dyn%model%mode_first(iel)
-        associate (el => dyn%model%elements(iel)%e)
-          nd = size(el%dofs)
-          do k = 1, nd
-            xe(k) = dyn%kin%x(el%dofs(k))
-            xde(k) = xd(el%dofs(k), c)
-          end do
-          call el%second(xe(1:nd), xde(1:nd), d2e(first:first + el%n_modes() - 1))
-        end associate
-      end do
-      do mode = 1, size(d2e)
+    do iel = 1, dyn%model%n_elements
+      associate (el => dyn%model%elements(iel)%e)
+        nd = size(el%dofs)
+        nm = el%n_modes()
+        do k = 1, nd
+          xe(k) = dyn%kin%x(el%dofs(k))
+          xde(k, :) = xd(el%dofs(k), :)
+        end do
+        call el%second_many(xe(1:nd), xde(1:nd, :), d2e(1:nm, :))
+      end associate
+      do k = 1, nm
+        mode = dyn%model%mode_first(iel) + k - 1
         row = dyn%kin%mode_row(mode)
-        if (row > 0) rhs(row, c) = rhs(row, c) - d2e(mode)
+        if (row > 0) rhs(row, :) = rhs(row, :) - d2e(k, :)
       end do
     end do
     call dyn%kin%jacobian_solve(rhs)
