@@ -401,44 +401,37 @@ contains
     end do
   end subroutine stress_terms
 
-  !> The modes' strain energy E(q0 + T dz) = es0 + es1 dz + dz es2 dz / 2: E is a quadratic
-  !> form in q (mode values are coordinates or zero), so polarisation is exact.
+  !> The modes' strain energy E(q0 + T dz) = es0 + es1 dz + dz es2 dz / 2 in one element pass:
+  !> the mode values are coordinates or zero, so e(q0 + T dz) = e0 + E dz with E the mode values
+  !> of T's columns, and E(q) = sum e^T S e / 2 over the elements (no elastic elements here).
   subroutine strain_terms(this, dyn, tz, q0)
     type(expansion_t), intent(inout) :: this
     type(dynamics_t), intent(in) :: dyn
     real(wp), intent(in) :: tz(:, :), q0(:)
-    real(wp) :: e_t(this%m)
-    integer :: a, b
+    real(wp) :: e0(dyn%model%max_modes), et(dyn%model%max_modes, this%m)
+    real(wp) :: s(dyn%model%max_modes, dyn%model%max_modes)
+    real(wp) :: se0(dyn%model%max_modes), set(dyn%model%max_modes, this%m)
+    integer :: iel, nm, a
     if (allocated(this%es1)) deallocate(this%es1, this%es2)
     allocate(this%es1(this%m), this%es2(this%m, this%m))
-    this%es0 = strain_energy(dyn, q0)
-    do a = 1, this%m
-      e_t(a) = strain_energy(dyn, tz(:, a))
-      this%es1(a) = strain_energy(dyn, q0 + tz(:, a)) - this%es0 - e_t(a)
-      this%es2(a, a) = 2 * e_t(a)
-    end do
-    do a = 1, this%m
-      do b = a + 1, this%m
-        this%es2(a, b) = strain_energy(dyn, tz(:, a) + tz(:, b)) - e_t(a) - e_t(b)
-        this%es2(b, a) = this%es2(a, b)
-      end do
-    end do
-  end subroutine strain_terms
-
-  !> Strain energy sum e^T S e / 2 of the elements at q (no elastic elements here).
-  real(wp) function strain_energy(dyn, q) result(en)
-    type(dynamics_t), intent(in) :: dyn
-    real(wp), intent(in) :: q(:)
-    real(wp) :: e(dyn%model%max_modes), s(dyn%model%max_modes, dyn%model%max_modes)
-    integer :: iel, nm
-    en = 0.0_wp
+    this%es0 = 0.0_wp
+    this%es1 = 0.0_wp
+    this%es2 = 0.0_wp
     do iel = 1, dyn%model%n_elements
       associate (el => dyn%model%elements(iel)%e)
         nm = el%n_modes()
-        call dyn%model%mode_values(iel, q, e(:nm))
+        call dyn%model%mode_values(iel, q0, e0(:nm))
+        do a = 1, this%m
+          call dyn%model%mode_values(iel, tz(:, a), et(:nm, a))
+        end do
+        if (all(et(:nm, :) == 0) .and. all(e0(:nm) == 0)) cycle
         call el%stiffness(s(:nm, :nm))
-        en = en + 0.5_wp * dot_product(e(:nm), matmul(s(:nm, :nm), e(:nm)))
+        se0(:nm) = matmul(s(:nm, :nm), e0(:nm))
+        set(:nm, :) = matmul(s(:nm, :nm), et(:nm, :))
+        this%es0 = this%es0 + 0.5_wp * dot_product(e0(:nm), se0(:nm))
+        this%es1 = this%es1 + matmul(se0(:nm), et(:nm, :))
+        this%es2 = this%es2 + matmul(transpose(et(:nm, :)), set(:nm, :))
       end associate
     end do
-  end function strain_energy
+  end subroutine strain_terms
 end submodule reduction_expansion_build
