@@ -102,6 +102,18 @@ module reduction_expansion
       real(wp), intent(in) :: t, eta(:)
       type(error_t), intent(out) :: err
     end subroutine exp_build
+    !> X2 at the kinematics' current solution (reduction_expansion_series).
+    module subroutine second_terms(dyn, x1, x2)
+      type(dynamics_t), intent(inout) :: dyn
+      real(wp), intent(in) :: x1(:, :)
+      real(wp), intent(out) :: x2(:, :, :)
+    end subroutine second_terms
+    !> X3's distinct columns and tri (reduction_expansion_series).
+    module subroutine third_terms(this, dyn, size_x)
+      type(expansion_t), intent(inout) :: this
+      type(dynamics_t), intent(inout) :: dyn
+      real(wp), intent(in) :: size_x
+    end subroutine third_terms
   end interface
 
 contains

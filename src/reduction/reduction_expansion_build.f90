@@ -3,13 +3,11 @@
 !> kinematic factors, so an expansion costs tens of full evaluations.
 submodule (reduction_expansion) reduction_expansion_build
   use dynamics_augmented, only: element_mass_t
-  use model_kinematics, only: kin_state_t
   implicit none
 
-  !> Nodal motion of the difference steps, relative to the model's size: the masses' first
-  !> derivatives (truncation 1e-7 relative, round-off 1e-9) and X3 (1e-6 and the kinematic
-  !> solve's tolerance over the step).
-  real(wp), parameter :: MASS_STEP = 1.0e-7_wp, THIRD_STEP = 1.0e-6_wp
+  !> Nodal motion of the masses' difference step, relative to the model's size (truncation
+  !> 1e-7 relative, round-off 1e-9).
+  real(wp), parameter :: MASS_STEP = 1.0e-7_wp
 
 contains
 
@@ -44,15 +42,14 @@ contains
     if (allocated(this%x1)) deallocate(this%x1, this%x2, this%xr)
     allocate(this%x1(n, m), this%x2(n, m, m), this%xr(n))
     call dyn%kin%apply_df_many(dyn%model, tz, this%x1)
-    call second_terms(dyn, this%x1, 1, this%x2)
+    call second_terms(dyn, this%x1, this%x2)
     block
       real(wp) :: qr(dyn%model%n_q)
       qr(1:nr) = 0.0_wp
       qr(nr + 1:) = basis%q_ref
       call dyn%kin%apply_df(dyn%model, qr, this%xr)
     end block
-    call third_terms(this, dyn, tz, size_x, err)
-    if (.not. err%ok()) return
+    call third_terms(this, dyn, size_x)
     ! Mass products at z0 and the quadratic velocity forces of the elements there.
     mx1 = dyn%mass%times(dyn%model, this%x1)
     mx2 = dyn%mass%times(dyn%model, reshape(this%x2, [n, m * m]))
@@ -107,115 +104,6 @@ contains
     end do
     this%valid = .true.
   end procedure exp_build
-
-  !> x2(:, a, b) = D2F[T_a, T_b] for first <= a <= b (and its mirror) from the nodal shapes
-  !> x1 = DF T at the kinematics' current solution, by polarisation of the second-order
-  !> terms along x1_a and x1_a + x1_b, all solved at once.
-  subroutine second_terms(dyn, x1, first, x2)
-    type(dynamics_t), intent(inout) :: dyn
-    real(wp), intent(in) :: x1(:, :)
-    integer, intent(in) :: first
-    real(wp), intent(inout) :: x2(:, :, :)
-    real(wp) :: xd(size(x1, 1), size(x1, 2) * (size(x1, 2) + 1) / 2)
-    real(wp) :: d2x(size(x1, 1), size(xd, 2))
-    integer :: a, b, c, m
-    m = size(x1, 2)
-    c = 0
-    do a = first, m
-      c = c + 1
-      xd(:, c) = x1(:, a)
-    end do
-    do a = first, m
-      do b = a + 1, m
-        c = c + 1
-        xd(:, c) = x1(:, a) + x1(:, b)
-      end do
-    end do
-    call second_many(dyn, xd(:, 1:c), d2x(:, 1:c))
-    c = 0
-    do a = first, m
-      c = c + 1
-      x2(:, a, a) = d2x(:, c)
-    end do
-    do a = first, m
-      do b = a + 1, m
-        c = c + 1
-        x2(:, a, b) = 0.5_wp * (d2x(:, c) - x2(:, a, a) - x2(:, b, b))
-        x2(:, b, a) = x2(:, a, b)
-      end do
-    end do
-  end subroutine second_terms
-
-  !> The second-order terms of the kinematics along nodal velocities xd(:, c): J_c d2x = -D2D[xd,
-  !> xd] (kinematics_t%second with the velocities known), one element pass with every column
-  !> (el%second_many) and one solve with every column.
-  subroutine second_many(dyn, xd, d2x)
-    type(dynamics_t), intent(inout) :: dyn
-    real(wp), intent(in) :: xd(:, :)
-    real(wp), intent(out) :: d2x(:, :)
-    real(wp) :: rhs(dyn%model%n_c, size(xd, 2)), d2e(dyn%model%max_modes, size(xd, 2))
-    real(wp) :: xe(dyn%model%max_dofs), xde(dyn%model%max_dofs, size(xd, 2))
-    integer :: iel, k, nd, nm, mode, row
-    rhs = 0.0_wp
-    do iel = 1, dyn%model%n_elements
-      associate (el => dyn%model%elements(iel)%e)
-        nd = size(el%dofs)
-        nm = el%n_modes()
-        do k = 1, nd
-          xe(k) = dyn%kin%x(el%dofs(k))
-          xde(k, :) = xd(el%dofs(k), :)
-        end do
-        call el%second_many(xe(1:nd), xde(1:nd, :), d2e(1:nm, :))
-      end associate
-      do k = 1, nm
-        mode = dyn%model%mode_first(iel) + k - 1
-        row = dyn%kin%mode_row(mode)
-        if (row > 0) rhs(row, :) = rhs(row, :) - d2e(k, :)
-      end do
-    end do
-    call dyn%kin%jacobian_solve(rhs)
-    d2x = 0.0_wp
-    do k = 1, dyn%model%n_c
-      d2x(dyn%model%calc_coord(k), :) = rhs(k, :)
-    end do
-  end subroutine second_many
-
-  !> X3(:, l, a, b) = d X2(:, a, b) / d z_l for l <= a <= b by one-sided differences (X2 anew
-  !> at z0 + h e_l, nodal motion THIRD_STEP of the model's size): the distinct columns of the
-  !> symmetric X3. The kinematics is left at z0's solution.
-  subroutine third_terms(this, dyn, tz, size_x, err)
-    type(expansion_t), intent(inout) :: this
-    type(dynamics_t), intent(inout) :: dyn
-    real(wp), intent(in) :: tz(:, :), size_x
-    type(error_t), intent(out) :: err
-    type(kin_state_t) :: at_z0
-    real(wp) :: x2p(size(this%x2, 1), this%m, this%m), x1p(size(this%x2, 1), this%m)
-    real(wp) :: q0(dyn%model%n_q), h
-    integer :: l, a, b, c
-    if (allocated(this%x3)) deallocate(this%x3, this%tri)
-    allocate(this%x3(size(this%x2, 1), this%m * (this%m + 1) * (this%m + 2) / 6))
-    allocate(this%tri(this%m, this%m, this%m))
-    this%tri = 0
-    call dyn%kin%save_state(at_z0)
-    q0 = dyn%kin%q
-    c = 0
-    do l = 1, this%m
-      h = THIRD_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
-      call dyn%kin%solve(dyn%model, q0 + h * tz(:, l), err)
-      if (.not. err%ok()) return
-      call dyn%kin%apply_df_many(dyn%model, tz, x1p)
-      call second_terms(dyn, x1p, l, x2p)
-      do b = l, this%m
-        do a = l, b
-          c = c + 1
-          this%tri(l, a, b) = c
-          this%x3(:, c) = (x2p(:, a, b) - this%x2(:, a, b)) / h
-        end do
-      end do
-      call dyn%kin%restore_state(at_z0)
-    end do
-    call dyn%kin%solve(dyn%model, q0, err)
-  end subroutine third_terms
 
   !> The mass's second-order terms with the element masses held: c(i, j, l, r) = X2_il^T M
   !> X2_jr + (X1_i^T M X3_jlr + X1_j^T M X3_ilr) / 2, from x2mx2 = X2^T M X2 and mx3.

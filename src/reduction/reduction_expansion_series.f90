@@ -1,0 +1,181 @@
+!> The series' second and third terms X2 and X3 of an expansion (reduction_expansion), from the
+!> kinematic factors at z0 only: element passes with every direction at once, then one solve
+!> with every column.
+!>
+!> On the kinematic rows the constraints read D(x(z)) = linear in z, so that
+!>     J X2_ab = R_ab := -D''[X1_a, X1_b]   and   J X3_lab = d R_ab / d z_l - J' X2_ab,
+!> J = D' at x(z). The derivative along z_l is a one-sided difference of element quantities
+!> only, (R_ab - J X2_ab)(x_h) / h with x_h = x0 + h X1_l + h^2 X2_ll / 2 and the directions
+!> X1 + h X2_l (at x0 the bracket is X2's solve residual, round-off): two element passes per
+!> l and no kinematic solve at z0 + h e_l.
+submodule (reduction_expansion) reduction_expansion_series
+  implicit none
+
+  !> Nodal motion of X3's difference step, relative to the model's size: truncation about
+  !> 1e-6 relative, round-off about 1e-10.
+  real(wp), parameter :: THIRD_STEP = 1.0e-6_wp
+
+contains
+
+  !> x2(:, a, b) = D2F[T_a, T_b] (and its mirror) from the nodal shapes x1 = DF T at the
+  !> kinematics' current solution.
+  module procedure second_terms
+    real(wp) :: rhs(dyn%model%n_c, n_pairs(size(x1, 2), 1))
+    integer :: a, b, m, k
+    m = size(x1, 2)
+    rhs = polarised_rhs(dyn, dyn%kin%x, x1, 1)
+    call dyn%kin%jacobian_solve(rhs)
+    x2 = 0.0_wp
+    do a = 1, m
+      do b = a, m
+        do k = 1, dyn%model%n_c
+          x2(dyn%model%calc_coord(k), a, b) = rhs(k, pair_column(a, b, 1, m))
+        end do
+        x2(:, b, a) = x2(:, a, b)
+      end do
+    end do
+  end procedure second_terms
+
+  !> X3(:, l, a, b) for l <= a <= b, the distinct columns of the symmetric X3, in the order of
+  !> tri(l, a, b); the kinematics stays at z0.
+  module procedure third_terms
+    real(wp) :: x1h(size(this%x1, 1), this%m), xh(size(this%x0)), h
+    real(wp), allocatable :: rhs(:, :), w(:, :)
+    integer :: l, a, b, c, k, np, m
+    m = this%m
+    if (allocated(this%x3)) deallocate(this%x3, this%tri)
+    allocate(this%x3(size(this%x0), m * (m + 1) * (m + 2) / 6), this%tri(m, m, m))
+    allocate(rhs(dyn%model%n_c, size(this%x3, 2)))
+    this%tri = 0
+    c = 0
+    do l = 1, m
+      h = THIRD_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
+      xh = this%x0 + h * this%x1(:, l) + (0.5_wp * h**2) * this%x2(:, l, l)
+      do a = l, m
+        x1h(:, a) = this%x1(:, a) + h * this%x2(:, a, l)
+      end do
+      np = n_pairs(m, l)
+      allocate(w(size(this%x0), np))
+      do a = l, m
+        do b = a, m
+          w(:, pair_column(a, b, l, m)) = this%x2(:, a, b)
+          this%tri(l, a, b) = c + pair_column(a, b, l, m)
+        end do
+      end do
+      rhs(:, c + 1:c + np) = (polarised_rhs(dyn, xh, x1h, l) - jacobian_rows(dyn, xh, w)) / h
+      deallocate(w)
+      c = c + np
+    end do
+    call dyn%kin%jacobian_solve(rhs)
+    this%x3 = 0.0_wp
+    do k = 1, dyn%model%n_c
+      this%x3(dyn%model%calc_coord(k), :) = rhs(k, :)
+    end do
+  end procedure third_terms
+
+  !> Number of pairs first <= a <= b <= m.
+  pure integer function n_pairs(m, first) result(n)
+    integer, intent(in) :: m, first
+    n = (m - first + 1) * (m - first + 2) / 2
+  end function n_pairs
+
+  !> Column of the pair (a, b), first <= a <= b <= m, row by row of a.
+  pure integer function pair_column(a, b, first, m) result(c)
+    integer, intent(in) :: a, b, first, m
+    ! Rows first .. a - 1 hold m - first + 1, m - first, ... pairs.
+    c = (a - first) * (2 * (m - first + 1) - (a - first) + 1) / 2 + (b - a) + 1
+  end function pair_column
+
+  !> -D''(x)[d_a, d_b] on the kinematic rows for first <= a <= b (column pair_column), by
+  !> polarisation of the second-order terms along d_a and d_a + d_b: one element pass.
+  function polarised_rhs(dyn, x, d, first) result(p)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: x(:), d(:, :)
+    integer, intent(in) :: first
+    real(wp) :: p(dyn%model%n_c, n_pairs(size(d, 2), first))
+    real(wp) :: xd(size(d, 1), size(p, 2)), raw(size(p, 1), size(p, 2))
+    integer :: a, b, m
+    m = size(d, 2)
+    do a = first, m
+      do b = a, m
+        if (a == b) then
+          xd(:, pair_column(a, b, first, m)) = d(:, a)
+        else
+          xd(:, pair_column(a, b, first, m)) = d(:, a) + d(:, b)
+        end if
+      end do
+    end do
+    raw = second_rhs(dyn, x, xd)
+    p = raw
+    do a = first, m
+      do b = a + 1, m
+        p(:, pair_column(a, b, first, m)) = 0.5_wp * (raw(:, pair_column(a, b, first, m)) - &
+          raw(:, pair_column(a, a, first, m)) - raw(:, pair_column(b, b, first, m)))
+      end do
+    end do
+  end function polarised_rhs
+
+  !> -D''(x)[xd_c, xd_c] on the kinematic rows (kinematics_t%second's right-hand side with the
+  !> velocities known) for every column: one element pass with el%second_many. The columns
+  !> are gathered and summed along the transposes, which keep each coordinate's and each
+  !> row's values contiguous.
+  function second_rhs(dyn, x, xd) result(rhs)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: x(:), xd(:, :)
+    real(wp) :: rhs(dyn%model%n_c, size(xd, 2))
+    real(wp) :: d2e(dyn%model%max_modes, size(xd, 2)), xe(dyn%model%max_dofs)
+    real(wp) :: xde(dyn%model%max_dofs, size(xd, 2))
+    real(wp) :: xd_t(size(xd, 2), size(xd, 1)), rhs_t(size(xd, 2), dyn%model%n_c)
+    integer :: iel, k, nd, nm, row
+    xd_t = transpose(xd)
+    rhs_t = 0.0_wp
+    do iel = 1, dyn%model%n_elements
+      associate (el => dyn%model%elements(iel)%e)
+        nd = size(el%dofs)
+        nm = el%n_modes()
+        do k = 1, nd
+          xe(k) = x(el%dofs(k))
+          xde(k, :) = xd_t(:, el%dofs(k))
+        end do
+        call el%second_many(xe(1:nd), xde(1:nd, :), d2e(1:nm, :))
+      end associate
+      do k = 1, nm
+        row = dyn%kin%mode_row(dyn%model%mode_first(iel) + k - 1)
+        if (row > 0) rhs_t(:, row) = rhs_t(:, row) - d2e(k, :)
+      end do
+    end do
+    rhs = transpose(rhs_t)
+  end function second_rhs
+
+  !> D'(x) w on the kinematic rows for every column of w: one element pass (transposed as in
+  !> second_rhs).
+  function jacobian_rows(dyn, x, w) result(r)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: x(:), w(:, :)
+    real(wp) :: r(dyn%model%n_c, size(w, 2))
+    real(wp) :: e(dyn%model%max_modes), de(dyn%model%max_modes, dyn%model%max_dofs)
+    real(wp) :: xe(dyn%model%max_dofs)
+    real(wp) :: w_t(size(w, 2), size(w, 1)), r_t(size(w, 2), dyn%model%n_c)
+    integer :: iel, j, k, nd, nm, row
+    w_t = transpose(w)
+    r_t = 0.0_wp
+    do iel = 1, dyn%model%n_elements
+      associate (el => dyn%model%elements(iel)%e)
+        nd = size(el%dofs)
+        nm = el%n_modes()
+        do k = 1, nd
+          xe(k) = x(el%dofs(k))
+        end do
+        call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
+        do j = 1, nm
+          row = dyn%kin%mode_row(dyn%model%mode_first(iel) + j - 1)
+          if (row == 0) cycle
+          do k = 1, nd
+            r_t(:, row) = r_t(:, row) + de(j, k) * w_t(:, el%dofs(k))
+          end do
+        end do
+      end associate
+    end do
+    r = transpose(r_t)
+  end function jacobian_rows
+end submodule reduction_expansion_series
