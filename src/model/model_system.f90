@@ -325,6 +325,11 @@ contains
     call move_alloc(grown, this%node_coord)
   end subroutine model_add_node_label
 
+  pure logical function is_rotation(kind)
+    integer, intent(in) :: kind
+    is_rotation = kind == COORD_PHI .or. kind == COORD_EULER
+  end function is_rotation
+
   !> Length of the translation of node i in a nodal displacement dx (x, y and, in space, z).
   !> Largest translation over the nodes of a nodal displacement dx.
   pure real(wp) function model_largest_translation(this, dx) result(d)
@@ -343,15 +348,21 @@ contains
   pure real(wp) function model_error_norm(this, dx, motion, rtol, atol) result(norm)
     class(model_t), intent(in) :: this
     real(wp), intent(in) :: dx(:), motion(:), rtol, atol
-    real(wp) :: scale(size(dx))
-    associate (rotation => this%coord_kind == COORD_PHI .or. this%coord_kind == COORD_EULER)
-      where (rotation)
-        scale = maxval(motion, mask=rotation)
-      elsewhere
-        scale = maxval(motion, mask=.not. rotation)
-      end where
-    end associate
-    norm = maxval(abs(dx) / (atol + rtol * scale))
+    real(wp) :: largest(2)
+    integer :: i
+    ! Loops, not masked intrinsics: this runs at every step of the integrators.
+    largest = -huge(1.0_wp)
+    do i = 1, size(dx)
+      associate (kind => merge(1, 2, is_rotation(this%coord_kind(i))))
+        largest(kind) = max(largest(kind), motion(i))
+      end associate
+    end do
+    norm = 0.0_wp
+    do i = 1, size(dx)
+      associate (kind => merge(1, 2, is_rotation(this%coord_kind(i))))
+        norm = max(norm, abs(dx(i)) / (atol + rtol * largest(kind)))
+      end associate
+    end do
   end function model_error_norm
 
   pure real(wp) function model_translation(this, i, dx) result(d)

@@ -260,20 +260,37 @@ contains
     d(2) = 0.5_wp * d(2)
   end function exp_spread
 
-  !> The reduced mass a + sum_l b(:, :, l) dz_l (m x m).
+  !> The reduced mass a + sum_l b(:, :, l) dz_l + sum_lr c(:, :, l, r) dz_l dz_r (m x m).
   pure function mass_at(this, dz) result(mz)
     type(expansion_t), intent(in) :: this
     real(wp), intent(in) :: dz(:)
     real(wp) :: mz(this%m, this%m)
-    integer :: l, r
     mz = this%a
-    do l = 1, this%m
-      mz = mz + dz(l) * this%b(:, :, l)
-      do r = 1, this%m
-        mz = mz + (dz(l) * dz(r)) * this%c(:, :, l, r)
-      end do
-    end do
+    call add_product(this%m**2, this%m, this%b, dz, mz)
+    call add_product(this%m**2, this%m**2, this%c, outer(dz, dz), mz)
   end function mass_at
+
+  !> y = y + a v, with a and y taken as the contiguous arrays they are (the coefficient
+  !> tensors as matrices: one pass over each, no temporaries).
+  pure subroutine add_product(rows, cols, a, v, y)
+    integer, intent(in) :: rows, cols
+    real(wp), intent(in) :: a(rows, cols), v(cols)
+    real(wp), intent(inout) :: y(rows)
+    integer :: j
+    do j = 1, cols
+      y = y + a(:, j) * v(j)
+    end do
+  end subroutine add_product
+
+  !> u v^T as a vector, element (a, b) at a + (b - 1) size(u).
+  pure function outer(u, v) result(w)
+    real(wp), intent(in) :: u(:), v(:)
+    real(wp) :: w(size(u) * size(v))
+    integer :: b
+    do b = 1, size(v)
+      w((b - 1) * size(u) + 1:b * size(u)) = u * v(b)
+    end do
+  end function outer
 
   !> Modal accelerations at (t, eta, eta_dot) from the expansion: O(m^4), no model pass.
   !> p, pd, pdd: the prescribed coordinates and their rates at t (dynamics_t%prescribed).
@@ -283,10 +300,9 @@ contains
     real(wp), intent(in) :: t, p(:), pd(:), pdd(:), eta(:), eta_dot(:)
     real(wp), intent(out) :: acc(:)
     type(error_t), intent(out) :: err
-    real(wp) :: dz(this%m), zd(this%m)
-    real(wp) :: mz(this%m, this%m), quad(this%m, this%m), f(this%m), g(this%m, this%m)
-    real(wp) :: rhs(this%k), mee(this%k, this%k)
-    integer :: l, i, info, nr
+    real(wp) :: dz(this%m), zd(this%m), mz(this%m, this%m), f(this%m), v(this%m)
+    real(wp) :: w(this%m, this%m), quad(this%m**2), rhs(this%k), mee(this%k, this%k)
+    integer :: l, info, nr
     nr = this%nr
     dz = [p, eta] - this%z0
     zd = [pd, eta_dot]
@@ -294,16 +310,14 @@ contains
     f = this%f1 + matmul(this%f2, dz)
     if (this%loads_vary) f = f + projected_load(this, dyn%load_factor * dyn%loads_at(t) - &
       this%load0, dz)
-    do l = 1, this%m
-      quad(:, l) = zd * zd(l)
-    end do
-    do i = nr + 1, this%m
-      g = this%g0(i, :, :)
-      do l = 1, this%m
-        g = g + dz(l) * this%g1(i, l, :, :)
-      end do
-      f(i) = f(i) - sum(g * quad)
-    end do
+    ! Inertia forces (g0 + g1 dz)[zd, zd]: the tensors contracted with zd zd^T first.
+    quad = outer(zd, zd)
+    v = 0.0_wp
+    call add_product(this%m, this%m**2, this%g0, quad, v)
+    w = 0.0_wp
+    call add_product(this%m**2, this%m**2, this%g1, quad, w)
+    call add_product(this%m, this%m, w, dz, v)
+    f = f - v
     rhs = f(nr + 1:) - this%s0 - matmul(this%kz, dz) - matmul(this%dz, zd)
     do l = 1, nr
       rhs = rhs - mz(nr + 1:, l) * pdd(l)
@@ -387,12 +401,19 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: dq(:), eta_old(:), eta_new(:), rtol, atol
     real(wp), intent(out) :: norm
-    real(wp) :: dx(size(this%x0)), motion(size(this%x0))
-    integer :: nr
-    nr = this%nr
-    dx = matmul(this%x1(:, nr + 1:), dq)
-    motion = max(abs(this%xr + matmul(this%x1(:, nr + 1:), eta_old)), &
-      abs(this%xr + matmul(this%x1(:, nr + 1:), eta_new)))
-    norm = model%error_norm(dx, motion, rtol, atol)
+    real(wp) :: dx(size(this%x0)), x_old(size(this%x0)), x_new(size(this%x0))
+    integer :: j
+    ! One pass over X1's modal columns for the three products.
+    dx = 0.0_wp
+    x_old = this%xr
+    x_new = this%xr
+    do j = 1, this%k
+      associate (col => this%x1(:, this%nr + j))
+        dx = dx + dq(j) * col
+        x_old = x_old + eta_old(j) * col
+        x_new = x_new + eta_new(j) * col
+      end associate
+    end do
+    norm = model%error_norm(dx, max(abs(x_old), abs(x_new)), rtol, atol)
   end subroutine exp_error_norm
 end module reduction_expansion
