@@ -96,39 +96,47 @@ contains
     end do
   end subroutine flat_dofs
 
-  !> M w for nodal vectors w (n_x, k): the lumped masses and the element blocks (loops over
-  !> the flat blocks in place: no block copies or temporaries per element).
+  !> M w for nodal vectors w (n_x, k): the lumped masses and the element blocks, in place
+  !> on the flat blocks (no block copies), every column of an element's rows at once.
   function mass_times(this, model, w) result(mw)
     class(element_mass_t), intent(in) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: w(:, :)
     real(wp) :: mw(size(w, 1), size(w, 2))
-    real(wp) :: we(model%max_dofs), me(model%max_dofs)
-    integer :: iel, nd, c, k, l, first, d0
-    do c = 1, size(w, 2)
-      mw(:, c) = model%lumped * w(:, c)
+    ! Rows of w gathered per element as the contiguous rows of w_t: every column at once.
+    real(wp) :: w_t(size(w, 2), size(w, 1)), mw_t(size(w, 2), size(w, 1))
+    integer :: iel, nd, c, first, d0
+    w_t = transpose(w)
+    do c = 1, size(w, 1)
+      mw_t(:, c) = model%lumped(c) * w_t(:, c)
     end do
     do iel = 1, model%n_elements
       first = this%offset(iel)
       if (first == 0) cycle
       d0 = this%dof_first(iel) - 1
       nd = this%dof_first(iel + 1) - 1 - d0
-      do c = 1, size(w, 2)
-        do l = 1, nd
-          we(l) = w(this%dofs(d0 + l), c)
-          me(l) = 0.0_wp
-        end do
-        do l = 1, nd
-          do k = 1, nd
-            me(k) = me(k) + this%val(first + (l - 1) * nd + k - 1) * we(l)
-          end do
-        end do
-        do k = 1, nd
-          mw(this%dofs(d0 + k), c) = mw(this%dofs(d0 + k), c) + me(k)
-        end do
-      end do
+      call add_block(nd, size(w, 2), this%val(first:first + nd * nd - 1), &
+        this%dofs(d0 + 1:d0 + nd), w_t, mw_t)
     end do
+    mw = transpose(mw_t)
   end function mass_times
+
+  !> mw_t(:, dofs) += w_t(:, dofs) m^T for one element block m (nd x nd, symmetric), on
+  !> transposed (columns x coordinates) arrays.
+  pure subroutine add_block(nd, nc, m, dofs, w_t, mw_t)
+    integer, intent(in) :: nd, nc, dofs(nd)
+    real(wp), intent(in) :: m(nd, nd), w_t(:, :)
+    real(wp), intent(inout) :: mw_t(:, :)
+    real(wp) :: acc(nc)
+    integer :: k, l
+    do k = 1, nd
+      acc = 0.0_wp
+      do l = 1, nd
+        acc = acc + m(k, l) * w_t(:, dofs(l))
+      end do
+      mw_t(:, dofs(k)) = mw_t(:, dofs(k)) + acc
+    end do
+  end subroutine add_block
 
   !> Number the unknowns and record the pattern, in the order aug_factor visits the entries.
   !> de_offset: the layout of the element Jacobians as the sparse kinematics keeps them.
