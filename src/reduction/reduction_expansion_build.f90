@@ -81,7 +81,7 @@ contains
       xl = this%x0 + hl * this%x1(:, l)
       call element_masses(dyn, xl, mass_l)
       ! X1^T dM [X1, X2] along X1_l = (dM X1)^T [X1, X2]: dM is symmetric
-      dmx = matmul(transpose(difference_product(dyn, mass_l, this%x1)), x12) / hl
+      dmx = matmul(transpose(mass_l%difference_times(dyn%mass, dyn%model, this%x1)), x12) / hl
       fwl = (element_weights(dyn, xl, vg) - fw0) / hl
       this%b(:, :, l) = matmul(transpose(this%x1), mx2(:, (l - 1) * m + 1:l * m))
       this%b(:, :, l) = this%b(:, :, l) + transpose(this%b(:, :, l)) + dmx(:, 1:m)
@@ -154,38 +154,6 @@ contains
     s(3) = maxval(i)
     s(2) = sum(i) - s(1) - s(3)
   end function sorted
-
-  !> (M_l - M) w for the element mass blocks M_l of mass_l and M of dyn%mass (the lumped
-  !> masses cancel), element block by element block.
-  function difference_product(dyn, mass_l, w) result(dw)
-    type(dynamics_t), intent(in) :: dyn
-    type(element_mass_t), intent(in) :: mass_l
-    real(wp), intent(in) :: w(:, :)
-    real(wp) :: dw(size(w, 1), size(w, 2))
-    real(wp) :: dm(dyn%model%max_dofs, dyn%model%max_dofs), we(dyn%model%max_dofs, size(w, 2))
-    real(wp) :: dwe(dyn%model%max_dofs, size(w, 2))
-    integer :: iel, nd, first, d0, i, j
-    dw = 0.0_wp
-    do iel = 1, dyn%model%n_elements
-      first = dyn%mass%offset(iel)
-      if (first == 0) cycle
-      d0 = dyn%mass%dof_first(iel) - 1
-      nd = dyn%mass%dof_first(iel + 1) - 1 - d0
-      do j = 1, nd
-        do i = 1, nd
-          dm(i, j) = mass_l%val(first + (j - 1) * nd + i - 1) - &
-            dyn%mass%val(first + (j - 1) * nd + i - 1)
-        end do
-      end do
-      do j = 1, nd
-        we(j, :) = w(dyn%mass%dofs(d0 + j), :)
-      end do
-      dwe(1:nd, :) = matmul(dm(1:nd, 1:nd), we(1:nd, :))
-      do j = 1, nd
-        dw(dyn%mass%dofs(d0 + j), :) = dw(dyn%mass%dofs(d0 + j), :) + dwe(j, :)
-      end do
-    end do
-  end function difference_product
 
   !> The elements' quadratic velocity forces h(x0, .) as a bilinear form on the columns of
   !> X1: gh(:, (b - 1) m + a) = h[X1_a, X1_b], by polarisation.
