@@ -351,21 +351,21 @@ contains
     class(expansion_t), intent(in) :: this
     real(wp), intent(in) :: z(:)
     real(wp) :: x(size(this%x0))
-    real(wp) :: dz(this%m), c
+    real(wp) :: dz(this%m), w3(size(this%x3, 2))
     integer :: a, b, l
     dz = z - this%z0
-    x = this%x0 + matmul(this%x1, dz)
+    ! X3[dz, dz, dz] / 6 over l <= a <= b: each distinct triple with its multiplicity
     do b = 1, this%m
       do a = 1, b
-        c = merge(1.0_wp, 0.5_wp, a /= b) * dz(a) * dz(b)
-        x = x + c * this%x2(:, a, b)
-        ! X3[dz, dz, dz] / 6 over l <= a <= b: each distinct triple with its multiplicity
         do l = 1, a
-          x = x + (dz(l) * dz(a) * dz(b) * triple_weight(l, a, b)) * &
-            this%x3(:, this%tri(l, a, b))
+          w3(this%tri(l, a, b)) = dz(l) * dz(a) * dz(b) * triple_weight(l, a, b)
         end do
       end do
     end do
+    x = this%x0
+    call add_product(size(x), this%m, this%x1, dz, x)
+    call add_product(size(x), this%m**2, this%x2, 0.5_wp * outer(dz, dz), x)
+    call add_product(size(x), size(w3), this%x3, w3, x)
   end function exp_coordinates
 
   !> Permutations of the triple (l, a, b), l <= a <= b, over 6 (X3's term of the series).
