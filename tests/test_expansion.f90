@@ -8,7 +8,7 @@ program test_expansion
   use core_kinds, only: wp
   use core_error, only: error_t
   use analysis_run, only: run_t
-  use reduction_expansion, only: expansion_t, expansion_set_t, AHEAD_FRACTION
+  use reduction_expansion, only: expansion_t, expansion_set_t, AHEAD_FRACTION, kept_slots
   use testing, only: suite_t
   implicit none
   type(suite_t) :: suite
@@ -30,6 +30,9 @@ program test_expansion
   call check_energies(2, 3)
   call check_centre_time()
   call check_second_many()
+  ! 1 GiB of series: all 64 at 389 coordinates (305 kB each), 13 at 10^5 (78 MB), 4 at least.
+  call suite%check(kept_slots(389, 6) == 64 .and. kept_slots(10**5, 6) == 13 .and. &
+    kept_slots(10**8, 6) == 4, 'kept expansions within the memory budget')
   ! With lumped masses the mass matrix is constant: its second-order terms are all there, and
   ! the kinetic energy converges at order 3; the weights are nodal loads, whose work follows
   ! the coordinates' series (order 4).

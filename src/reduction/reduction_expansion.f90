@@ -16,9 +16,10 @@
 !> An expansion serves while the quadratic term is small: with d1 and d2 bounds of the nodal
 !> translations of X1 dz and X2[dz, dz] / 2, while (d2 / d1)^2 <= tol, which for a rotation by
 !> an angle a is a^2 / 4, the relative size of the first term the inertia forces drop. Up to
-!> MAX_KEPT expansions are kept: a state that leaves one is looked up among the others (a
-!> structure vibrating about a rest position goes back and forth between two) before a new
-!> one is made in place of the one used longest ago.
+!> MAX_KEPT expansions are kept (fewer where their series would take more than KEPT_BYTES):
+!> a state that leaves one is looked up among the others (a structure vibrating about a rest
+!> position goes back and forth between two) before a new one is made in place of the one
+!> used longest ago.
 !>
 !> Where the prescribed coordinates move, a new expansion is centred ahead of the state, on
 !> their known path (set_centre_time): the state then crosses its whole range instead of
@@ -32,9 +33,13 @@ module reduction_expansion
   use reduction_basis, only: basis_t
   implicit none
   private
-  public :: expansion_t, expansion_set_t, expansion_unsupported, AHEAD_FRACTION
+  public :: expansion_t, expansion_set_t, expansion_unsupported, AHEAD_FRACTION, kept_slots
 
-  integer, parameter :: MAX_KEPT = 64
+  integer, parameter :: MAX_KEPT = 64, MIN_KEPT = 4
+  !> Memory the kept expansions' series X1, X2, X3 may take together (n (m + m^2 + m (m + 1)
+  !> (m + 2) / 6) numbers each): 64 at 128 elements per link and k = 4 take 39 MB; a model of
+  !> 10^5 coordinates keeps 13.
+  integer(kind=8), parameter :: KEPT_BYTES = 2_8**30
   !> A new expansion is centred where the prescribed coordinates alone would use this fraction
   !> of the tolerance at the current state: the rest is left to the modal coordinates, whose
   !> path is not known in advance (two-link, tol 1e-3: 0.25, 0.5 and 0.8 gave 53, 48 and 44
@@ -78,7 +83,7 @@ module reduction_expansion
   !> The expansions kept during a run, the one in use and the counts for the output.
   type :: expansion_set_t
     real(wp) :: tol = 1.0e-3_wp
-    type(expansion_t), allocatable :: item(:)        !< MAX_KEPT slots once one is made
+    type(expansion_t), allocatable :: item(:)        !< kept_slots(...) once one is made
     integer :: current = 0
     integer :: last_use(MAX_KEPT) = 0, clock = 0
     integer :: n_expansions = 0
@@ -138,7 +143,7 @@ contains
     if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta, &
       this%tol)
     if (found) return
-    do i = 1, MAX_KEPT
+    do i = 1, size(this%item)
       if (i == this%current) cycle
       if (this%item(i)%needs_update(p, eta, this%tol)) cycle
       this%current = i
@@ -214,8 +219,9 @@ contains
     real(wp), intent(in) :: t, eta(:)
     type(error_t), intent(out) :: err
     integer :: slot
-    if (.not. allocated(this%item)) allocate(this%item(MAX_KEPT))
-    slot = minloc(merge(this%last_use, -1, this%item%valid), 1)
+    if (.not. allocated(this%item)) allocate(this%item(kept_slots(dyn%model%n_x, &
+      dyn%model%n_rh + size(eta))))
+    slot = minloc(merge(this%last_use(1:size(this%item)), -1, this%item%valid), 1)
     call this%item(slot)%build(dyn, basis, t, eta, err)
     if (.not. err%ok()) return
     this%current = slot
@@ -223,6 +229,14 @@ contains
     this%last_use(slot) = this%clock
     this%n_expansions = this%n_expansions + 1
   end subroutine set_expand
+
+  !> How many expansions of n coordinates and m = n_rh + k terms to keep.
+  pure integer function kept_slots(n, m) result(slots)
+    integer, intent(in) :: n, m
+    integer(kind=8) :: per_expansion
+    per_expansion = 8_8 * n * (m + m**2 + m * (m + 1) * (m + 2) / 6)
+    slots = int(max(int(MIN_KEPT, 8), min(int(MAX_KEPT, 8), KEPT_BYTES / per_expansion)))
+  end function kept_slots
 
   !> Drop every expansion (a new basis).
   subroutine set_forget(this)
