@@ -60,6 +60,25 @@ module dynamics_augmented
     procedure, private :: element_jacobian => aug_element_jacobian
   end type augmented_t
 
+  interface
+    !> M w for nodal vectors w (n_x, k): the lumped masses and the element blocks
+    !> (dynamics_augmented_mass).
+    module function mass_times(this, model, w) result(mw)
+      class(element_mass_t), intent(in) :: this
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: w(:, :)
+      real(wp) :: mw(size(w, 1), size(w, 2))
+    end function mass_times
+    !> (M - M_base) w over the element blocks of two sets of element masses of one model.
+    module function mass_difference_times(this, base, model, w) result(dw)
+      class(element_mass_t), intent(in) :: this
+      type(element_mass_t), intent(in) :: base
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: w(:, :)
+      real(wp) :: dw(size(w, 1), size(w, 2))
+    end function mass_difference_times
+  end interface
+
 contains
 
   subroutine mass_init(this, model)
@@ -96,72 +115,6 @@ contains
       dofs(first(iel):first(iel + 1) - 1) = model%elements(iel)%e%dofs
     end do
   end subroutine flat_dofs
-
-  !> M w for nodal vectors w (n_x, k): the lumped masses and the element blocks, in place
-  !> on the flat blocks (no block copies), every column of an element's rows at once.
-  function mass_times(this, model, w) result(mw)
-    class(element_mass_t), intent(in) :: this
-    type(model_t), intent(in) :: model
-    real(wp), intent(in) :: w(:, :)
-    real(wp) :: mw(size(w, 1), size(w, 2))
-    ! Rows of w gathered per element as the contiguous rows of w_t: every column at once.
-    real(wp) :: w_t(size(w, 2), size(w, 1)), mw_t(size(w, 2), size(w, 1))
-    integer :: iel, nd, c, first, d0
-    w_t = transpose(w)
-    do c = 1, size(w, 1)
-      mw_t(:, c) = model%lumped(c) * w_t(:, c)
-    end do
-    do iel = 1, model%n_elements
-      first = this%offset(iel)
-      if (first == 0) cycle
-      d0 = this%dof_first(iel) - 1
-      nd = this%dof_first(iel + 1) - 1 - d0
-      call add_block(nd, size(w, 2), size(w, 1), this%val(first:first + nd * nd - 1), &
-        this%dofs(d0 + 1:d0 + nd), w_t, mw_t)
-    end do
-    mw = transpose(mw_t)
-  end function mass_times
-
-  !> (M - M_base) w for the element blocks of this and base, two sets of element masses of the
-  !> same model (the lumped masses cancel): a difference quotient of the mass along a motion.
-  function mass_difference_times(this, base, model, w) result(dw)
-    class(element_mass_t), intent(in) :: this
-    type(element_mass_t), intent(in) :: base
-    type(model_t), intent(in) :: model
-    real(wp), intent(in) :: w(:, :)
-    real(wp) :: dw(size(w, 1), size(w, 2))
-    real(wp) :: w_t(size(w, 2), size(w, 1)), dw_t(size(w, 2), size(w, 1))
-    real(wp) :: dm(model%max_dofs**2)
-    integer :: iel, nd, first, d0, i
-    w_t = transpose(w)
-    dw_t = 0.0_wp
-    do iel = 1, model%n_elements
-      first = this%offset(iel)
-      if (first == 0) cycle
-      d0 = this%dof_first(iel) - 1
-      nd = this%dof_first(iel + 1) - 1 - d0
-      do i = 1, nd * nd
-        dm(i) = this%val(first + i - 1) - base%val(first + i - 1)
-      end do
-      call add_block(nd, size(w, 2), size(w, 1), dm, this%dofs(d0 + 1:d0 + nd), w_t, dw_t)
-    end do
-    dw = transpose(dw_t)
-  end function mass_difference_times
-
-  !> mw_t(:, dofs) += w_t(:, dofs) m^T for one element block m (nd x nd, symmetric), on
-  !> transposed (columns x coordinates) arrays.
-  pure subroutine add_block(nd, nc, n, m, dofs, w_t, mw_t)
-    integer, intent(in) :: nd, nc, n, dofs(nd)
-    ! Explicit shapes: contiguous columns, which the compiler vectorises.
-    real(wp), intent(in) :: m(nd, nd), w_t(nc, n)
-    real(wp), intent(inout) :: mw_t(nc, n)
-    integer :: k, l
-    do k = 1, nd
-      do l = 1, nd
-        mw_t(:, dofs(k)) = mw_t(:, dofs(k)) + m(k, l) * w_t(:, dofs(l))
-      end do
-    end do
-  end subroutine add_block
 
   !> Number the unknowns and record the pattern, in the order aug_factor visits the entries.
   !> de_offset: the layout of the element Jacobians as the sparse kinematics keeps them.
