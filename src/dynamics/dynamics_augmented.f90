@@ -269,10 +269,12 @@ contains
     integer, intent(out) :: info
     real(wp), intent(in), optional :: mass_scale
     real(wp), intent(out), optional :: traces(2)
-    real(wp), allocatable :: de(:, :), s(:, :), block(:, :)
-    logical, allocatable :: stressed(:)
-    real(wp) :: rcond, scale, tr(2)
-    integer :: iel, k, l, next, nd, nm
+    real(wp), allocatable :: de(:, :)
+    ! Fixed-size element buffers: no allocation per element in a step's factorisation.
+    real(wp) :: s(model%max_modes, model%max_modes), ds(model%max_modes, model%max_dofs)
+    real(wp) :: sds(model%max_modes, model%max_dofs), block(model%max_dofs, model%max_dofs)
+    real(wp) :: rcond, scale, tr(2), coef
+    integer :: iel, j, k, l, next, nd, nm, first, off
     scale = 1.0_wp
     if (present(mass_scale)) scale = mass_scale
     call start_assembly(this, model, this%newton, next, scale)
@@ -281,25 +283,47 @@ contains
       associate (el => model%elements(iel)%e)
         nd = size(el%dofs)
         nm = el%n_modes()
+        first = model%mode_first(iel)
         call this%element_jacobian(model, iel, de)
-        allocate(s(nm, nm), block(nd, nd))
-        call el%stiffness(s)
-        stressed = model%modes(model%mode_first(iel):model%mode_first(iel) + nm - 1)%class &
-          == MODE_DYNAMIC .or. (model%elastic_element(iel) .and. mode_has_stress( &
-          model%modes(model%mode_first(iel):model%mode_first(iel) + nm - 1)%class))
-        where (.not. spread(stressed, 2, nd)) de = 0.0_wp
-        block = (c_q + c_v * el%damping) * matmul(transpose(de), matmul(s, de))
+        call el%stiffness(s(1:nm, 1:nm))
+        ! The rows of the modes that carry a stress: dynamic ones, and elastic ones of an
+        ! elastic element.
+        do j = 1, nm
+          if (model%modes(first + j - 1)%class == MODE_DYNAMIC .or. &
+            (model%elastic_element(iel) .and. mode_has_stress(model%modes(first + j - 1)%class))) &
+            then
+            ds(j, 1:nd) = de(j, 1:nd)
+          else
+            ds(j, 1:nd) = 0.0_wp
+          end if
+        end do
+        coef = c_q + c_v * el%damping
+        ! (c_q + c_v d) ds^T S ds in loops: matmul's temporaries cost more than these few
+        ! products.
+        do l = 1, nd
+          do j = 1, nm
+            sds(j, l) = dot_product(s(j, 1:nm), ds(1:nm, l))
+          end do
+        end do
+        do l = 1, nd
+          do k = 1, nd
+            block(k, l) = coef * dot_product(ds(1:nm, k), sds(1:nm, l))
+          end do
+        end do
         do k = 1, nd
           if (this%free_index(el%dofs(k)) > 0) tr(1) = tr(1) + block(k, k)
         end do
-        if (mass%offset(iel) > 0) then
-          associate (me => reshape(mass%val(mass%offset(iel):mass%offset(iel) + nd * nd - 1), &
-                                   [nd, nd]))
-            block = block + scale * me
+        off = mass%offset(iel)
+        if (off > 0) then
+          do l = 1, nd
             do k = 1, nd
-              if (this%free_index(el%dofs(k)) > 0) tr(2) = tr(2) + me(k, k)
+              block(k, l) = block(k, l) + scale * mass%val(off + (l - 1) * nd + k - 1)
             end do
-          end associate
+          end do
+          do k = 1, nd
+            if (this%free_index(el%dofs(k)) > 0) tr(2) = tr(2) + mass%val(off + (k - 1) * &
+              (nd + 1))
+          end do
         end if
         do l = 1, nd
           do k = 1, nd
@@ -308,9 +332,7 @@ contains
             call add_entry(this%newton, next, block(k, l))
           end do
         end do
-        call this%element_jacobian(model, iel, de)
         call add_constraint_rows(this, model, iel, de, this%newton, next)
-        deallocate(s, block)
       end associate
     end do
     if (present(traces)) traces = tr
