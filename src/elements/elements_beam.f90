@@ -76,7 +76,7 @@ contains
   !> = a_k - beta, a_k = alpha0 + phi_k - phi_k0, wrapped into (-pi, pi] as atan2 did.
   pure function chord(this, x) result(c)
     class(beam_t), intent(in) :: this
-    real(wp), intent(in) :: x(:)
+    real(wp), intent(in) :: x(6)
     type(chord_t) :: c
     real(wp) :: beta
     integer :: k
@@ -132,7 +132,7 @@ contains
   pure subroutine modes(this, c, e, de)
     class(beam_t), intent(in) :: this
     type(chord_t), intent(in) :: c
-    real(wp), intent(out) :: e(:), de(:, :)
+    real(wp), intent(out) :: e(3), de(3, 6)
     real(wp) :: g(2), g1(2), g2(2), nb(2), s2, s3, a2, a3
     integer :: k, j
     do k = 1, 2
@@ -181,8 +181,8 @@ contains
   pure subroutine second_modes(this, c, v, d2e)
     class(beam_t), intent(in) :: this
     type(chord_t), intent(in) :: c
-    real(wp), intent(in) :: v(:)
-    real(wp), intent(out) :: d2e(:)
+    real(wp), intent(in) :: v(6)
+    real(wp), intent(out) :: d2e(3)
     real(wp) :: dv(2), a, b, d2beta, g, g1, g2, dth, de(3), e(3)
     integer :: k
     dv = v(4:5) - v(1:2)
