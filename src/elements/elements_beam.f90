@@ -208,10 +208,14 @@ contains
     real(wp) :: p, kb
     p = this%shear_p
     kb = this%ei / (this%l0**3 * (1 + p))
-    s = 0.0_wp
+    ! Entry by entry (s is 3 x 3): a whole-array zeroing costs a library call per evaluation.
     s(1, 1) = this%ea / this%l0
+    s(2, 1) = 0.0_wp
+    s(3, 1) = 0.0_wp
+    s(1, 2) = 0.0_wp
+    s(1, 3) = 0.0_wp
     s(2, 2) = kb * (4 + p)
-    s(3, 3) = kb * (4 + p)
+    s(3, 3) = s(2, 2)
     s(2, 3) = -kb * (2 - p)
     s(3, 2) = s(2, 3)
   end subroutine beam_stiffness
