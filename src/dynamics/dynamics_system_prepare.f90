@@ -32,21 +32,23 @@ contains
       ! One pass over the elements at (x, x_dot): the second-order terms of the kinematics
       ! and the element masses and convective forces (one chord per beam); then the solve
       ! for conv, and the inertia forces from the kept blocks.
+      ! The element coordinates from the flat list mass%dofs: indexing through the polymorphic
+      ! elements reloads their descriptors for every coordinate.
       do iel = 1, m%n_elements
-        nd = size(m%elements(iel)%e%dofs)
+        d0 = this%mass%dof_first(iel) - 1
+        nd = this%mass%dof_first(iel + 1) - 1 - d0
         mf = m%mode_first(iel)
         associate (el => m%elements(iel)%e, first => this%mass%offset(iel), &
-                   d2 => d2e(mf:mf + this%kin%el_nm(iel) - 1))
+                   d2 => d2e(mf:mf + this%kin%el_nm(iel) - 1), dofs => this%mass%dofs)
           ! Gathered: vector-subscripted actual arguments would be temporaries per element.
           do k = 1, nd
-            xe(k) = this%kin%x(el%dofs(k))
-            xde(k) = xd(el%dofs(k))
+            xe(k) = this%kin%x(dofs(d0 + k))
+            xde(k) = xd(dofs(d0 + k))
           end do
           if (first == 0) then
             call el%second(xe(1:nd), xde(1:nd), d2)
             cycle
           end if
-          d0 = this%mass%dof_first(iel) - 1
           call second_inertia_into(el, xe(1:nd), xde(1:nd), d2, nd, &
             this%mass%val(first:first + nd * nd - 1), h_all(d0 + 1:d0 + nd))
         end associate
@@ -57,24 +59,25 @@ contains
       g = this%load_factor * m%gravity
       do iel = 1, m%n_elements
         if (this%mass%offset(iel) == 0) cycle
-        nd = size(m%elements(iel)%e%dofs)
         d0 = this%mass%dof_first(iel) - 1
+        nd = this%mass%dof_first(iel + 1) - 1 - d0
         associate (el => m%elements(iel)%e, he => h_all(d0 + 1:d0 + nd), &
-                   fe => fe_work(1:nd), first => this%mass%offset(iel))
+                   fe => fe_work(1:nd), first => this%mass%offset(iel), dofs => this%mass%dofs)
           do k = 1, nd
-            ce(k) = conv(el%dofs(k))
+            ce(k) = conv(dofs(d0 + k))
           end do
-          fe = 0.0_wp
           if (weighted) then
             do k = 1, nd
-              xe(k) = this%kin%x(el%dofs(k))
+              xe(k) = this%kin%x(dofs(d0 + k))
             end do
             call el%weight(xe(1:nd), g(1:m%dim), fe, pot)
+            fe = fe - he
+          else
+            fe = -he
           end if
-          fe = fe - he
           call subtract_product(nd, this%mass%val(first:first + nd * nd - 1), ce, fe)
           do k = 1, nd
-            rhs(el%dofs(k)) = rhs(el%dofs(k)) + fe(k)
+            rhs(dofs(d0 + k)) = rhs(dofs(d0 + k)) + fe(k)
           end do
         end associate
       end do
@@ -104,18 +107,33 @@ contains
   end subroutine second_inertia_into
 
   !> f := f - m c for one element block, by hand (explicit shapes: constant strides; matmul
-  !> on such small blocks costs more than the product).
+  !> on such small blocks costs more than the product). The planar beam's 6 x 6 blocks, most
+  !> of a planar model's, go through a copy of the loop with constant trip counts, which the
+  !> compiler unrolls into whole-vector operations.
   pure subroutine subtract_product(nd, m, c, f)
     integer, intent(in) :: nd
     real(wp), intent(in) :: m(nd, nd), c(nd)
     real(wp), intent(inout) :: f(nd)
     integer :: k, l
+    if (nd == 6) then
+      call subtract_product_6(m, c, f)
+      return
+    end if
     do l = 1, nd
       do k = 1, nd
         f(k) = f(k) - m(k, l) * c(l)
       end do
     end do
   end subroutine subtract_product
+
+  pure subroutine subtract_product_6(m, c, f)
+    real(wp), intent(in) :: m(6, 6), c(6)
+    real(wp), intent(inout) :: f(6)
+    integer :: l
+    do l = 1, 6
+      f = f - m(:, l) * c(l)
+    end do
+  end subroutine subtract_product_6
 
   !> Nodal forces of the moments on spatial nodes: M . omega_global = M . 2 E(lambda) lambda'
   !> gives 2 E^T M on the Euler parameters, E = [-lv, l0 I + [lv x]]. A moment fixed in space

@@ -77,7 +77,7 @@ contains
   !> = a_k - beta, a_k = alpha0 + phi_k - phi_k0, wrapped into (-pi, pi] as atan2 did.
   pure function chord(this, x) result(c)
     class(beam_t), intent(in) :: this
-    real(wp), intent(in) :: x(:)
+    real(wp), intent(in) :: x(6)
     type(chord_t) :: c
     real(wp) :: beta
     integer :: k
@@ -133,7 +133,7 @@ contains
   pure subroutine modes(this, c, e, de)
     class(beam_t), intent(in) :: this
     type(chord_t), intent(in) :: c
-    real(wp), intent(out) :: e(:), de(:, :)
+    real(wp), intent(out) :: e(3), de(3, 6)
     real(wp) :: g(2), g1(2), g2(2), nb(2), s2, s3, a2, a3
     integer :: k, j
     do k = 1, 2
@@ -195,8 +195,8 @@ contains
   pure subroutine second_modes(this, c, v, d2e)
     class(beam_t), intent(in) :: this
     type(chord_t), intent(in) :: c
-    real(wp), intent(in) :: v(:)
-    real(wp), intent(out) :: d2e(:)
+    real(wp), intent(in) :: v(6)
+    real(wp), intent(out) :: d2e(3)
     real(wp) :: dv(2), a, b, d2beta, g, g1, g2, dth, de(3), e(3)
     integer :: k
     dv = v(4:5) - v(1:2)
@@ -222,10 +222,14 @@ contains
     real(wp) :: p, kb
     p = this%shear_p
     kb = this%ei / (this%l0**3 * (1 + p))
-    s = 0.0_wp
+    ! Entry by entry (s is 3 x 3): a whole-array zeroing costs a library call per evaluation.
     s(1, 1) = this%ea / this%l0
+    s(2, 1) = 0.0_wp
+    s(3, 1) = 0.0_wp
+    s(1, 2) = 0.0_wp
+    s(1, 3) = 0.0_wp
     s(2, 2) = kb * (4 + p)
-    s(3, 3) = kb * (4 + p)
+    s(3, 3) = s(2, 2)
     s(2, 3) = -kb * (2 - p)
     s(3, 2) = s(2, 3)
   end subroutine beam_stiffness
@@ -286,82 +290,99 @@ contains
   end subroutine beam_second_inertia
 
   !> The body of beam_inertia at the chord c, with d2e = second_modes along xd.
+  !> The bending rows of de are d2 = de(2, :) / l0 = a w2 and d3 = de(3, :) / l0 = b w3 with
+  !> w2 = (n, 1, -n, 0), w3 = (n, 0, -n, 1), n = nl / l: every vector of the closed form is
+  !> (gamma n, alpha, -gamma n, beta), so each 2x2 block of M is a few 2-vectors times n and the
+  !> 21 entries of the upper triangle are written out (no 6x6 outer products).
   pure subroutine inertia_at(this, c, xd, d2e, m, h)
     class(beam_t), intent(in) :: this
     type(chord_t), intent(in) :: c
-    real(wp), intent(in) :: xd(:), d2e(:)
-    real(wp), intent(out) :: m(:, :), h(:)
-    real(wp) :: e(3), de(3, 6), d2(6), d3(6), e2, e3, f2, f3, v2, v3
-    real(wp) :: u(2), pd(2), ll, sc, scc, k2, k4, s2, s4, rho_l
-    real(wp) :: gp(6), gq(6), gc(6), q2(6), q3(6), bm(6, 6), r2(2), r4(2), rp(2), rq(2), rc(2)
-    ! Assembled in a local of fixed shape (constant strides, loops the compiler unrolls), then
-    ! copied once into the assumed-shape m.
-    real(wp) :: mm(6, 6)
-    integer :: i, j
-    call modes(this, c, e, de)
+    ! Explicit shapes: constant strides, where assumed shapes cost an index computation per
+    ! access (the callers' arrays are contiguous, so they pass without a copy).
+    real(wp), intent(in) :: xd(6), d2e(3)
+    real(wp), intent(out) :: m(6, 6), h(6)
+    real(wp) :: g(2), g1(2), g2(2), a, b, e2, e3, f2, f3, v2, v3, dxn, n(2)
+    real(wp) :: u(2), pd(2), ll, sc, scc, k2, k4, s2, s4, rho_l, t3, t6, tt, sg2, sg3, hb
+    real(wp) :: gp2, gp4, gq2, gq4, gc2, gc4, ap(2), aq(2), r2(2), r4(2), rc(2)
+    real(wp) :: mm(6, 6), cpp, cqq, cpq(2, 2)
+    integer :: i, j, k
+    do k = 1, 2
+      call bend_measure(this, c%theta(k), g(k), g1(k), g2(k))
+    end do
     ! c(xi) = H2 e2 - H4 e3 etc. with the 1 / l0 of c folded in.
-    e2 = e(2) / this%l0; e3 = e(3) / this%l0
-    d2 = de(2, :) / this%l0; d3 = de(3, :) / this%l0
+    e2 = g(1); e3 = -g(2)
+    a = g1(1); b = -g1(2)
+    n = c%nl / c%l
     f2 = d2e(2) / this%l0; f3 = d2e(3) / this%l0
     u = perp(c%lv)
-    pd(1) = xd(2) - xd(5)
-    pd(2) = xd(4) - xd(1)
     ll = dot_product(c%lv, c%lv)
     ! sum w c, sum w c^2 and sum w c H2, sum w c H4 (k2, k4)
     sc = e2 * M_2 - e3 * M_4
     k2 = e2 * M_22 - e3 * M_24
     k4 = e2 * M_24 - e3 * M_44
     scc = e2 * k2 - e3 * k4
-    ! sum w (1 - xi) dc, sum w xi dc, sum w c dc, and the rows of |lv|^2 sum w dc dc^T
-    gp = M_P2 * d2 - M_P4 * d3
-    gq = M_X2 * d2 - M_X4 * d3
-    gc = k2 * d2 - k4 * d3
-    q2 = ll * (M_22 * d2 - M_24 * d3)
-    q3 = ll * (M_44 * d3 - M_24 * d2)
-    ! B = sum w A^T u dc^T; its rows 3 and 6 vanish (A has no rotation columns).
-    do j = 1, 6
-      bm(1:2, j) = u * gp(j) - c%lv * gc(j)
-      bm(3, j) = 0.0_wp
-      bm(4:5, j) = u * gq(j) + c%lv * gc(j)
-      bm(6, j) = 0.0_wp
+    ! The (alpha, beta) of sum w (1 - xi) dc, sum w xi dc and sum w c dc; gamma = alpha + beta.
+    gp2 = M_P2 * a; gp4 = -M_P4 * b
+    gq2 = M_X2 * a; gq4 = -M_X4 * b
+    gc2 = k2 * a; gc4 = -k4 * b
+    ! B = sum w A^T u dc^T: its translation rows are ap n^T, the rotation columns u and lv
+    ! times alpha, beta (rows 3 and 6 vanish: A has no rotation columns).
+    ap = (gp2 + gp4) * u - (gc2 + gc4) * c%lv
+    aq = (gq2 + gq4) * u + (gc2 + gc4) * c%lv
+    ! |lv|^2 sum w dc dc^T: tt n n^T on the translations, t3 n and t6 n beside them.
+    t3 = ll * a * (M_22 * a - M_24 * b)
+    t6 = ll * b * (M_44 * b - M_24 * a)
+    tt = t3 + t6
+    ! The configuration-independent moments and the sums of c on the translation blocks.
+    cpp = M_PP + scc
+    cqq = M_XX + scc
+    cpq(:, 1) = [M_PX - scc, sc]
+    cpq(:, 2) = [-sc, M_PX - scc]
+    ! Both triangles written here: the scaling below is then one whole-array product.
+    do j = 1, 2
+      do i = 1, 2
+        ! Symmetric bit for bit: sums and products of two operands commute exactly.
+        mm(i, j) = ap(i) * n(j) + ap(j) * n(i) + tt * (n(i) * n(j))
+        mm(i + 3, j + 3) = -aq(i) * n(j) - aq(j) * n(i) + tt * (n(i) * n(j))
+        mm(i, j + 3) = aq(j) * n(i) - ap(i) * n(j) - tt * n(i) * n(j) + cpq(i, j)
+        mm(j + 3, i) = mm(i, j + 3)
+      end do
+      mm(j, j) = mm(j, j) + cpp
+      mm(j + 3, j + 3) = mm(j + 3, j + 3) + cqq
+      mm(j, 3) = gp2 * u(j) - gc2 * c%lv(j) + t3 * n(j)
+      mm(j, 6) = gp4 * u(j) - gc4 * c%lv(j) + t6 * n(j)
+      mm(3, j + 3) = gq2 * u(j) + gc2 * c%lv(j) - t3 * n(j)
+      mm(j + 3, 6) = gq4 * u(j) + gc4 * c%lv(j) - t6 * n(j)
+      mm(3, j) = mm(j, 3)
+      mm(6, j) = mm(j, 6)
+      mm(j + 3, 3) = mm(3, j + 3)
+      mm(6, j + 3) = mm(j + 3, 6)
     end do
+    mm(3, 3) = ll * M_22 * a**2
+    mm(3, 6) = -ll * M_24 * a * b
+    mm(6, 3) = mm(3, 6)
+    mm(6, 6) = ll * M_44 * b**2
     rho_l = this%rho_a * this%l0
-    do j = 1, 6
-      do i = 1, j
-        mm(i, j) = bm(i, j) + bm(j, i) + d2(i) * q2(j) + d3(i) * q3(j)
-      end do
-    end do
-    mm(1, 1) = mm(1, 1) + (M_PP + scc)
-    mm(2, 2) = mm(2, 2) + (M_PP + scc)
-    mm(4, 4) = mm(4, 4) + (M_XX + scc)
-    mm(5, 5) = mm(5, 5) + (M_XX + scc)
-    mm(1, 4) = mm(1, 4) + (M_PX - scc)
-    mm(2, 5) = mm(2, 5) + (M_PX - scc)
-    mm(1, 5) = mm(1, 5) - sc
-    mm(2, 4) = mm(2, 4) + sc
-    do j = 1, 6
-      do i = 1, j
-        mm(i, j) = rho_l * mm(i, j)
-        mm(j, i) = mm(i, j)
-      end do
-    end do
-    m = mm
+    m = rho_l * mm
     ! d2r(xi) = d2c u + 2 (dc . xd) perp(dlv) = H2 r2 - H4 r4, pd = perp(dlv)
-    v2 = dot_product(d2, xd)
-    v3 = dot_product(d3, xd)
+    pd(1) = xd(2) - xd(5)
+    pd(2) = xd(4) - xd(1)
+    dxn = n(1) * (xd(1) - xd(4)) + n(2) * (xd(2) - xd(5))
+    v2 = a * (dxn + xd(3))
+    v3 = b * (dxn + xd(6))
     r2 = f2 * u + 2 * v2 * pd
     r4 = f3 * u + 2 * v3 * pd
     ! h = sum w (A^T d2r + dc (u . d2r)): sums of (1 - xi) d2r, xi d2r, c d2r, then the dc part
-    rp = M_P2 * r2 - M_P4 * r4
-    rq = M_X2 * r2 - M_X4 * r4
     rc = k2 * r2 - k4 * r4
     s2 = dot_product(u, r2)
     s4 = dot_product(u, r4)
-    h(1:2) = rp + perp(rc)
-    h(3) = 0.0_wp
-    h(4:5) = rq - perp(rc)
-    h(6) = 0.0_wp
-    h = rho_l * (h + (M_22 * s2 - M_24 * s4) * d2 - (M_24 * s2 - M_44 * s4) * d3)
+    sg2 = a * (M_22 * s2 - M_24 * s4)
+    sg3 = b * (M_44 * s4 - M_24 * s2)
+    hb = sg2 + sg3
+    h(1:2) = rho_l * (M_P2 * r2 - M_P4 * r4 + perp(rc) + hb * n)
+    h(3) = rho_l * sg2
+    h(4:5) = rho_l * (M_X2 * r2 - M_X4 * r4 - perp(rc) - hb * n)
+    h(6) = rho_l * sg3
   end subroutine inertia_at
 
   pure function perp(a) result(p)

@@ -45,6 +45,10 @@ module model_kinematics
     integer, allocatable :: mode_row(:), mode_q(:)
     real(wp), allocatable :: mode_period(:)
     integer, allocatable :: jac_src(:), jac_row(:), jac_col(:), jac_slot(:), in_src(:)
+    !> The residual from the mode values e_val(0:n_modes) of the element pass (e_val(0) = 0):
+    !> row i is e_val(row_mode(i)) (0 if no mode has row i), less q on the rows q_rows.
+    real(wp), allocatable :: e_val(:)
+    integer, allocatable :: row_mode(:), q_rows(:)
     !> Sparse: the entries split into each slot's first one in element order (jac_set_*:
     !> assigned) and the others (jac_add_*: added, in element order), so that the assembly
     !> needs no zeroing pass over the values and sums in the same order as before.

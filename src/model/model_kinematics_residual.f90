@@ -10,7 +10,15 @@ contains
     type(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     integer, intent(in) :: ent_col(:), ent_slot(:), ent_in(:)
-    integer :: iel, j, k, p, n_jac, n_in, row
+    integer :: iel, j, k, p, n_jac, n_in, row, m
+    if (allocated(this%e_val)) deallocate(this%e_val, this%row_mode, this%q_rows)
+    allocate(this%e_val(0:size(model%modes)), this%row_mode(model%n_c))
+    this%e_val = 0.0_wp
+    this%row_mode = 0
+    do m = 1, size(model%modes)
+      if (this%mode_row(m) > 0) this%row_mode(this%mode_row(m)) = m
+    end do
+    this%q_rows = pack(this%mode_row, this%mode_row > 0 .and. this%mode_q > 0)
     n_jac = count(ent_col > 0)
     if (allocated(this%jac_src)) deallocate(this%jac_src, this%jac_row, this%jac_col, &
       this%jac_slot, this%in_src)
@@ -77,16 +85,16 @@ contains
     real(wp), intent(in) :: q(:)
     real(wp), intent(out) :: r(:)
     logical, intent(in), optional :: jacobian
-    real(wp) :: e(model%max_modes), de(model%max_modes, model%max_dofs), xe(model%max_dofs)
-    integer :: iel, j, k, m, row, nm, nd, first
+    real(wp) :: de(model%max_modes, model%max_dofs), xe(model%max_dofs)
+    integer :: iel, k, m, row, nm, nd, first, mf
     logical :: with_jac
     with_jac = .false.
     if (present(jacobian)) with_jac = jacobian
-    r = 0.0_wp
     do iel = 1, model%n_elements
       nm = this%el_nm(iel)
       nd = this%el_nd(iel)
-      associate (el => model%elements(iel)%e)
+      mf = model%mode_first(iel)
+      associate (el => model%elements(iel)%e, e => this%e_val(mf:mf + nm - 1))
         ! Gathered into a contiguous buffer: a vector subscript as the actual argument makes
         ! the compiler allocate a temporary per element.
         do k = 1, nd
@@ -94,24 +102,24 @@ contains
         end do
         if (with_jac) then
           first = this%de_offset(iel)
-          call evaluate_into(el, xe(1:nd), e(1:nm), nm, nd, &
+          call evaluate_into(el, xe(1:nd), e, nm, nd, &
             this%de_val(first:first + nm * nd - 1))
         else
-          call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
+          call el%evaluate(xe(1:nd), e, de(1:nm, 1:nd))
         end if
       end associate
-      do j = 1, nm
-        m = model%mode_first(iel) + j - 1
-        row = this%mode_row(m)
-        if (row == 0) cycle
-        r(row) = e(j)
-        if (this%mode_q(m) > 0) then
-          r(row) = e(j) - q(this%mode_q(m))
-          associate (period => this%mode_period(m))
-            if (period > 0) r(row) = modulo(r(row) + period / 2, period) - period / 2
-          end associate
-        end if
-      end do
+    end do
+    ! Flat loops over the rows instead of per element mode: most rows are a mode value.
+    do k = 1, size(r)
+      r(k) = this%e_val(this%row_mode(k))
+    end do
+    do k = 1, size(this%q_rows)
+      row = this%q_rows(k)
+      m = this%row_mode(row)
+      r(row) = this%e_val(m) - q(this%mode_q(m))
+      associate (period => this%mode_period(m))
+        if (period > 0) r(row) = modulo(r(row) + period / 2, period) - period / 2
+      end associate
     end do
     if (.not. with_jac) return
     ! The entries in the element order of kin_init: the sums into repeated slots are the same.
