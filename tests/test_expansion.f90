@@ -130,30 +130,35 @@ contains
       'centred at the state where the joints rest')
   end subroutine check_centre_time
 
-  !> Every element's second_many (the beams' from one chord) equals second column by column,
-  !> to round-off (the same arithmetic, perhaps contracted differently).
+  !> Every element's second_many and convective_many (the beams' from one chord) equal second
+  !> and inertia's h column by column, to round-off (the same arithmetic, perhaps contracted
+  !> differently).
   subroutine check_second_many()
-    real(wp) :: v(6, 3), d2e(3, 3), one(3), worst, scale
+    real(wp) :: v(6, 3), d2e(3, 3), one(3), h(6, 3), h1(6), m(6, 6), worst(2), scale(2)
     integer :: iel, c, j, nd, nm
     worst = 0.0_wp
     scale = 0.0_wp
     do iel = 1, run%red%dyn%model%n_elements
-      associate (el => run%red%dyn%model%elements(iel)%e)
+      associate (el => run%red%dyn%model%elements(iel)%e, x => run%red%dyn%kin%x)
         nd = size(el%dofs)
         nm = el%n_modes()
         do c = 1, 3
           v(1:nd, c) = [(sin(1.3_wp * c + 0.7_wp * j), j = 1, nd)]
         end do
-        call el%second_many(run%red%dyn%kin%x(el%dofs), v(1:nd, :), d2e(1:nm, :))
+        call el%second_many(x(el%dofs), v(1:nd, :), d2e(1:nm, :))
+        call el%convective_many(x(el%dofs), v(1:nd, :), h(1:nd, :))
         do c = 1, 3
-          call el%second(run%red%dyn%kin%x(el%dofs), v(1:nd, c), one(1:nm))
-          worst = max(worst, maxval(abs(one(1:nm) - d2e(1:nm, c))))
-          scale = max(scale, maxval(abs(one(1:nm))))
+          call el%second(x(el%dofs), v(1:nd, c), one(1:nm))
+          worst(1) = max(worst(1), maxval(abs(one(1:nm) - d2e(1:nm, c))))
+          scale(1) = max(scale(1), maxval(abs(one(1:nm))))
+          call el%inertia(x(el%dofs), v(1:nd, c), m(1:nd, 1:nd), h1(1:nd))
+          worst(2) = max(worst(2), maxval(abs(h1(1:nd) - h(1:nd, c))))
+          scale(2) = max(scale(2), maxval(abs(h1(1:nd))))
         end do
       end associate
     end do
-    call suite%check(scale > 0 .and. worst <= 1.0e-13_wp * scale, &
-      'second_many equals second per column (round-off: 1e-13 relative)')
+    call suite%check(all(scale > 0) .and. all(worst <= 1.0e-13_wp * scale), &
+      'second_many and convective_many equal second and inertia per column (1e-13 relative)')
   end subroutine check_second_many
 
   !> At z0 the series is exact: only the projections' round-off differs.

@@ -37,6 +37,7 @@ module elements_base
     procedure :: inertia => element_zero_inertia
     procedure :: second_inertia => element_second_inertia
     procedure :: second_many => element_second_many
+    procedure :: convective_many => element_convective_many
     procedure :: weight => element_zero_weight
     procedure :: lumped_mass => element_no_lumped_mass
     procedure :: has_limit => element_no_limit
@@ -133,6 +134,19 @@ contains
       call this%second(x, v(:, c), d2e(:, c))
     end do
   end subroutine element_second_many
+
+  !> The convective force h of inertia along each column of xd at the same x (a reduced
+  !> model's expansion); an element that can skip its mass matrix for it overrides this.
+  pure subroutine element_convective_many(this, x, xd, h)
+    class(element_t), intent(in) :: this
+    real(wp), intent(in) :: x(:), xd(:, :)
+    real(wp), intent(out) :: h(:, :)
+    real(wp) :: m(size(x), size(x))
+    integer :: c
+    do c = 1, size(xd, 2)
+      call this%inertia(x, xd(:, c), m, h(:, c))
+    end do
+  end subroutine element_convective_many
 
   !> Nodal forces f (n_coords) of gravity g (2 components in the plane, 3 in space) on a
   !> consistent mass, and its potential energy.

@@ -57,6 +57,7 @@ module elements_beam
     procedure :: evaluate => beam_evaluate
     procedure :: second => beam_second
     procedure :: second_many => beam_second_many
+    procedure :: convective_many => beam_convective_many
     procedure :: stiffness => beam_stiffness
     procedure, nopass :: type_name => beam_type_name
     procedure :: has_inertia => beam_has_inertia
@@ -191,6 +192,25 @@ contains
     end do
   end subroutine beam_second_many
 
+  !> The convective forces h along each column of xd from one chord (no mass matrices).
+  pure subroutine beam_convective_many(this, x, xd, h)
+    class(beam_t), intent(in) :: this
+    real(wp), intent(in) :: x(:), xd(:, :)
+    real(wp), intent(out) :: h(:, :)
+    type(chord_t) :: c
+    real(wp) :: d2e(3)
+    integer :: col
+    if (.not. this%has_inertia()) then
+      h = 0.0_wp
+      return
+    end if
+    c = chord(this, x)
+    do col = 1, size(xd, 2)
+      call second_modes(this, c, xd(:, col), d2e)
+      call convective_at(this, c, xd(:, col), d2e, h(:, col))
+    end do
+  end subroutine beam_convective_many
+
   !> d2e along v from the chord, shared by second and inertia.
   pure subroutine second_modes(this, c, v, d2e)
     class(beam_t), intent(in) :: this
@@ -301,9 +321,9 @@ contains
     ! access (the callers' arrays are contiguous, so they pass without a copy).
     real(wp), intent(in) :: xd(6), d2e(3)
     real(wp), intent(out) :: m(6, 6), h(6)
-    real(wp) :: g(2), g1(2), g2(2), a, b, e2, e3, f2, f3, v2, v3, dxn, n(2)
-    real(wp) :: u(2), pd(2), ll, sc, scc, k2, k4, s2, s4, rho_l, t3, t6, tt, sg2, sg3, hb
-    real(wp) :: gp2, gp4, gq2, gq4, gc2, gc4, ap(2), aq(2), r2(2), r4(2), rc(2)
+    real(wp) :: g(2), g1(2), g2(2), a, b, e2, e3, n(2)
+    real(wp) :: u(2), ll, sc, scc, k2, k4, rho_l, t3, t6, tt
+    real(wp) :: gp2, gp4, gq2, gq4, gc2, gc4, ap(2), aq(2)
     real(wp) :: mm(6, 6), cpp, cqq, cpq(2, 2)
     integer :: i, j, k
     do k = 1, 2
@@ -313,7 +333,6 @@ contains
     e2 = g(1); e3 = -g(2)
     a = g1(1); b = -g1(2)
     n = c%nl / c%l
-    f2 = d2e(2) / this%l0; f3 = d2e(3) / this%l0
     u = perp(c%lv)
     ll = dot_product(c%lv, c%lv)
     ! sum w c, sum w c^2 and sum w c H2, sum w c H4 (k2, k4)
@@ -364,6 +383,30 @@ contains
     mm(6, 6) = ll * M_44 * b**2
     rho_l = this%rho_a * this%l0
     m = rho_l * mm
+    call convective_at(this, c, xd, d2e, h)
+  end subroutine inertia_at
+
+  !> The convective force h of inertia_at alone (a reduced model's expansion asks it along
+  !> many velocities at one chord).
+  pure subroutine convective_at(this, c, xd, d2e, h)
+    class(beam_t), intent(in) :: this
+    type(chord_t), intent(in) :: c
+    real(wp), intent(in) :: xd(6), d2e(3)
+    real(wp), intent(out) :: h(6)
+    real(wp) :: g(2), g1(2), g2(2), a, b, e2, e3, f2, f3, v2, v3, dxn, n(2), u(2), pd(2)
+    real(wp) :: k2, k4, s2, s4, rho_l, sg2, sg3, hb, r2(2), r4(2), rc(2)
+    integer :: k
+    do k = 1, 2
+      call bend_measure(this, c%theta(k), g(k), g1(k), g2(k))
+    end do
+    e2 = g(1); e3 = -g(2)
+    a = g1(1); b = -g1(2)
+    n = c%nl / c%l
+    f2 = d2e(2) / this%l0; f3 = d2e(3) / this%l0
+    u = perp(c%lv)
+    k2 = e2 * M_22 - e3 * M_24
+    k4 = e2 * M_24 - e3 * M_44
+    rho_l = this%rho_a * this%l0
     ! d2r(xi) = d2c u + 2 (dc . xd) perp(dlv) = H2 r2 - H4 r4, pd = perp(dlv)
     pd(1) = xd(2) - xd(5)
     pd(2) = xd(4) - xd(1)
@@ -383,7 +426,7 @@ contains
     h(3) = rho_l * sg2
     h(4:5) = rho_l * (M_X2 * r2 - M_X4 * r4 - perp(rc) - hb * n)
     h(6) = rho_l * sg3
-  end subroutine inertia_at
+  end subroutine convective_at
 
   pure function perp(a) result(p)
     real(wp), intent(in) :: a(2)

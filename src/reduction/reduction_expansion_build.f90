@@ -156,41 +156,63 @@ contains
   end function sorted
 
   !> The elements' quadratic velocity forces h(x0, .) as a bilinear form on the columns of
-  !> X1: gh(:, (b - 1) m + a) = h[X1_a, X1_b], by polarisation.
+  !> X1: gh(:, (b - 1) m + a) = h[X1_a, X1_b], by polarisation of h along X1_a and X1_a + X1_b,
+  !> every direction in one element pass (el%convective_many).
   subroutine velocity_forces(dyn, x0, x1, gh)
     type(dynamics_t), intent(in) :: dyn
     real(wp), intent(in) :: x0(:), x1(:, :)
     real(wp), intent(out) :: gh(:, :)
-    integer :: a, b, m
+    real(wp) :: xd(size(x1, 1), size(x1, 2) * (size(x1, 2) + 1) / 2)
+    real(wp) :: h(size(x1, 1), size(xd, 2))
+    integer :: a, b, m, c
     m = size(x1, 2)
-    do a = 1, m
-      gh(:, (a - 1) * m + a) = nodal_h(dyn, x0, x1(:, a))
-    end do
+    xd(:, 1:m) = x1
+    c = m
     do a = 1, m
       do b = a + 1, m
-        gh(:, (b - 1) * m + a) = 0.5_wp * (nodal_h(dyn, x0, x1(:, a) + x1(:, b)) - &
-          gh(:, (a - 1) * m + a) - gh(:, (b - 1) * m + b))
+        c = c + 1
+        xd(:, c) = x1(:, a) + x1(:, b)
+      end do
+    end do
+    h = nodal_h(dyn, x0, xd)
+    c = m
+    do a = 1, m
+      gh(:, (a - 1) * m + a) = h(:, a)
+      do b = a + 1, m
+        c = c + 1
+        gh(:, (b - 1) * m + a) = 0.5_wp * (h(:, c) - h(:, a) - h(:, b))
         gh(:, (a - 1) * m + b) = gh(:, (b - 1) * m + a)
       end do
     end do
   end subroutine velocity_forces
 
-  !> Assembled quadratic velocity forces h(x, xd) of the elements with inertia.
+  !> Assembled quadratic velocity forces h(x, xd(:, c)) of the elements with inertia, for every
+  !> column (gathered and summed along the transposes, as the series' element passes).
   function nodal_h(dyn, x, xd) result(h)
     type(dynamics_t), intent(in) :: dyn
-    real(wp), intent(in) :: x(:), xd(:)
-    real(wp) :: h(size(x))
-    real(wp) :: me(dyn%model%max_dofs, dyn%model%max_dofs), he(dyn%model%max_dofs)
-    integer :: iel, nd
-    h = 0.0_wp
+    real(wp), intent(in) :: x(:), xd(:, :)
+    real(wp) :: h(size(x), size(xd, 2))
+    real(wp) :: xd_t(size(xd, 2), size(x)), h_t(size(xd, 2), size(x))
+    real(wp) :: xe(dyn%model%max_dofs), xde(dyn%model%max_dofs, size(xd, 2))
+    real(wp) :: he(dyn%model%max_dofs, size(xd, 2))
+    integer :: iel, nd, k
+    xd_t = transpose(xd)
+    h_t = 0.0_wp
     do iel = 1, dyn%model%n_elements
       if (dyn%mass%offset(iel) == 0) cycle
       associate (el => dyn%model%elements(iel)%e)
         nd = size(el%dofs)
-        call el%inertia(x(el%dofs), xd(el%dofs), me(1:nd, 1:nd), he(1:nd))
-        h(el%dofs) = h(el%dofs) + he(1:nd)
+        do k = 1, nd
+          xe(k) = x(el%dofs(k))
+          xde(k, :) = xd_t(:, el%dofs(k))
+        end do
+        call el%convective_many(xe(1:nd), xde(1:nd, :), he(1:nd, :))
+        do k = 1, nd
+          h_t(:, el%dofs(k)) = h_t(:, el%dofs(k)) + he(k, :)
+        end do
       end associate
     end do
+    h = transpose(h_t)
   end function nodal_h
 
   !> The element mass blocks at x, in dyn%mass's layout.
