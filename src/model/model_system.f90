@@ -325,12 +325,12 @@ contains
     call move_alloc(grown, this%node_coord)
   end subroutine model_add_node_label
 
+  !> Whether a coordinate of this kind is (part of) a rotation.
   pure logical function is_rotation(kind)
     integer, intent(in) :: kind
     is_rotation = kind == COORD_PHI .or. kind == COORD_EULER
   end function is_rotation
 
-  !> Length of the translation of node i in a nodal displacement dx (x, y and, in space, z).
   !> Largest translation over the nodes of a nodal displacement dx.
   pure real(wp) function model_largest_translation(this, dx) result(d)
     class(model_t), intent(in) :: this
@@ -365,6 +365,7 @@ contains
     end do
   end function model_error_norm
 
+  !> Length of the translation of node i in a nodal displacement dx (x, y and, in space, z).
   pure real(wp) function model_translation(this, i, dx) result(d)
     class(model_t), intent(in) :: this
     integer, intent(in) :: i

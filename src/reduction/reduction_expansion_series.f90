@@ -23,7 +23,7 @@ contains
     real(wp) :: rhs(dyn%model%n_c, n_pairs(size(x1, 2), 1))
     integer :: a, b, m, k
     m = size(x1, 2)
-    rhs = polarised_rhs(dyn, dyn%kin%x, x1, 1)
+    call polarised_rhs(dyn, dyn%kin%x, x1, 1, rhs)
     call dyn%kin%jacobian_solve(rhs)
     x2 = 0.0_wp
     do a = 1, m
@@ -40,7 +40,7 @@ contains
   !> tri(l, a, b); the kinematics stays at z0.
   module procedure third_terms
     real(wp) :: x1h(size(this%x1, 1), this%m), xh(size(this%x0)), h
-    real(wp), allocatable :: rhs(:, :), w(:, :)
+    real(wp), allocatable :: rhs(:, :), w(:, :), p(:, :), jw(:, :)
     integer :: l, a, b, c, k, np, m
     m = this%m
     if (allocated(this%x3)) deallocate(this%x3, this%tri)
@@ -55,15 +55,16 @@ contains
         x1h(:, a) = this%x1(:, a) + h * this%x2(:, a, l)
       end do
       np = n_pairs(m, l)
-      allocate(w(size(this%x0), np))
+      allocate(w(size(this%x0), np), p(dyn%model%n_c, np), jw(dyn%model%n_c, np))
       do a = l, m
         do b = a, m
           w(:, pair_column(a, b, l, m)) = this%x2(:, a, b)
           this%tri(l, a, b) = c + pair_column(a, b, l, m)
         end do
       end do
-      rhs(:, c + 1:c + np) = (polarised_rhs(dyn, xh, x1h, l) - jacobian_rows(dyn, xh, w)) / h
-      deallocate(w)
+      call polarised_rhs(dyn, xh, x1h, l, p, w, jw)
+      rhs(:, c + 1:c + np) = (p - jw) / h
+      deallocate(w, p, jw)
       c = c + np
     end do
     call dyn%kin%jacobian_solve(rhs)
@@ -86,13 +87,16 @@ contains
     c = (a - first) * (2 * (m - first + 1) - (a - first) + 1) / 2 + (b - a) + 1
   end function pair_column
 
-  !> -D''(x)[d_a, d_b] on the kinematic rows for first <= a <= b (column pair_column), by
-  !> polarisation of the second-order terms along d_a and d_a + d_b: one element pass.
-  function polarised_rhs(dyn, x, d, first) result(p)
+  !> p(:, pair_column(a, b)) = -D''(x)[d_a, d_b] on the kinematic rows for first <= a <= b, by
+  !> polarisation of the second-order terms along d_a and d_a + d_b; with w also jw = D'(x) w.
+  !> One element pass.
+  subroutine polarised_rhs(dyn, x, d, first, p, w, jw)
     type(dynamics_t), intent(in) :: dyn
     real(wp), intent(in) :: x(:), d(:, :)
     integer, intent(in) :: first
-    real(wp) :: p(dyn%model%n_c, n_pairs(size(d, 2), first))
+    real(wp), intent(out) :: p(:, :)
+    real(wp), intent(in), optional :: w(:, :)
+    real(wp), intent(out), optional :: jw(:, :)
     real(wp) :: xd(size(d, 1), size(p, 2)), raw(size(p, 1), size(p, 2))
     integer :: a, b, m
     m = size(d, 2)
@@ -105,7 +109,7 @@ contains
         end if
       end do
     end do
-    raw = second_rhs(dyn, x, xd)
+    call element_terms(dyn, x, xd, raw, w, jw)
     p = raw
     do a = first, m
       do b = a + 1, m
@@ -113,22 +117,33 @@ contains
           raw(:, pair_column(a, a, first, m)) - raw(:, pair_column(b, b, first, m)))
       end do
     end do
-  end function polarised_rhs
+  end subroutine polarised_rhs
 
-  !> -D''(x)[xd_c, xd_c] on the kinematic rows (kinematics_t%second's right-hand side with the
-  !> velocities known) for every column: one element pass with el%second_many. The columns
-  !> are gathered and summed along the transposes, which keep each coordinate's and each
-  !> row's values contiguous.
-  function second_rhs(dyn, x, xd) result(rhs)
+  !> rhs = -D''(x)[xd_c, xd_c] on the kinematic rows (kinematics_t%second's right-hand side with
+  !> the velocities known) for every column, and with w also jw = D'(x) w: one element pass
+  !> (el%second_many, el%evaluate). The columns are gathered and summed along the transposes,
+  !> which keep each coordinate's and each row's values contiguous.
+  subroutine element_terms(dyn, x, xd, rhs, w, jw)
     type(dynamics_t), intent(in) :: dyn
     real(wp), intent(in) :: x(:), xd(:, :)
-    real(wp) :: rhs(dyn%model%n_c, size(xd, 2))
+    real(wp), intent(out) :: rhs(:, :)
+    real(wp), intent(in), optional :: w(:, :)
+    real(wp), intent(out), optional :: jw(:, :)
     real(wp) :: d2e(dyn%model%max_modes, size(xd, 2)), xe(dyn%model%max_dofs)
-    real(wp) :: xde(dyn%model%max_dofs, size(xd, 2))
+    real(wp) :: xde(dyn%model%max_dofs, size(xd, 2)), e(dyn%model%max_modes)
+    real(wp) :: de(dyn%model%max_modes, dyn%model%max_dofs)
     real(wp) :: xd_t(size(xd, 2), size(xd, 1)), rhs_t(size(xd, 2), dyn%model%n_c)
-    integer :: iel, k, nd, nm, row
+    real(wp), allocatable :: w_t(:, :), jw_t(:, :)
+    integer :: iel, j, k, nd, nm, row
+    logical :: with_w
+    with_w = present(w) .and. present(jw)
     xd_t = transpose(xd)
     rhs_t = 0.0_wp
+    if (with_w) then
+      w_t = transpose(w)
+      allocate(jw_t(size(w, 2), dyn%model%n_c))
+      jw_t = 0.0_wp
+    end if
     do iel = 1, dyn%model%n_elements
       associate (el => dyn%model%elements(iel)%e)
         nd = size(el%dofs)
@@ -138,44 +153,19 @@ contains
           xde(k, :) = xd_t(:, el%dofs(k))
         end do
         call el%second_many(xe(1:nd), xde(1:nd, :), d2e(1:nm, :))
-      end associate
-      do k = 1, nm
-        row = dyn%kin%mode_row(dyn%model%mode_first(iel) + k - 1)
-        if (row > 0) rhs_t(:, row) = rhs_t(:, row) - d2e(k, :)
-      end do
-    end do
-    rhs = transpose(rhs_t)
-  end function second_rhs
-
-  !> D'(x) w on the kinematic rows for every column of w: one element pass (transposed as in
-  !> second_rhs).
-  function jacobian_rows(dyn, x, w) result(r)
-    type(dynamics_t), intent(in) :: dyn
-    real(wp), intent(in) :: x(:), w(:, :)
-    real(wp) :: r(dyn%model%n_c, size(w, 2))
-    real(wp) :: e(dyn%model%max_modes), de(dyn%model%max_modes, dyn%model%max_dofs)
-    real(wp) :: xe(dyn%model%max_dofs)
-    real(wp) :: w_t(size(w, 2), size(w, 1)), r_t(size(w, 2), dyn%model%n_c)
-    integer :: iel, j, k, nd, nm, row
-    w_t = transpose(w)
-    r_t = 0.0_wp
-    do iel = 1, dyn%model%n_elements
-      associate (el => dyn%model%elements(iel)%e)
-        nd = size(el%dofs)
-        nm = el%n_modes()
-        do k = 1, nd
-          xe(k) = x(el%dofs(k))
-        end do
-        call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
+        if (with_w) call el%evaluate(xe(1:nd), e(1:nm), de(1:nm, 1:nd))
         do j = 1, nm
           row = dyn%kin%mode_row(dyn%model%mode_first(iel) + j - 1)
           if (row == 0) cycle
+          rhs_t(:, row) = rhs_t(:, row) - d2e(j, :)
+          if (.not. with_w) cycle
           do k = 1, nd
-            r_t(:, row) = r_t(:, row) + de(j, k) * w_t(:, el%dofs(k))
+            jw_t(:, row) = jw_t(:, row) + de(j, k) * w_t(:, el%dofs(k))
           end do
         end do
       end associate
     end do
-    r = transpose(r_t)
-  end function jacobian_rows
+    rhs = transpose(rhs_t)
+    if (with_w) jw = transpose(jw_t)
+  end subroutine element_terms
 end submodule reduction_expansion_series
