@@ -6,8 +6,8 @@
 !>     J X2_ab = R_ab := -D''[X1_a, X1_b]   and   J X3_lab = d R_ab / d z_l - J' X2_ab,
 !> J = D' at x(z). The derivative along z_l is a one-sided difference of element quantities
 !> only, (R_ab - J X2_ab)(x_h) / h with x_h = x0 + h X1_l + h^2 X2_ll / 2 and the directions
-!> X1 + h X2_l (at x0 the bracket is X2's solve residual, round-off): two element passes per
-!> l and no kinematic solve at z0 + h e_l.
+!> X1 + h X2_l (at x0 the bracket is X2's solve residual, round-off): one element pass per l
+!> for both terms, and no kinematic solve at z0 + h e_l.
 submodule (reduction_expansion) reduction_expansion_series
   implicit none
 
