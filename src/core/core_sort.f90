@@ -1,9 +1,12 @@
-!> Sorting of the small integer lists the sparse set-ups order (entries of a column by row, a
-!> block's outside columns): stable insertion sort, since the lists are short.
+!> Sorting of short index lists by integer keys (the sparse set-ups: entries of a column by row,
+!> a block's outside columns) or real values (eigenvalues, Ritz values): stable insertion
+!> sorts, since the lists are short. Two routines, not one: converting the sparse set-ups'
+!> integer keys to reals would copy the whole key array per column.
 module core_sort
+  use core_kinds, only: wp
   implicit none
   private
-  public :: sort_by_key
+  public :: sort_by_key, sort_by_value
 
 contains
 
@@ -23,4 +26,22 @@ contains
       idx(j + 1) = key
     end do
   end subroutine sort_by_key
+
+  !> Reorder idx so that values(idx) ascends; equal values keep their order (for descending
+  !> order pass -values).
+  pure subroutine sort_by_value(idx, values)
+    integer, intent(inout) :: idx(:)
+    real(wp), intent(in) :: values(:)
+    integer :: i, j, key
+    do i = 2, size(idx)
+      key = idx(i)
+      j = i - 1
+      do while (j >= 1)
+        if (values(idx(j)) <= values(key)) exit
+        idx(j + 1) = idx(j)
+        j = j - 1
+      end do
+      idx(j + 1) = key
+    end do
+  end subroutine sort_by_value
 end module core_sort

@@ -24,9 +24,10 @@ module dynamics_buckling
   use core_error, only: error_t, ERR_INPUT, ERR_MODEL, ERR_NUMERIC
   use core_linalg, only: sym_gen_eig, chol_factor
   use core_strings, only: int_str
+  use core_sort, only: sort_by_value
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: tangent_stiffness
-  use dynamics_buckling_krylov, only: krylov_buckling, krylov_buckling_applies, sort_descending
+  use dynamics_buckling_krylov, only: krylov_buckling, krylov_buckling_applies
   implicit none
   private
   public :: buckling_result_t, buckling_analysis, THETA_CUTOFF
@@ -172,7 +173,7 @@ contains
       if (theta(i) > THETA_CUTOFF * big) keep = [keep, i]
     end do
     res%n_negative = count(theta < -THETA_CUTOFF * big)
-    call sort_descending(theta, keep)
+    call sort_by_value(keep, -theta)
     nk = min(n_modes, size(keep))
     keep = keep(1:nk)
     res%load_factor = 1 / theta(keep)

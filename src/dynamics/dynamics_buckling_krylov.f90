@@ -17,12 +17,13 @@ module dynamics_buckling_krylov
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC
   use core_strings, only: int_str
+  use core_sort, only: sort_by_value
   use core_arpack, only: dnaupd, dneupd
   use dynamics_system, only: dynamics_t
   use dynamics_static_krylov, only: krylov_statics_t
   implicit none
   private
-  public :: krylov_buckling, krylov_buckling_applies, sort_descending
+  public :: krylov_buckling, krylov_buckling_applies
 
 contains
 
@@ -152,7 +153,7 @@ contains
     integer, allocatable :: order(:)
     integer :: i
     order = pack([(i, i = 1, size(theta))], theta > cutoff * maxval(abs(theta)))
-    call sort_descending(theta, order)
+    call sort_by_value(order, -theta)
     theta = theta(order)
     shapes = shapes(:, order)
   end subroutine keep_positive
@@ -172,20 +173,4 @@ contains
     allocate(node_shapes(dyn%model%n_x, size(shapes, 2)))
     call dyn%kin%apply_df_many(dyn%model, dq, node_shapes)
   end subroutine nodal_shapes
-  !> Order the indices `idx` by decreasing value(idx) (insertion sort: a few entries).
-  subroutine sort_descending(value, idx)
-    real(wp), intent(in) :: value(:)
-    integer, intent(inout) :: idx(:)
-    integer :: i, j, tmp
-    do i = 2, size(idx)
-      tmp = idx(i)
-      j = i - 1
-      do while (j >= 1)
-        if (value(idx(j)) >= value(tmp)) exit
-        idx(j + 1) = idx(j)
-        j = j - 1
-      end do
-      idx(j + 1) = tmp
-    end do
-  end subroutine sort_descending
 end module dynamics_buckling_krylov

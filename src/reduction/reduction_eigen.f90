@@ -12,6 +12,7 @@ module reduction_eigen
   use core_linalg, only: sym_gen_eig, chol_factor
   use core_strings, only: int_str
   use core_arpack, only: dsaupd, dseupd
+  use core_sort, only: sort_by_value
   implicit none
   private
   public :: lowest_modes, eigen_solver_choice
@@ -330,7 +331,8 @@ contains
     end select
 
     ! Ascending order (dseupd's order depends on which and the mode).
-    order = sort_index(d(1:nev))
+    order = [(i, i = 1, nev)]
+    call sort_by_value(order, d(1:nev))
     allocate(lambda(nev), v(n, nev))
     do j = 1, nev
       v(:, j) = z(:, order(j))
@@ -360,22 +362,4 @@ contains
     s = 0.0_wp
     if (n > 0) s = maxval(col)
   end function sym_norm1
-
-  !> Permutation that sorts x ascending (insertion sort: nev is small).
-  pure function sort_index(x) result(idx)
-    real(wp), intent(in) :: x(:)
-    integer :: idx(size(x))
-    integer :: i, j, t
-    idx = [(i, i = 1, size(x))]
-    do i = 2, size(x)
-      t = idx(i)
-      j = i - 1
-      do while (j >= 1)
-        if (x(idx(j)) <= x(t)) exit
-        idx(j + 1) = idx(j)
-        j = j - 1
-      end do
-      idx(j + 1) = t
-    end do
-  end function sort_index
 end module reduction_eigen
