@@ -43,9 +43,9 @@ module core_sparse_block
     !> The places in fac of -C_k that the pattern leaves zero, zeroed before each assembly.
     integer, allocatable :: mt_zero(:)
     !> Per value slot of the matrix its row and its place in fac: the assembly is one pass in
-    !> slot order, every value stored as -(a_ij / r_i).
+    !> slot order, every value stored as -(a_ij / r_i) (times rs).
     integer, allocatable :: slot_row(:), slot_dest(:)
-    real(wp), allocatable :: rs(:)           !< row scale factors (matrix rows)
+    real(wp), allocatable :: rs(:)           !< reciprocal row scale factors (matrix rows)
     !> The same by permuted row; a solve needs none of them: D_k^-1 is kept with the scaling
     !> of b_k folded in, as D_k^-1 R_k^-1 (and G_k = D_k^-1 C_k is free of it).
     real(wp), allocatable :: rs_perm(:)
@@ -90,14 +90,16 @@ contains
       r = abs(val(p))
       if (r > this%rs(this%slot_row(p))) this%rs(this%slot_row(p)) = r
     end do
+    ! Kept as reciprocals: one division per row instead of one per entry.
     do i = 1, this%n
       if (this%rs(i) == 0.0_wp) this%rs(i) = 1.0_wp
+      this%rs(i) = 1.0_wp / this%rs(i)
     end do
     do p = 1, size(this%mt_zero)
       this%fac(this%mt_zero(p)) = 0.0_wp
     end do
     do p = 1, size(val)
-      this%fac(this%slot_dest(p)) = -(val(p) / this%rs(this%slot_row(p)))
+      this%fac(this%slot_dest(p)) = -(val(p) * this%rs(this%slot_row(p)))
     end do
     do i = 1, this%n
       this%rs_perm(i) = this%rs(this%prow(i))

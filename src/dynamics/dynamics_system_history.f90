@@ -16,7 +16,7 @@ contains
     type(error_t) :: err
     ! An output needs the configuration only (the energy takes the velocities through DF):
     ! a kinematic solution, not a whole evaluation of the equations of motion.
-    call this%kin%solve(this%model, this%full_q(t, q), err)
+    call this%kin%solve(this%model, this%full_q(t, q), err, t)
     call this%report(err, status)
     if (status == 0) call this%store(k, t, q, v)
   end procedure dyn_record

@@ -23,7 +23,7 @@ contains
       call this%prescribed(t, q(1:nr), qd(1:nr), pdd)
       q(nr + 1:) = q_dy
       qd(nr + 1:) = v_dy
-      call this%kin%solve(m, q, err)
+      call this%kin%solve(m, q, err, t)
       if (.not. err%ok()) return
       call this%kin%apply_df(m, qd, xd)
       dq(1:nr) = pdd
@@ -54,6 +54,7 @@ contains
         end associate
       end do
       call this%kin%second_solve(m, d2e, conv, dq)
+      call this%kin%note_rates(t, qd, dq, xd, conv)
       rhs = this%load_factor * this%loads_at(t) - m%lumped * conv
       weighted = any(m%gravity /= 0)
       g = this%load_factor * m%gravity

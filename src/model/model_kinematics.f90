@@ -18,6 +18,14 @@ module model_kinematics
     real(wp), allocatable :: x(:), q(:)
   end type kin_state_t
 
+  !> The time derivatives of a solution along a trajectory at time t (note_rates): q's and x's
+  !> velocities and accelerations, x_dd = D2F qd qd + DF qdd for the qdd given.
+  type :: kin_rates_t
+    logical :: valid = .false.
+    real(wp) :: t = 0
+    real(wp), allocatable :: qd(:), qdd(:), xd(:), xdd(:)
+  end type kin_rates_t
+
   !> The Jacobian J_c is factorised dense (LAPACK) or sparse (KLU, `sparse`): its few entries per
   !> element make the sparse factors O(n), the dense ones O(n^3). Either way DF and D2F are
   !> applied through solves with the one factorisation (apply_df, apply_dft, second); the dense
@@ -66,6 +74,9 @@ module model_kinematics
     !> kinematics (a von Mises truss passing flat).
     logical :: keep_failed_guess = .false.
     integer :: n_solves = 0, n_iterations = 0
+    !> The rates of the last solution, when its caller noted them: the next solve at a later
+    !> time then predicts by their Taylor series (model_kinematics_rates).
+    type(kin_rates_t) :: rates
   contains
     procedure :: init => kin_init
     procedure :: solve => kin_solve
@@ -77,6 +88,7 @@ module model_kinematics
     procedure :: second_solve => kin_second_solve
     procedure :: residual => kin_residual
     procedure :: jacobian_solve => kin_jacobian_solve
+    procedure :: note_rates => kin_note_rates
     procedure :: restart_from => kin_restart_from
     procedure :: save_state => kin_save_state
     procedure :: restore_state => kin_restore_state
@@ -85,6 +97,20 @@ module model_kinematics
   end type kinematics_t
 
   interface
+    !> Note the time derivatives of the last solution, reached at time t along a trajectory:
+    !> velocities qd, xd = DF qd and accelerations qdd, xdd = D2F qd qd + DF qdd.
+    module subroutine kin_note_rates(this, t, qd, qdd, xd, xdd)
+      class(kinematics_t), intent(inout) :: this
+      real(wp), intent(in) :: t, qd(:), qdd(:), xd(:), xdd(:)
+    end subroutine kin_note_rates
+    !> x := the predicted solution at q (time t if known) from the last one, whose factors
+    !> are at hand; the noted rates are used up unless t is theirs.
+    module subroutine predict(this, model, q, t)
+      type(kinematics_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: q(:)
+      real(wp), intent(in), optional :: t
+    end subroutine predict
     !> dx = DF_x dq (n_x) at the last solution, by one solve.
     module subroutine kin_apply_df(this, model, dq, dx)
       class(kinematics_t), intent(inout) :: this
@@ -270,23 +296,24 @@ contains
   !> solved from the one before: a far jump, such as a modal analysis at a time when a shaft
   !> has turned 10 rad, defeats Newton from the reference but not in steps. The first
   !> failure's error is returned if no subdivision succeeds.
-  subroutine kin_solve(this, model, q, err)
+  subroutine kin_solve(this, model, q, err, t)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: q(:)
     type(error_t), intent(out) :: err
+    real(wp), intent(in), optional :: t
     real(wp), allocatable :: x_last(:), q_last(:)
     type(error_t) :: sub_err
     integer :: n, i, n_solves
     ! The usual path (every evaluation of a run) copies nothing.
     if (.not. this%continuation) then
-      call kin_newton(this, model, q, err)
+      call kin_newton(this, model, q, err, t)
       return
     end if
     allocate(x_last, source=this%x)
     allocate(q_last, source=this%q)
     n_solves = this%n_solves
-    call kin_newton(this, model, q, err)
+    call kin_newton(this, model, q, err, t)
     if (err%ok()) return
     n = 1
     do while (n < 64)
@@ -318,15 +345,17 @@ contains
     this%x = x
     this%has_factors = .false.
     this%has_df = .false.
+    this%rates%valid = .false.
   end subroutine kin_restart_from
 
-  subroutine kin_newton(this, model, q, err)
+  subroutine kin_newton(this, model, q, err, t)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: q(:)
     type(error_t), intent(out) :: err
-    real(wp) :: r(model%n_c), dx(model%n_c, 1), rmax, rprev, dxp(model%n_x)
-    real(wp) :: x_start(model%n_x), x_last(model%n_x), dq(model%n_q)
+    real(wp), intent(in), optional :: t
+    real(wp) :: r(model%n_c), dx(model%n_c, 1), rmax, rprev
+    real(wp) :: x_start(model%n_x), x_last(model%n_x)
     integer :: it, info, worst
     logical :: stale
     character(len=200) :: msg
@@ -339,9 +368,9 @@ contains
     stale = this%has_factors
     x_last = this%x
     if (this%has_factors) then
-      dq = q - this%q
-      call this%apply_df(model, dq, dxp)
-      this%x = this%x + dxp
+      call predict(this, model, q, t)
+    else
+      this%rates%valid = .false.
     end if
     do it = 1, model%n_q
       if (model%q_coord(it) > 0) this%x(model%q_coord(it)) = model%x0(model%q_coord(it)) + q(it)
@@ -447,6 +476,7 @@ contains
     this%q = state%q
     this%has_factors = .false.
     this%has_df = .false.
+    this%rates%valid = .false.
   end subroutine kin_restore_state
 
   !> The elastic and released modes that the undetermined motion changes. With the smallest
