@@ -42,12 +42,12 @@ module core_sparse_block
     real(wp), allocatable :: fac(:)
     !> The places in fac of -C_k that the pattern leaves zero, zeroed before each assembly.
     integer, allocatable :: mt_zero(:)
-    !> Per value slot of the matrix its row and its place in fac: the assembly is one pass in
-    !> slot order, every value stored as -(a_ij / r_i) (times rs).
-    integer, allocatable :: slot_row(:), slot_dest(:)
-    real(wp), allocatable :: rs(:)           !< reciprocal row scale factors (matrix rows)
-    !> The same by permuted row; a solve needs none of them: D_k^-1 is kept with the scaling
-    !> of b_k folded in, as D_k^-1 R_k^-1 (and G_k = D_k^-1 C_k is free of it).
+    !> The value slots by permuted row (row pi's from row_ptr(pi) to row_ptr(pi + 1) - 1) and
+    !> each one's place in fac: the assembly is one pass over the rows, a row's largest
+    !> magnitude found in registers and its values stored as -(a_ij / r_i) right after.
+    integer, allocatable :: row_ptr(:), row_slot(:), row_dest(:)
+    !> Reciprocal row scales by permuted row; a solve needs none of them: D_k^-1 is kept with
+    !> the scaling of b_k folded in, as D_k^-1 R_k^-1 (and G_k = D_k^-1 C_k is free of it).
     real(wp), allocatable :: rs_perm(:)
     logical :: factored = .false.
   contains
@@ -82,27 +82,22 @@ contains
     this%factored = .false.
     info = 1
     rcond = 0.0_wp
-    ! KLU's rule: each row divided by its largest magnitude (1 for a zero row).
-    do i = 1, this%n
-      this%rs(i) = 0.0_wp
-    end do
-    do p = 1, size(val)
-      r = abs(val(p))
-      if (r > this%rs(this%slot_row(p))) this%rs(this%slot_row(p)) = r
-    end do
-    ! Kept as reciprocals: one division per row instead of one per entry.
-    do i = 1, this%n
-      if (this%rs(i) == 0.0_wp) this%rs(i) = 1.0_wp
-      this%rs(i) = 1.0_wp / this%rs(i)
-    end do
     do p = 1, size(this%mt_zero)
       this%fac(this%mt_zero(p)) = 0.0_wp
     end do
-    do p = 1, size(val)
-      this%fac(this%slot_dest(p)) = -(val(p) * this%rs(this%slot_row(p)))
-    end do
+    ! KLU's rule: each row divided by its largest magnitude (1 for a zero row); kept as the
+    ! reciprocal, one division per row instead of one per entry.
     do i = 1, this%n
-      this%rs_perm(i) = this%rs(this%prow(i))
+      r = 0.0_wp
+      do p = this%row_ptr(i), this%row_ptr(i + 1) - 1
+        r = max(r, abs(val(this%row_slot(p))))
+      end do
+      if (r == 0.0_wp) r = 1.0_wp
+      r = 1.0_wp / r
+      this%rs_perm(i) = r
+      do p = this%row_ptr(i), this%row_ptr(i + 1) - 1
+        this%fac(this%row_dest(p)) = -(val(this%row_slot(p)) * r)
+      end do
     end do
     umin = huge(1.0_wp)
     umax = 0.0_wp

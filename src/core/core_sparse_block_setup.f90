@@ -111,15 +111,17 @@ contains
     end do
     ! One array for the factors: the diagonal blocks, then the [D_k^-1 R_k^-1, -G_k].
     this%mt_offset = this%mt_offset + n_dia
-    allocate(this%fac(n_dia + n_mt), this%rs(n), this%rs_perm(n), used(n_dia + n_mt))
-    allocate(this%slot_row(colptr(n + 1)), this%slot_dest(colptr(n + 1)))
+    allocate(this%fac(n_dia + n_mt), this%rs_perm(n), used(n_dia + n_mt))
     this%fac = 0.0_wp
     do pi = 1, n
       do e = row_ptr(pi), row_ptr(pi + 1) - 1
-        this%slot_row(row_slot(e)) = this%prow(pi)
-        this%slot_dest(row_slot(e)) = row_dest(e) + merge(n_dia, 0, e >= row_mid(pi))
+        row_dest(e) = row_dest(e) + merge(n_dia, 0, e >= row_mid(pi))
       end do
     end do
+    ! row_slot holds 1-based value slots (colptr + 1 on): it indexes the values directly.
+    this%row_ptr = row_ptr
+    this%row_slot = row_slot
+    this%row_dest = row_dest
     ! The places of -C_k no entry writes (the own columns are set in every factorisation).
     used = .false.
     used(1:n_dia) = .true.
@@ -130,7 +132,7 @@ contains
         used(this%mt_offset(k) + i * nc + 1:this%mt_offset(k) + i * nc + m) = .true.
       end do
     end do
-    used(this%slot_dest) = .true.
+    used(this%row_dest) = .true.
     this%mt_zero = pack([(i, i = 1, n_dia + n_mt)], .not. used)
     ok = .true.
   end procedure block_setup

@@ -67,9 +67,10 @@ module elements_beam
     procedure :: lumped_mass => beam_lumped_mass
   end type beam_t
 
-  !> Chord geometry and tangent rotations shared by all evaluations.
+  !> Chord geometry and tangent rotations shared by all evaluations; rl = 1 / l, since a
+  !> division costs several products' time and the kernels divide by l often.
   type :: chord_t
-    real(wp) :: lv(2), l, el(2), nl(2), theta(2)
+    real(wp) :: lv(2), l, rl, el(2), nl(2), theta(2)
   end type chord_t
 
 contains
@@ -85,7 +86,8 @@ contains
     c%lv = x(4:5) - x(1:2)
     ! Element lengths are far from overflow: no need for norm2's scaling.
     c%l = sqrt(c%lv(1)**2 + c%lv(2)**2)
-    c%el = c%lv / c%l
+    c%rl = 1.0_wp / c%l
+    c%el = c%lv * c%rl
     c%nl(1) = -c%el(2)
     c%nl(2) = c%el(1)
     beta = atan2(c%lv(2), c%lv(1))
@@ -135,13 +137,13 @@ contains
     class(beam_t), intent(in) :: this
     type(chord_t), intent(in) :: c
     real(wp), intent(out) :: e(3), de(3, 6)
-    real(wp) :: g(2), g1(2), g2(2), nb(2), s2, s3, a2, a3
+    real(wp) :: g(2), g1(2), g2(2), nb(2), s2, s3, a2, a3, r30
     integer :: k, j
     do k = 1, 2
       call bend_measure(this, c%theta(k), g(k), g1(k), g2(k))
     end do
     ! theta_k = alpha0 + phi_k - phi_k0 - beta(chord); d beta / d x_q = nl / l
-    nb = c%nl / c%l
+    nb = c%nl * c%rl
     s2 = this%l0 * g1(1)
     s3 = -this%l0 * g1(2)
     e(2) = this%l0 * g(1)
@@ -159,8 +161,9 @@ contains
     de(2, 3) = s2; de(2, 6) = 0.0_wp
     de(3, 3) = 0.0_wp; de(3, 6) = s3
     e(1) = c%l - this%l0 + arc_term(this, e(2), e(3))
-    a2 = (4 * e(2) + e(3)) / (30 * this%l0)
-    a3 = (e(2) + 4 * e(3)) / (30 * this%l0)
+    r30 = 1.0_wp / (30 * this%l0)
+    a2 = (4 * e(2) + e(3)) * r30
+    a3 = (e(2) + 4 * e(3)) * r30
     do j = 1, 6
       de(1, j) = de(1, j) + a2 * de(2, j) + a3 * de(3, j)
     end do
@@ -222,16 +225,16 @@ contains
     dv = v(4:5) - v(1:2)
     a = dot_product(c%el, dv)
     b = dot_product(c%nl, dv)
-    d2beta = -2 * a * b / c%l**2
+    d2beta = -2 * a * b * c%rl**2
     do k = 1, 2
       call bend_measure(this, c%theta(k), g, g1, g2)
-      dth = v(3 * k) - b / c%l
+      dth = v(3 * k) - b * c%rl
       e(k + 1) = this%l0 * g
       de(k + 1) = this%l0 * g1 * dth
       d2e(k + 1) = this%l0 * (g1 * (-d2beta) + g2 * dth**2)
     end do
     e(3) = -e(3); de(3) = -de(3); d2e(3) = -d2e(3)
-    d2e(1) = (dot_product(dv, dv) - a**2) / c%l &
+    d2e(1) = (dot_product(dv, dv) - a**2) * c%rl &
       + ((4 * e(2) + e(3)) * d2e(2) + (e(2) + 4 * e(3)) * d2e(3) &
          + 4 * de(2)**2 + 2 * de(2) * de(3) + 4 * de(3)**2) / (30 * this%l0)
   end subroutine second_modes
@@ -332,7 +335,7 @@ contains
     ! c(xi) = H2 e2 - H4 e3 etc. with the 1 / l0 of c folded in.
     e2 = g(1); e3 = -g(2)
     a = g1(1); b = -g1(2)
-    n = c%nl / c%l
+    n = c%nl * c%rl
     u = perp(c%lv)
     ll = dot_product(c%lv, c%lv)
     ! sum w c, sum w c^2 and sum w c H2, sum w c H4 (k2, k4)
@@ -401,7 +404,7 @@ contains
     end do
     e2 = g(1); e3 = -g(2)
     a = g1(1); b = -g1(2)
-    n = c%nl / c%l
+    n = c%nl * c%rl
     f2 = d2e(2) / this%l0; f3 = d2e(3) / this%l0
     u = perp(c%lv)
     k2 = e2 * M_22 - e3 * M_24
