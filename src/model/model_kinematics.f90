@@ -89,6 +89,7 @@ module model_kinematics
     procedure :: residual => kin_residual
     procedure :: jacobian_solve => kin_jacobian_solve
     procedure :: note_rates => kin_note_rates
+    procedure :: predict => kin_predict
     procedure :: restart_from => kin_restart_from
     procedure :: save_state => kin_save_state
     procedure :: restore_state => kin_restore_state
@@ -105,12 +106,12 @@ module model_kinematics
     end subroutine kin_note_rates
     !> x := the predicted solution at q (time t if known) from the last one, whose factors
     !> are at hand; the noted rates are used up unless t is theirs.
-    module subroutine predict(this, model, q, t)
-      type(kinematics_t), intent(inout) :: this
+    module subroutine kin_predict(this, model, q, t)
+      class(kinematics_t), intent(inout) :: this
       type(model_t), intent(in) :: model
       real(wp), intent(in) :: q(:)
       real(wp), intent(in), optional :: t
-    end subroutine predict
+    end subroutine kin_predict
     !> dx = DF_x dq (n_x) at the last solution, by one solve.
     module subroutine kin_apply_df(this, model, dq, dx)
       class(kinematics_t), intent(inout) :: this
@@ -368,7 +369,7 @@ contains
     stale = this%has_factors
     x_last = this%x
     if (this%has_factors) then
-      call predict(this, model, q, t)
+      call this%predict(model, q, t)
     else
       this%rates%valid = .false.
     end if

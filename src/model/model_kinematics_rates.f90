@@ -20,7 +20,7 @@ contains
     this%rates%valid = .true.
   end procedure kin_note_rates
 
-  module procedure predict
+  module procedure kin_predict
     real(wp) :: dq(model%n_q), dx(model%n_x), s
     dq = q - this%q
     if (present(t) .and. this%rates%valid) then
@@ -36,5 +36,5 @@ contains
       this%x = this%x + dx
       this%rates%valid = .false.
     end if
-  end procedure predict
+  end procedure kin_predict
 end submodule model_kinematics_rates
