@@ -54,7 +54,8 @@ contains
     real(wp) :: fe(this%model%max_dofs), g(3)
     real(wp) :: e(this%model%max_modes), s(this%model%max_modes, this%model%max_modes)
     real(wp) :: de(this%model%max_modes, this%model%max_dofs)
-    integer :: iel, nm, nd
+    real(wp) :: xe(this%model%max_dofs), xde(this%model%max_dofs)
+    integer :: iel, nm, nd, k
     associate (m => this%model)
       call this%prescribed(t, q(1:m%n_rh), qd_rh, pdd)
       q(m%n_rh + 1:) = q_dy
@@ -65,8 +66,14 @@ contains
         associate (el => m%elements(iel)%e)
           nm = el%n_modes()
           nd = size(el%dofs)
+          ! Gathered: vector-subscripted arguments are a heap temporary each, per element
+          ! and output.
+          do k = 1, nd
+            xe(k) = x(el%dofs(k))
+            xde(k) = xd(el%dofs(k))
+          end do
           if (m%elastic_element(iel)) then
-            call el%evaluate(x(el%dofs), e(:nm), de(:nm, :nd))
+            call el%evaluate(xe(:nd), e(:nm), de(:nm, :nd))
             where (.not. mode_has_stress(m%modes(m%mode_first(iel):m%mode_first(iel) + nm - 1) &
                    %class)) e(:nm) = 0.0_wp
           else
@@ -75,9 +82,9 @@ contains
           call el%stiffness(s(:nm, :nm))
           en(2) = en(2) + 0.5_wp * dot_product(e(:nm), matmul(s(:nm, :nm), e(:nm)))
           if (.not. el%has_inertia()) cycle
-          call el%inertia(x(el%dofs), xd(el%dofs), me(:nd, :nd), he(:nd))
-          call el%weight(x(el%dofs), g(1:m%dim), fe(:nd), pot)
-          en(1) = en(1) + 0.5_wp * dot_product(xd(el%dofs), matmul(me(:nd, :nd), xd(el%dofs)))
+          call el%inertia(xe(:nd), xde(:nd), me(:nd, :nd), he(:nd))
+          call el%weight(xe(:nd), g(1:m%dim), fe(:nd), pot)
+          en(1) = en(1) + 0.5_wp * dot_product(xde(:nd), matmul(me(:nd, :nd), xde(:nd)))
           en(2) = en(2) + pot
         end associate
       end do
