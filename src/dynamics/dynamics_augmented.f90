@@ -42,8 +42,10 @@ module dynamics_augmented
     !> The dynamic modes' q_dy indices, and J_d entry by entry (dynamic mode, coordinate k of
     !> its element, in that order) for the products with it without class tests or element
     !> lookups: position in de_val, coordinate and its unknown (0: none).
-    !> Dynamic mode i's entries run from jd_first(i) to jd_first(i + 1) - 1.
-    integer, allocatable :: dyn_q(:), jd_first(:)
+    !> Dynamic mode i's entries run from jd_first(i) to jd_first(i + 1) - 1, those of free
+    !> coordinates first (to jd_last_free(i), in element order, as are the others): the
+    !> products with J_d over the unknowns stop there.
+    integer, allocatable :: dyn_q(:), jd_first(:), jd_last_free(:)
     integer, allocatable :: jd_de(:), jd_coord(:), jd_free(:)
     !> Element coordinates, flat as in element_mass_t.
     integer, allocatable :: dof_first(:), dofs(:)
@@ -185,9 +187,9 @@ contains
   subroutine list_dynamic_modes(this, model)
     type(augmented_t), intent(inout) :: this
     type(model_t), intent(in) :: model
-    integer :: iel, j, k, m, n, p, nm, nd
+    integer :: iel, j, k, m, n, p, nm, nd, pass, coord
     n = count(model%modes%class == MODE_DYNAMIC)
-    allocate(this%dyn_q(n), this%jd_first(n + 1))
+    allocate(this%dyn_q(n), this%jd_first(n + 1), this%jd_last_free(n))
     p = 0
     do iel = 1, model%n_elements
       nm = model%elements(iel)%e%n_modes()
@@ -207,11 +209,16 @@ contains
         n = n + 1
         this%dyn_q(n) = model%modes(m)%q - model%n_rh
         this%jd_first(n) = p + 1
-        do k = 1, nd
-          p = p + 1
-          this%jd_de(p) = this%de_offset(iel) + j - 1 + (k - 1) * nm
-          this%jd_coord(p) = this%dofs(this%dof_first(iel) + k - 1)
-          this%jd_free(p) = this%free_index(this%jd_coord(p))
+        do pass = 1, 2
+          do k = 1, nd
+            coord = this%dofs(this%dof_first(iel) + k - 1)
+            if ((this%free_index(coord) > 0) .neqv. (pass == 1)) cycle
+            p = p + 1
+            this%jd_de(p) = this%de_offset(iel) + j - 1 + (k - 1) * nm
+            this%jd_coord(p) = coord
+            this%jd_free(p) = this%free_index(coord)
+          end do
+          if (pass == 1) this%jd_last_free(n) = p
         end do
       end do
     end do
@@ -396,17 +403,11 @@ contains
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: g(:, :)
     real(wp) :: f(model%n_x, size(g, 2))
-    real(wp) :: gi
-    integer :: c, i, p, iq
+    integer :: c, iq
     do c = 1, size(g, 2)
-      f(:, c) = 0.0_wp
-      ! Mode by mode: its generalised force is read once for its entries.
-      do i = 1, size(this%dyn_q)
-        gi = g(this%dyn_q(i), c)
-        do p = this%jd_first(i), this%jd_first(i + 1) - 1
-          f(this%jd_coord(p), c) = f(this%jd_coord(p), c) + this%de_val(this%jd_de(p)) * gi
-        end do
-      end do
+      call jd_transpose_times(size(this%dyn_q), size(this%jd_de), size(this%de_val), model%n_x, &
+        size(g, 1), this%jd_first, this%dyn_q, this%jd_de, this%jd_coord, this%de_val, g(:, c), &
+        f(:, c))
       do iq = model%n_rh + 1, model%n_q
         if (model%q_coord(iq) > 0) f(model%q_coord(iq), c) = f(model%q_coord(iq), c) + &
           g(iq - model%n_rh, c)
@@ -423,8 +424,7 @@ contains
     real(wp), intent(out) :: a(:, :)
     logical, intent(in), optional :: newton
     real(wp) :: b(this%n_free + this%n_con, size(f, 2))
-    real(wp) :: s
-    integer :: i, c, p, iq, j
+    integer :: i, c, iq
     do c = 1, size(f, 2)
       b(this%n_free + 1:, c) = 0.0_wp
       do i = 1, model%n_x
@@ -442,16 +442,9 @@ contains
     end if
     ! y = DF_dy a is b on the free coordinates (zero elsewhere): read through free_index.
     do c = 1, size(f, 2)
-      a(:, c) = 0.0_wp
-      ! Mode by mode (a mode's entries are consecutive): its acceleration summed in a scalar.
-      do j = 1, size(this%dyn_q)
-        s = 0.0_wp
-        do p = this%jd_first(j), this%jd_first(j + 1) - 1
-          if (this%jd_free(p) == 0) cycle
-          s = s + this%de_val(this%jd_de(p)) * b(this%jd_free(p), c)
-        end do
-        a(this%dyn_q(j), c) = s
-      end do
+      call jd_times(size(this%dyn_q), size(this%jd_de), size(this%de_val), size(b, 1), &
+        size(a, 1), this%jd_first, this%jd_last_free, this%dyn_q, this%jd_de, this%jd_free, &
+        this%de_val, b(:, c), a(:, c))
       do iq = model%n_rh + 1, model%n_q
         if (model%q_coord(iq) > 0) then
           i = this%free_index(model%q_coord(iq))
@@ -461,6 +454,49 @@ contains
       end do
     end do
   end subroutine aug_accelerations
+
+  ! The products with J_d on explicit-shape arrays: the compiler keeps the bases in registers
+  ! where it reloaded each component's descriptor per entry.
+
+  !> f = J_d^T g over the dynamic modes (zero on the other coordinates), mode by mode: its
+  !> generalised force is read once for its entries.
+  pure subroutine jd_transpose_times(n_dyn, n_jd, n_de, n_x, n_g, first, dyn_q, jd_de, &
+      jd_coord, de, g, f)
+    integer, intent(in) :: n_dyn, n_jd, n_de, n_x, n_g
+    integer, intent(in) :: first(n_dyn + 1), dyn_q(n_dyn), jd_de(n_jd), jd_coord(n_jd)
+    real(wp), intent(in) :: de(n_de), g(n_g)
+    real(wp), intent(out) :: f(n_x)
+    real(wp) :: gi
+    integer :: i, p
+    f = 0.0_wp
+    do i = 1, n_dyn
+      gi = g(dyn_q(i))
+      do p = first(i), first(i + 1) - 1
+        f(jd_coord(p)) = f(jd_coord(p)) + de(jd_de(p)) * gi
+      end do
+    end do
+  end subroutine jd_transpose_times
+
+  !> a = J_d y for y = b on the free coordinates (zero elsewhere), mode by mode (its entries
+  !> of free coordinates are consecutive): its acceleration summed in a scalar.
+  pure subroutine jd_times(n_dyn, n_jd, n_de, n_b, n_a, first, last_free, dyn_q, jd_de, &
+      jd_free, de, b, a)
+    integer, intent(in) :: n_dyn, n_jd, n_de, n_b, n_a
+    integer, intent(in) :: first(n_dyn + 1), last_free(n_dyn), dyn_q(n_dyn), jd_de(n_jd), &
+      jd_free(n_jd)
+    real(wp), intent(in) :: de(n_de), b(n_b)
+    real(wp), intent(out) :: a(n_a)
+    real(wp) :: s
+    integer :: j, p
+    a = 0.0_wp
+    do j = 1, n_dyn
+      s = 0.0_wp
+      do p = first(j), last_free(j)
+        s = s + de(jd_de(p)) * b(jd_free(p))
+      end do
+      a(dyn_q(j)) = s
+    end do
+  end subroutine jd_times
 
   !> dD/dx of element iel at the last factorisation.
   pure subroutine aug_element_jacobian(this, model, iel, de)
