@@ -159,6 +159,7 @@ contains
     real(wp), intent(in) :: de(n_de)
     real(wp), intent(inout) :: val(n_val)
     integer :: k
+    !GCC$ unroll 4
     do k = 1, n_set
       val(set_slot(k)) = 0.0_wp + de(set_src(k))
     end do
