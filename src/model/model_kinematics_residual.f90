@@ -97,9 +97,7 @@ contains
       associate (el => model%elements(iel)%e, e => this%e_val(mf:mf + nm - 1))
         ! Gathered into a contiguous buffer: a vector subscript as the actual argument makes
         ! the compiler allocate a temporary per element.
-        do k = 1, nd
-          xe(k) = this%x(el%dofs(k))
-        end do
+        xe(1:nd) = this%x(el%dofs)
         if (with_jac) then
           first = this%de_offset(iel)
           call evaluate_into(el, xe(1:nd), e, nm, nd, &
