@@ -68,13 +68,13 @@ contains
 
 
   !> el%evaluate with the Jacobian written straight into its flat storage de (nm x nd,
-  !> contiguous in de_val): no copy per element and coordinate.
-  subroutine evaluate_into(el, x, e, nm, nd, de)
+  !> contiguous in de_val): no copy per element and coordinate. Explicit shapes throughout:
+  !> the caller passes addresses, only the element call needs descriptors.
+  subroutine evaluate_into(el, nm, nd, x, e, de)
     class(element_t), intent(in) :: el
-    real(wp), intent(in) :: x(:)
-    real(wp), intent(out) :: e(:)
     integer, intent(in) :: nm, nd
-    real(wp), intent(out) :: de(nm, nd)
+    real(wp), intent(in) :: x(nd)
+    real(wp), intent(out) :: e(nm), de(nm, nd)
     call el%evaluate(x, e, de)
   end subroutine evaluate_into
 
@@ -100,8 +100,7 @@ contains
         xe(1:nd) = this%x(el%dofs)
         if (with_jac) then
           first = this%de_offset(iel)
-          call evaluate_into(el, xe(1:nd), e, nm, nd, &
-            this%de_val(first:first + nm * nd - 1))
+          call evaluate_into(el, nm, nd, xe(1:nd), e, this%de_val(first:first + nm * nd - 1))
         else
           call el%evaluate(xe(1:nd), e, de(1:nm, 1:nd))
         end if
