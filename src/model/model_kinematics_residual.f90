@@ -156,6 +156,8 @@ contains
     real(wp), intent(in) :: de(n_de)
     real(wp), intent(inout) :: val(n_val)
     integer :: k
+    ! Every entry of J_c at every Newton iteration: unrolled, the loop control is a quarter of
+    ! what it was per entry (other compilers read the directive as a comment).
     !GCC$ unroll 4
     do k = 1, n_set
       val(set_slot(k)) = 0.0_wp + de(set_src(k))
@@ -165,6 +167,7 @@ contains
     end do
   end subroutine assemble_sparse
 
+  !> to(k) = from(src(k)).
   pure subroutine gather(n, n_src, src, from, to)
     integer, intent(in) :: n, n_src, src(n)
     real(wp), intent(in) :: from(n_src)
