@@ -42,8 +42,10 @@ module dynamics_augmented
     !> The dynamic modes' q_dy indices, and J_d entry by entry (dynamic mode, coordinate k of
     !> its element, in that order) for the products with it without class tests or element
     !> lookups: position in de_val, coordinate and its unknown (0: none).
-    !> Dynamic mode i's entries run from jd_first(i) to jd_first(i + 1) - 1.
-    integer, allocatable :: dyn_q(:), jd_first(:)
+    !> Dynamic mode i's entries run from jd_first(i) to jd_first(i + 1) - 1, those of free
+    !> coordinates first (to jd_last_free(i), in element order, as are the others): the
+    !> products with J_d over the unknowns stop there.
+    integer, allocatable :: dyn_q(:), jd_first(:), jd_last_free(:)
     integer, allocatable :: jd_de(:), jd_coord(:), jd_free(:)
     !> Element coordinates, flat as in element_mass_t.
     integer, allocatable :: dof_first(:), dofs(:)
@@ -77,6 +79,23 @@ module dynamics_augmented
       real(wp), intent(in) :: w(:, :)
       real(wp) :: dw(size(w, 1), size(w, 2))
     end function mass_difference_times
+    !> Nodal forces whose projection DF_dy^T is the generalised force g (n_dy, k columns):
+    !> J_d^T g on the modes, g itself on the dynamic coordinates (dynamics_augmented_products).
+    module function aug_nodal_equivalent(this, model, g) result(f)
+      class(augmented_t), intent(in) :: this
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: g(:, :)
+      real(wp) :: f(model%n_x, size(g, 2))
+    end function aug_nodal_equivalent
+    !> Accelerations a (n_dy, k) for nodal forces f (n_x, k) with the last factors (those of
+    !> the iteration matrix with `newton`): the solution of Mbar a = DF_dy^T f.
+    module subroutine aug_accelerations(this, model, f, a, newton)
+      class(augmented_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: f(:, :)
+      real(wp), intent(out) :: a(:, :)
+      logical, intent(in), optional :: newton
+    end subroutine aug_accelerations
   end interface
 
 contains
@@ -185,9 +204,9 @@ contains
   subroutine list_dynamic_modes(this, model)
     type(augmented_t), intent(inout) :: this
     type(model_t), intent(in) :: model
-    integer :: iel, j, k, m, n, p, nm, nd
+    integer :: iel, j, k, m, n, p, nm, nd, pass, coord
     n = count(model%modes%class == MODE_DYNAMIC)
-    allocate(this%dyn_q(n), this%jd_first(n + 1))
+    allocate(this%dyn_q(n), this%jd_first(n + 1), this%jd_last_free(n))
     p = 0
     do iel = 1, model%n_elements
       nm = model%elements(iel)%e%n_modes()
@@ -207,11 +226,16 @@ contains
         n = n + 1
         this%dyn_q(n) = model%modes(m)%q - model%n_rh
         this%jd_first(n) = p + 1
-        do k = 1, nd
-          p = p + 1
-          this%jd_de(p) = this%de_offset(iel) + j - 1 + (k - 1) * nm
-          this%jd_coord(p) = this%dofs(this%dof_first(iel) + k - 1)
-          this%jd_free(p) = this%free_index(this%jd_coord(p))
+        do pass = 1, 2
+          do k = 1, nd
+            coord = this%dofs(this%dof_first(iel) + k - 1)
+            if ((this%free_index(coord) > 0) .neqv. (pass == 1)) cycle
+            p = p + 1
+            this%jd_de(p) = this%de_offset(iel) + j - 1 + (k - 1) * nm
+            this%jd_coord(p) = coord
+            this%jd_free(p) = this%free_index(coord)
+          end do
+          if (pass == 1) this%jd_last_free(n) = p
         end do
       end do
     end do
@@ -388,79 +412,6 @@ contains
     real(wp), intent(in) :: v
     lu%val(lu%pos(k)) = lu%val(lu%pos(k)) + v
   end subroutine add_entry
-
-  !> Nodal forces whose projection DF_dy^T is the generalised force g (n_dy, k columns):
-  !> J_d^T g on the modes, g itself on the dynamic coordinates.
-  function aug_nodal_equivalent(this, model, g) result(f)
-    class(augmented_t), intent(in) :: this
-    type(model_t), intent(in) :: model
-    real(wp), intent(in) :: g(:, :)
-    real(wp) :: f(model%n_x, size(g, 2))
-    real(wp) :: gi
-    integer :: c, i, p, iq
-    do c = 1, size(g, 2)
-      f(:, c) = 0.0_wp
-      ! Mode by mode: its generalised force is read once for its entries.
-      do i = 1, size(this%dyn_q)
-        gi = g(this%dyn_q(i), c)
-        do p = this%jd_first(i), this%jd_first(i + 1) - 1
-          f(this%jd_coord(p), c) = f(this%jd_coord(p), c) + this%de_val(this%jd_de(p)) * gi
-        end do
-      end do
-      do iq = model%n_rh + 1, model%n_q
-        if (model%q_coord(iq) > 0) f(model%q_coord(iq), c) = f(model%q_coord(iq), c) + &
-          g(iq - model%n_rh, c)
-      end do
-    end do
-  end function aug_nodal_equivalent
-
-  !> Accelerations a (n_dy, k) for nodal forces f (n_x, k) with the last factors: the solution
-  !> of Mbar a = DF_dy^T f.
-  subroutine aug_accelerations(this, model, f, a, newton)
-    class(augmented_t), intent(inout) :: this
-    type(model_t), intent(in) :: model
-    real(wp), intent(in) :: f(:, :)
-    real(wp), intent(out) :: a(:, :)
-    logical, intent(in), optional :: newton
-    real(wp) :: b(this%n_free + this%n_con, size(f, 2))
-    real(wp) :: s
-    integer :: i, c, p, iq, j
-    do c = 1, size(f, 2)
-      b(this%n_free + 1:, c) = 0.0_wp
-      do i = 1, model%n_x
-        if (this%free_index(i) > 0) b(this%free_index(i), c) = f(i, c)
-      end do
-    end do
-    if (present(newton)) then
-      if (newton) then
-        call this%newton%solve_many(b)
-      else
-        call this%lu%solve_many(b)
-      end if
-    else
-      call this%lu%solve_many(b)
-    end if
-    ! y = DF_dy a is b on the free coordinates (zero elsewhere): read through free_index.
-    do c = 1, size(f, 2)
-      a(:, c) = 0.0_wp
-      ! Mode by mode (a mode's entries are consecutive): its acceleration summed in a scalar.
-      do j = 1, size(this%dyn_q)
-        s = 0.0_wp
-        do p = this%jd_first(j), this%jd_first(j + 1) - 1
-          if (this%jd_free(p) == 0) cycle
-          s = s + this%de_val(this%jd_de(p)) * b(this%jd_free(p), c)
-        end do
-        a(this%dyn_q(j), c) = s
-      end do
-      do iq = model%n_rh + 1, model%n_q
-        if (model%q_coord(iq) > 0) then
-          i = this%free_index(model%q_coord(iq))
-          a(iq - model%n_rh, c) = 0.0_wp
-          if (i > 0) a(iq - model%n_rh, c) = b(i, c)
-        end if
-      end do
-    end do
-  end subroutine aug_accelerations
 
   !> dD/dx of element iel at the last factorisation.
   pure subroutine aug_element_jacobian(this, model, iel, de)

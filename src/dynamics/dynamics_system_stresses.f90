@@ -46,22 +46,42 @@ contains
   !> full q = (q_rh, q_dy), from the terms of stress_entries (elements with elastic modes
   !> excluded: their stresses act as nodal forces).
   module procedure dyn_stresses
-    real(wp) :: s(this%model%max_modes, this%model%max_modes), beta
-    integer :: iel, k, nm
-    sigma = 0.0_wp
+    ! Every element's S and beta first, then the terms in one loop on explicit-shape arrays:
+    ! the compiler keeps the bases in registers where it reloaded each component's
+    ! descriptor per term.
+    real(wp) :: s(this%model%max_modes, this%model%max_modes, this%model%n_elements)
+    real(wp) :: beta(this%model%n_elements)
+    integer :: iel, nm
     do iel = 1, this%model%n_elements
+      beta(iel) = 0.0_wp
       if (this%st_first(iel + 1) == this%st_first(iel)) cycle
       associate (el => this%model%elements(iel)%e)
         nm = el%n_modes()
-        call el%stiffness(s(1:nm, 1:nm))
-        beta = el%damping
+        call el%stiffness(s(1:nm, 1:nm, iel))
+        beta(iel) = el%damping
       end associate
-      do k = this%st_first(iel), this%st_first(iel + 1) - 1
-        sigma(this%st_row(k)) = sigma(this%st_row(k)) + &
-          s(this%st_i(k), this%st_j(k)) * (q(this%st_col(k)) + beta * qd(this%st_col(k)))
+    end do
+    call add_terms(this%model%n_elements, size(this%st_row), this%model%max_modes, size(q), &
+      size(sigma), this%st_first, this%st_row, this%st_col, this%st_i, this%st_j, s, beta, q, qd, &
+      sigma)
+  end procedure dyn_stresses
+
+  !> sigma = sum of the terms S_ij (q + beta qd) of dyn_stresses, element by element.
+  pure subroutine add_terms(n_el, n, mm, n_q, n_dy, first, row, col, ti, tj, s, beta, q, qd, &
+      sigma)
+    integer, intent(in) :: n_el, n, mm, n_q, n_dy
+    integer, intent(in) :: first(n_el + 1), row(n), col(n), ti(n), tj(n)
+    real(wp), intent(in) :: s(mm, mm, n_el), beta(n_el), q(n_q), qd(n_q)
+    real(wp), intent(out) :: sigma(n_dy)
+    integer :: iel, k
+    sigma = 0.0_wp
+    do iel = 1, n_el
+      do k = first(iel), first(iel + 1) - 1
+        sigma(row(k)) = sigma(row(k)) + &
+          s(ti(k), tj(k), iel) * (q(col(k)) + beta(iel) * qd(col(k)))
       end do
     end do
-  end procedure dyn_stresses
+  end subroutine add_terms
 
   !> The constant part of K0 and D0: dsigma_dy/dq_dy and dsigma_dy/dv_dy of the dynamic
   !> modes (block diagonal by element).

@@ -13,17 +13,53 @@ contains
     integer, intent(in) :: nc
     real(wp), intent(in) :: dq(model%n_q, nc)
     real(wp), intent(out) :: b(model%n_c, nc)
-    integer :: row, k, c
+    integer :: c
     do c = 1, nc
-      do row = 1, model%n_c
-        b(row, c) = 0.0_wp
-        if (model%row_q(row) > 0) b(row, c) = dq(model%row_q(row), c)
-      end do
-      do k = 1, size(this%in_row)
-        b(this%in_row(k), c) = b(this%in_row(k), c) - this%in_val(k) * dq(this%in_q(k), c)
-      end do
+      call rhs_column(model%n_c, model%n_q, size(this%in_row), model%row_q, this%in_row, &
+        this%in_q, this%in_val, dq(:, c), b(:, c))
     end do
   end subroutine transfer_rhs
+
+  ! The loops of the transfer functions on explicit-shape arrays: the compiler keeps the bases
+  ! in registers where it reloaded each component's descriptor per entry, and assigns each
+  ! entry once where whole-array zeroing went first.
+
+  !> One column of transfer_rhs.
+  pure subroutine rhs_column(n_c, n_q, n_in, row_q, in_row, in_q, in_val, dq, b)
+    integer, intent(in) :: n_c, n_q, n_in, row_q(n_c), in_row(n_in), in_q(n_in)
+    real(wp), intent(in) :: in_val(n_in), dq(n_q)
+    real(wp), intent(out) :: b(n_c)
+    integer :: row, k
+    do row = 1, n_c
+      if (row_q(row) > 0) then
+        b(row) = dq(row_q(row))
+      else
+        b(row) = 0.0_wp
+      end if
+    end do
+    do k = 1, n_in
+      b(in_row(k)) = b(in_row(k)) - in_val(k) * dq(in_q(k))
+    end do
+  end subroutine rhs_column
+
+  !> Nodal vector dx (n_x) from its calculable part b (n_c) and its inputs dq (n_dq = n_q, or
+  !> 0 for zero inputs): the other coordinates are zero. One pass over the coordinates, read
+  !> through calc_index and input_q (a calculable coordinate is never an input).
+  pure subroutine nodal_from(n_x, n_c, n_dq, calc_index, input_q, b, dq, dx)
+    integer, intent(in) :: n_x, n_c, n_dq, calc_index(n_x), input_q(n_x)
+    real(wp), intent(in) :: b(n_c), dq(n_dq)
+    real(wp), intent(out) :: dx(n_x)
+    integer :: i
+    do i = 1, n_x
+      if (calc_index(i) > 0) then
+        dx(i) = b(calc_index(i))
+      else if (input_q(i) > 0 .and. n_dq > 0) then
+        dx(i) = dq(input_q(i))
+      else
+        dx(i) = 0.0_wp
+      end if
+    end do
+  end subroutine nodal_from
 
   module procedure kin_apply_df
     call apply_df_columns(this, model, 1, dq, dx)
@@ -40,17 +76,12 @@ contains
     real(wp), intent(in) :: dq(model%n_q, nc)
     real(wp), intent(out) :: dx(model%n_x, nc)
     real(wp) :: b(model%n_c, nc)
-    integer :: iq, i, c
+    integer :: c
     call transfer_rhs(this, model, nc, dq, b)
     call this%jacobian_solve(b)
     do c = 1, nc
-      dx(:, c) = 0.0_wp
-      do i = 1, model%n_c
-        dx(model%calc_coord(i), c) = b(i, c)
-      end do
-      do iq = 1, model%n_q
-        if (model%q_coord(iq) > 0) dx(model%q_coord(iq), c) = dq(iq, c)
-      end do
+      call nodal_from(model%n_x, model%n_c, model%n_q, model%calc_index, model%input_q, b(:, c), &
+        dq(:, c), dx(:, c))
     end do
   end subroutine apply_df_columns
 
@@ -116,7 +147,7 @@ contains
 
   module procedure kin_second_solve
     real(wp) :: rhs(model%n_c, 1)
-    integer :: m, row, i, iq
+    integer :: m, row
     if (present(qdd)) then
       call transfer_rhs(this, model, 1, qdd, rhs)
     else
@@ -127,13 +158,12 @@ contains
       if (row > 0) rhs(row, 1) = rhs(row, 1) - d2e(m)
     end do
     call this%jacobian_solve(rhs)
-    d2x = 0.0_wp
-    do i = 1, model%n_c
-      d2x(model%calc_coord(i)) = rhs(i, 1)
-    end do
-    if (.not. present(qdd)) return
-    do iq = 1, model%n_q
-      if (model%q_coord(iq) > 0) d2x(model%q_coord(iq)) = qdd(iq)
-    end do
+    if (present(qdd)) then
+      call nodal_from(model%n_x, model%n_c, model%n_q, model%calc_index, model%input_q, &
+        rhs(:, 1), qdd, d2x)
+    else
+      call nodal_from(model%n_x, model%n_c, 0, model%calc_index, model%input_q, rhs(:, 1), &
+        d2e(1:0), d2x)
+    end if
   end procedure kin_second_solve
 end submodule model_kinematics_transfer
