@@ -1,0 +1,67 @@
+!> The error path of the kinematics: why J_c is singular, naming the undetermined coordinate
+!> and the modes whose class would fix it.
+submodule (model_kinematics) model_kinematics_diagnostics
+  implicit none
+
+contains
+
+  !> Why J_c is singular, from a dense factorisation (also in sparse mode: this is the error
+  !> path, and the dense factors name the undetermined coordinate and the modes it moves).
+  module procedure kin_singular_message
+    type(kinematics_t) :: dense
+    real(wp) :: r(model%n_c), rcond
+    integer :: info, worst
+    call dense%init(model, sparse=.false.)
+    dense%x = this%x
+    call dense%residual(model, q, r, jacobian=.true.)
+    call lu_factor(dense%lu, dense%ipiv, info, rcond, worst)
+    msg = 'the kinematic Jacobian is singular'
+    if (worst < 1) return
+    msg = msg // ': coordinate ' // trim(model%coord_name(model%calc_coord(worst))) // &
+      ' is not determined by the rigid, prescribed and dynamic modes (check the mode ' // &
+      'classes and supports; elastic and released modes follow from the others and ' // &
+      'determine nothing)' // dense%free_modes_moved(model, worst)
+  end procedure kin_singular_message
+
+  !> The elastic and released modes that the undetermined motion changes. With the smallest
+  !> pivot k of the factors J_c = P L U treated as zero, z_k = 1, z_(>k) = 0 and
+  !> U(1:k-1, 1:k-1) z(1:k-1) = -U(1:k-1, k) solve U z = 0, so z is (nearly) the motion that
+  !> nothing determines. A mode that changes along z is one whose promotion to dynamic or
+  !> rigid would fix that motion. '' if none is found.
+  module procedure kin_free_modes_moved
+    real(wp) :: z(model%n_c), dz(model%n_x)
+    real(wp), allocatable :: e(:), de(:, :)
+    integer :: iel, j, m, n_listed, i
+    hint = ''
+    if (model%n_c == 0) return
+    z = 0.0_wp
+    z(k) = 1.0_wp
+    do i = k - 1, 1, -1
+      if (this%lu(i, i) == 0) return
+      z(i) = -(dot_product(this%lu(i, i + 1:k), z(i + 1:k))) / this%lu(i, i)
+    end do
+    dz = 0.0_wp
+    dz(model%calc_coord) = z / maxval(abs(z))
+    n_listed = 0
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        allocate(e(el%n_modes()), de(el%n_modes(), size(el%dofs)))
+        call el%evaluate(this%x(el%dofs), e, de)
+        do j = 1, el%n_modes()
+          m = model%mode_first(iel) + j - 1
+          if (model%modes(m)%row /= 0) cycle
+          if (abs(dot_product(de(j, :), dz(el%dofs))) <= 1.0e-6_wp * &
+              max(maxval(abs(de(j, :))), tiny(1.0_wp))) cycle
+          n_listed = n_listed + 1
+          if (n_listed > 4) cycle
+          if (len(hint) > 0) hint = hint // ', '
+          hint = hint // model%mode_name(m)
+        end do
+        deallocate(e, de)
+      end associate
+    end do
+    if (n_listed > 4) hint = hint // ' and others'
+    if (len(hint) > 0) hint = '; that motion changes ' // hint // ': make one of them ' // &
+      'dynamic and another mode of the same loop elastic'
+  end procedure kin_free_modes_moved
+end submodule model_kinematics_diagnostics
