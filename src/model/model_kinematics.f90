@@ -310,7 +310,8 @@ contains
   !> `continuation` is on, the step from the last q is cut into 2, 4, ... 64 equal parts, each
   !> solved from the one before: a far jump, such as a modal analysis at a time when a shaft
   !> has turned 10 rad, defeats Newton from the reference but not in steps. The first
-  !> failure's error is returned if no subdivision succeeds.
+  !> failure's error is returned if no subdivision succeeds. t, the time of q, lets the
+  !> predictor use the rates noted at the last solution (model_kinematics_rates).
   subroutine kin_solve(this, model, q, err, t)
     class(kinematics_t), intent(inout) :: this
     type(model_t), intent(in) :: model
