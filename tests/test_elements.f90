@@ -179,6 +179,19 @@ contains
       call el%second_inertia(x, xd, d2e_one, m1, h1)
       call ts%check(all(d2e_one == d2e) .and. all(m1 == m) .and. all(h1 == h), &
         what // ' second_inertia = second and inertia')
+      ! With the mode values at x given (the planar beam then takes its tangent rotations
+      ! from them, no atan2): the same to round-off (angles of order 1: 1e-15 relative).
+      block
+        real(wp) :: e(el%n_modes()), de(el%n_modes(), n)
+        call el%evaluate(x, e, de)
+        call el%second_inertia(x, xd, d2e_one, m1, h1, e)
+        call ts%expect(what // ' second_inertia with mode values: d2e', &
+          relerr(d2e_one, d2e, 1.0_wp), 1.0e-13_wp, C_M)
+        call ts%expect(what // ' second_inertia with mode values: M', &
+          relerr(flat(m1), flat(m), 1.0_wp), 1.0e-13_wp, C_M)
+        call ts%expect(what // ' second_inertia with mode values: h', &
+          relerr(h1, h, 1.0_wp), 1.0e-13_wp, C_M)
+      end block
     end block
     dm = fd_mass_derivative(el, x, 1.0e-5_wp)
     hfd = 0.0_wp

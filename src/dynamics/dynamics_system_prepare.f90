@@ -49,8 +49,14 @@ contains
             call el%second(xe(1:nd), xde(1:nd), d2)
             cycle
           end if
-          call second_inertia_into(el, xe(1:nd), xde(1:nd), d2, nd, &
-            this%mass%val(first:first + nd * nd - 1), h_all(d0 + 1:d0 + nd))
+          if (this%kin%modes_at_x) then
+            call second_inertia_into(el, xe(1:nd), xde(1:nd), d2, nd, &
+              this%mass%val(first:first + nd * nd - 1), h_all(d0 + 1:d0 + nd), &
+              this%kin%e_val(mf:mf + this%kin%el_nm(iel) - 1))
+          else
+            call second_inertia_into(el, xe(1:nd), xde(1:nd), d2, nd, &
+              this%mass%val(first:first + nd * nd - 1), h_all(d0 + 1:d0 + nd))
+          end if
         end associate
       end do
       call this%kin%second_solve(m, d2e, conv, dq)
@@ -97,14 +103,16 @@ contains
   end procedure dyn_prepare
 
   !> el%second_inertia with the mass matrix written straight into its flat block m (nd x nd,
-  !> contiguous in element_mass_t%val): no copy per element.
-  subroutine second_inertia_into(el, x, xd, d2e, nd, m, h)
+  !> contiguous in element_mass_t%val): no copy per element. e: the kinematics' mode values
+  !> at x, when they are current.
+  subroutine second_inertia_into(el, x, xd, d2e, nd, m, h, e)
     class(element_t), intent(in) :: el
     real(wp), intent(in) :: x(:), xd(:)
     real(wp), intent(out) :: d2e(:)
     integer, intent(in) :: nd
     real(wp), intent(out) :: m(nd, nd), h(:)
-    call el%second_inertia(x, xd, d2e, m, h)
+    real(wp), intent(in), optional :: e(:)
+    call el%second_inertia(x, xd, d2e, m, h, e)
   end subroutine second_inertia_into
 
   !> f := f - m c for one element block, by hand (explicit shapes: constant strides; matmul

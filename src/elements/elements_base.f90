@@ -113,11 +113,14 @@ contains
 
   !> second (d2e along xd) and inertia (m, h) at the same (x, xd) in one call: the evaluation's
   !> single pass over the elements with masses. An element whose two share their geometry
-  !> (the planar beam's chord) overrides it to compute that once.
-  pure subroutine element_second_inertia(this, x, xd, d2e, m, h)
+  !> (the planar beam's chord) overrides it to compute that once. e: the mode values at x when
+  !> the caller has them (the kinematics' last pass), which an element may take its geometry
+  !> from.
+  pure subroutine element_second_inertia(this, x, xd, d2e, m, h, e)
     class(element_t), intent(in) :: this
     real(wp), intent(in) :: x(:), xd(:)
     real(wp), intent(out) :: d2e(:), m(:, :), h(:)
+    real(wp), intent(in), optional :: e(:)
     call this%second(x, xd, d2e)
     call this%inertia(x, xd, m, h)
   end subroutine element_second_inertia

@@ -83,6 +83,18 @@ contains
     type(chord_t) :: c
     real(wp) :: beta
     integer :: k
+    c = chord_lengths(x)
+    beta = atan2(c%lv(2), c%lv(1))
+    do k = 1, 2
+      ! Reducing a_k before subtracting beta keeps the rounding at the size of theta, not of a_k.
+      c%theta(k) = wrap_angle(wrap_angle(this%alpha0 + x(3 * k) - this%phi0(k)) - beta)
+    end do
+  end function chord
+
+  !> The chord's vector, length and directions (theta left to the caller).
+  pure function chord_lengths(x) result(c)
+    real(wp), intent(in) :: x(6)
+    type(chord_t) :: c
     c%lv = x(4:5) - x(1:2)
     ! Element lengths are far from overflow: no need for norm2's scaling.
     c%l = sqrt(c%lv(1)**2 + c%lv(2)**2)
@@ -90,12 +102,8 @@ contains
     c%el = c%lv * c%rl
     c%nl(1) = -c%el(2)
     c%nl(2) = c%el(1)
-    beta = atan2(c%lv(2), c%lv(1))
-    do k = 1, 2
-      ! Reducing a_k before subtracting beta keeps the rounding at the size of theta, not of a_k.
-      c%theta(k) = wrap_angle(wrap_angle(this%alpha0 + x(3 * k) - this%phi0(k)) - beta)
-    end do
-  end function chord
+    c%theta = 0.0_wp
+  end function chord_lengths
 
   !> a modulo 2 pi in (-pi, pi]. Nodal angles may have turned many times: the split 2 pi keeps
   !> the reduction exact, so theta is as accurate as with the former sin/cos + atan2.
@@ -296,13 +304,24 @@ contains
     call inertia_at(this, c, xd, d2e, m, h)
   end subroutine beam_inertia
 
-  !> second and inertia from one chord (the evaluation's pass over the elements).
-  pure subroutine beam_second_inertia(this, x, xd, d2e, m, h)
+  !> second and inertia from one chord (the evaluation's pass over the elements). With the
+  !> mode values e at x and the angle form of bending, the tangent rotations are e2 / l0 and
+  !> -e3 / l0: the chord then needs no atan2 (a latency of tens of cycles per element).
+  pure subroutine beam_second_inertia(this, x, xd, d2e, m, h, e)
     class(beam_t), intent(in) :: this
     real(wp), intent(in) :: x(:), xd(:)
     real(wp), intent(out) :: d2e(:), m(:, :), h(:)
+    real(wp), intent(in), optional :: e(:)
     type(chord_t) :: c
-    c = chord(this, x)
+    real(wp) :: rl0
+    if (present(e) .and. this%bending == BENDING_ANGLE) then
+      c = chord_lengths(x)
+      rl0 = 1.0_wp / this%l0
+      c%theta(1) = e(2) * rl0
+      c%theta(2) = -e(3) * rl0
+    else
+      c = chord(this, x)
+    end if
     call second_modes(this, c, xd, d2e)
     if (this%has_inertia()) then
       call inertia_at(this, c, xd, d2e, m, h)

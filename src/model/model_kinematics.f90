@@ -77,6 +77,9 @@ module model_kinematics
     !> The rates of the last solution, when its caller noted them: the next solve at a later
     !> time then predicts by their Taylor series (model_kinematics_rates).
     type(kin_rates_t) :: rates
+    !> e_val holds the mode values at x: the last solve ended on its residual pass (no
+    !> correction after it, as with elastic modes), so an element pass at x may take them.
+    logical :: modes_at_x = .false.
   contains
     procedure :: init => kin_init
     procedure :: solve => kin_solve
@@ -362,6 +365,7 @@ contains
     this%has_factors = .false.
     this%has_df = .false.
     this%rates%valid = .false.
+    this%modes_at_x = .false.
   end subroutine kin_restart_from
 
   subroutine kin_newton(this, model, q, err, t)
@@ -378,6 +382,7 @@ contains
     call model%check_limits(q, err)
     if (.not. err%ok()) return
     this%n_solves = this%n_solves + 1
+    this%modes_at_x = .false.
     ! The factors of the previous solution serve for the predictor and for one chord step:
     ! close to it they contract nearly as well as fresh ones, and the solution then needs one
     ! factorisation (at the final x, for the transfer functions) instead of two.
@@ -427,6 +432,7 @@ contains
         ! and statics differences such stresses. Without them rmax is all the accuracy x
         ! needs, and the factors then belong to x exactly.
         if (model%n_elastic > 0) call add_calculable(this, model, dx(:, 1))
+        this%modes_at_x = model%n_elastic == 0
         this%q = q
         this%has_factors = .true.
         this%n_iterations = this%n_iterations + it - 1
@@ -471,5 +477,6 @@ contains
     this%has_factors = .false.
     this%has_df = .false.
     this%rates%valid = .false.
+    this%modes_at_x = .false.
   end subroutine kin_restore_state
 end module model_kinematics
