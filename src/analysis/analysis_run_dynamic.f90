@@ -47,9 +47,9 @@ contains
       if (len(this%control%hint) > 0) err%message = err%message // '. A sampled ' // &
         'controller may be unstable: ' // this%control%hint(3:)
     end if
-    if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a,i0,a)') 'dynamic: ', &
+    if (this%verbose .and. err%ok()) write(*, '(a,i0,a,i0,a,i0,a,i0,a)') 'dynamic: ', &
       this%stats%n_steps, ' steps, ', this%stats%n_rhs_evals, ' evaluations, ', &
-      this%stats%n_jac_evals, ' Jacobians'
+      this%stats%n_jac_evals, ' Jacobians, ', this%stats%n_factorisations, ' factorisations'
   end procedure run_dynamic
 
   !> integrator = 'auto' below rtol 1e-6: BDF unless the model is stiff (model_scene's

@@ -51,6 +51,7 @@ contains
       if (err%ok()) call h5%write_int_attr('/', 'n_steps', s%n_steps, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_rhs_evals', s%n_rhs_evals, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_jac_evals', s%n_jac_evals, err)
+      if (err%ok()) call h5%write_int_attr('/', 'n_factorisations', s%n_factorisations, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_err_test_fails', s%n_err_test_fails, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_nonlin_fails', s%n_nonlin_fails, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_restarts', s%n_restarts, err)

@@ -281,11 +281,13 @@ contains
   !> I - c_q da/dq - c_v da/dv = Mbar^-1 (Mbar + c_q K0 + c_v D0) with the linearised Jacobian):
   !> K0 = DF_dy^T K_x DF_dy with the element stiffness K_x = D_x^T S D_x over the stressed modes
   !> (the dynamic ones; dynamic and elastic ones of elements with elastic modes), because
-  !> D_x DF_dy is the unit row on a dynamic mode. The element Jacobians and masses are those of
-  !> the last aug_factor. Statics' preconditioner (dynamics_static_krylov) asks for
-  !> mass_scale M + c_q K0 instead, and for the traces of the two parts over the free
-  !> coordinates (stiffness, mass) to choose mass_scale.
-  subroutine aug_factor_newton(this, model, mass, c_q, c_v, info, mass_scale, traces)
+  !> D_x DF_dy is the unit row on a dynamic mode. The element Jacobians are those of the last
+  !> aug_factor, or de_val (the kinematics' at the masses' state: the matrix then belongs to
+  !> one state without an aug_factor there); the masses are those of `mass`. Statics'
+  !> preconditioner (dynamics_static_krylov) asks for mass_scale M + c_q K0 instead, and for
+  !> the traces of the two parts over the free coordinates (stiffness, mass) to choose
+  !> mass_scale.
+  subroutine aug_factor_newton(this, model, mass, c_q, c_v, info, mass_scale, traces, de_val)
     class(augmented_t), intent(inout) :: this
     type(model_t), intent(in) :: model
     type(element_mass_t), intent(in) :: mass
@@ -293,6 +295,7 @@ contains
     integer, intent(out) :: info
     real(wp), intent(in), optional :: mass_scale
     real(wp), intent(out), optional :: traces(2)
+    real(wp), intent(in), optional :: de_val(:)
     real(wp), allocatable :: de(:, :)
     ! Fixed-size element buffers: no allocation per element in a step's factorisation.
     real(wp) :: s(model%max_modes, model%max_modes), ds(model%max_modes, model%max_dofs)
@@ -301,6 +304,7 @@ contains
     integer :: iel, j, k, l, next, nd, nm, first, off
     scale = 1.0_wp
     if (present(mass_scale)) scale = mass_scale
+    if (present(de_val)) this%de_val = de_val
     call start_assembly(this, model, this%newton, next, scale)
     tr = [0.0_wp, sum(model%lumped, mask=this%free_index > 0)]
     do iel = 1, model%n_elements

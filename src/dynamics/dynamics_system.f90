@@ -148,7 +148,8 @@ module dynamics_system
       class(dynamics_t), intent(in) :: this
     end function dyn_has_iteration_solver
     !> Factor I - c_q da/dq - c_v da/dv = Mbar^-1 (Mbar + c_q K0 + c_v D0) (linearised Jacobian)
-    !> at the state of the last evaluation.
+    !> at the state of the last evaluation (its element masses and the kinematics' element
+    !> Jacobians), whether an accel or a newton_correction made it.
     module subroutine dyn_iteration_factor(this, c_q, c_v, status)
       class(dynamics_t), intent(inout) :: this
       real(wp), intent(in) :: c_q, c_v

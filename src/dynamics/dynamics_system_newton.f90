@@ -36,7 +36,8 @@ contains
 
   module procedure dyn_iteration_factor
     integer :: info
-    call this%aug%factor_newton(this%model, this%mass, c_q, c_v, info)
+    call this%aug%factor_newton(this%model, this%mass, c_q, c_v, info, &
+      de_val=this%kin%de_val)
     status = 0
     if (info /= 0) status = 1
   end procedure dyn_iteration_factor

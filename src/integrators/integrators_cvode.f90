@@ -26,6 +26,7 @@ module integrators_cvode
     FCVode, FCVodeSStolerances, FCVodeSetUserData, FCVodeSetErrHandlerFn, &
     FCVodeSetLinearSolver, FCVodeSetJacFn, FCVodeSetMaxOrd, FCVodeSetMaxStep, &
     FCVodeSetMaxNumSteps, FCVodeSetStopTime, FCVodeGetNumSteps, FCVodeGetNumJacEvals, &
+    FCVodeGetNumLinSolvSetups, &
     FCVodeGetNumErrTestFails, FCVodeGetNumNonlinSolvConvFails, FCVodeGetCurrentTime
   implicit none
   private
@@ -182,6 +183,8 @@ contains
     if (flag == 0) stats%n_steps = stats%n_steps + int(n(1), i8)
     flag = FCVodeGetNumJacEvals(this%mem, n)
     if (flag == 0) stats%n_jac_evals = stats%n_jac_evals + int(n(1), i8)
+    flag = FCVodeGetNumLinSolvSetups(this%mem, n)
+    if (flag == 0) stats%n_factorisations = stats%n_factorisations + int(n(1), i8)
     flag = FCVodeGetNumErrTestFails(this%mem, n)
     if (flag == 0) stats%n_err_test_fails = stats%n_err_test_fails + int(n(1), i8)
     flag = FCVodeGetNumNonlinSolvConvFails(this%mem, n)

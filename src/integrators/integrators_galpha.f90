@@ -46,6 +46,9 @@ module integrators_galpha
   !> (CVODE's CRDOWN).
   real(wp), parameter :: rate_decay = 0.3_wp
   integer, parameter :: rate_lifetime = 20
+  !> A system-solver step that needed a second correction refactors the iteration matrix at
+  !> its end when the matrix is at least this many steps old (see take_step).
+  integer, parameter :: refactor_age = 2
   !> Local step halvings after failed steps before giving up (fixed step).
   integer, parameter :: max_halvings = 10
   !> Successful steps at a halved step size before trying the double again (fixed step).
@@ -105,6 +108,10 @@ module integrators_galpha
     integer :: rate_age = 0
     logical :: have_jac = .false., jac_is_current = .false., refresh_jac = .true.
     logical :: lu_valid = .false.
+    !> System solver: refactor before the next step at the state the last step ended on (its
+    !> last evaluation), and steps since the last factorisation (see take_step).
+    logical :: refactor_here = .false.
+    integer :: matrix_age = 0
     integer :: halvings = 0, steps_at_level = 0
     !> The last non-zero status of accel, for the error message.
     integer :: bad_status = 0

@@ -22,8 +22,9 @@ module integrators_system
     !> a model may override it with its linearised matrices.
     procedure :: jacobian => system_fd_jacobian
     !> A model may solve the Newton systems of implicit steps itself, e.g. sparse where a
-    !> dense n x n Jacobian would cost O(n^2) memory and O(n^3) work. Then, after an `accel`
-    !> at the Jacobian's state, iteration_factor(c_q, c_v) factors I - c_q da/dq - c_v da/dv,
+    !> dense n x n Jacobian would cost O(n^2) memory and O(n^3) work. Then
+    !> iteration_factor(c_q, c_v) factors I - c_q da/dq - c_v da/dv at the state of the last
+    !> `accel` or newton_correction (an integrator refactors where its last step ended),
     !> and newton_correction(t, q, v, x, dx) returns dx = that matrix's inverse times
     !> (a(t, q, v) - x), formed as the model likes (flexmor's: from the residual of the
     !> equations of motion, without factoring its mass matrix). Default: not offered.
@@ -90,6 +91,7 @@ module integrators_system
     integer(i8) :: n_steps = 0
     integer(i8) :: n_rhs_evals = 0        !< calls of `accel`
     integer(i8) :: n_jac_evals = 0        !< Jacobian evaluations
+    integer(i8) :: n_factorisations = 0   !< factorisations of the Newton iteration matrix
     integer(i8) :: n_err_test_fails = 0   !< steps rejected by the error test
     integer(i8) :: n_nonlin_fails = 0     !< Newton (corrector) convergence failures
     integer(i8) :: n_restarts = 0         !< re-initialisations at breakpoints

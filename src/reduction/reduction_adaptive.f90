@@ -127,6 +127,7 @@ contains
     total%n_steps = total%n_steps + seg%n_steps
     total%n_rhs_evals = total%n_rhs_evals + seg%n_rhs_evals
     total%n_jac_evals = total%n_jac_evals + seg%n_jac_evals
+    total%n_factorisations = total%n_factorisations + seg%n_factorisations
     total%n_err_test_fails = total%n_err_test_fails + seg%n_err_test_fails
     total%n_nonlin_fails = total%n_nonlin_fails + seg%n_nonlin_fails
     total%n_restarts = total%n_restarts + seg%n_restarts
