@@ -85,6 +85,8 @@ module integrators_galpha
     !> Accelerations at the start of the last accepted step and its length: Newton starts
     !> from qdd extrapolated linearly through them (h_old = 0: no such step since a restart).
     real(wp), allocatable :: qdd_old(:)
+    !> take_step's vectors (automatic arrays would be a heap allocation each, per step).
+    real(wp), allocatable :: work(:, :)
     real(wp) :: h_old = 0
     !> Step that produced `acc`: acc approximates qdd at t + (alpha_m - alpha_f) h_last.
     real(wp) :: h_last = 0
@@ -171,7 +173,7 @@ contains
     this%stats = integrator_stats_t()
     allocate(this%q(this%n), this%v(this%n), this%qdd(this%n), this%acc(this%n))
     allocate(this%q_prev(this%n), this%v_prev(this%n), this%qdd_prev(this%n))
-    allocate(this%acc_prev(this%n), this%qdd_old(this%n))
+    allocate(this%acc_prev(this%n), this%qdd_old(this%n), this%work(this%n, 9))
     this%system_solver = sys%has_iteration_solver()
     if (.not. this%system_solver) then
       allocate(this%dadq(this%n, this%n), this%dadv(this%n, this%n), this%lu(this%n, this%n))

@@ -80,82 +80,86 @@ contains
 
   !> One step from this%t to t_new = this%t + h; the state is updated only on success.
   module procedure take_step
-    real(wp), dimension(this%n) :: acc0, acc_known, q_known, v_known, x, q1, v1, f, dx
     real(wp) :: c_q, c_v, dnorm, dnorm_old, rate
     integer :: iter, status
 
-    outcome = STEP_NEWTON_FAILED
-    if (.not. this%lu_valid) return
-    ! acc lags qdd by (alpha_m - alpha_f) h_last; a new step size needs the lag for h.
-    acc0 = this%qdd + (h / this%h_last) * (this%acc - this%qdd)
-    acc_known = (this%alpha_f * this%qdd - this%alpha_m * acc0) / (1 - this%alpha_m)
-    q_known = this%q + h * this%v + h**2 * ((0.5_wp - this%beta) * acc0 + this%beta * acc_known)
-    v_known = this%v + h * ((1 - this%gamma) * acc0 + this%gamma * acc_known)
-    call newton_coefficients(this, h, c_q, c_v)
+    associate (acc0 => this%work(:, 1), acc_known => this%work(:, 2), &
+               q_known => this%work(:, 3), v_known => this%work(:, 4), x => this%work(:, 5), &
+               q1 => this%work(:, 6), v1 => this%work(:, 7), f => this%work(:, 8), &
+               dx => this%work(:, 9))
+      outcome = STEP_NEWTON_FAILED
+      if (.not. this%lu_valid) return
+      ! acc lags qdd by (alpha_m - alpha_f) h_last; a new step size needs the lag for h.
+      acc0 = this%qdd + (h / this%h_last) * (this%acc - this%qdd)
+      acc_known = (this%alpha_f * this%qdd - this%alpha_m * acc0) / (1 - this%alpha_m)
+      q_known = this%q + h * this%v + h**2 * ((0.5_wp - this%beta) * acc0 + this%beta * acc_known)
+      v_known = this%v + h * ((1 - this%gamma) * acc0 + this%gamma * acc_known)
+      call newton_coefficients(this, h, c_q, c_v)
 
-    ! Smooth accelerations: the linear extrapolation leaves a first correction O(h^2) smaller
-    ! than the constant one, so that more steps stop after one correction.
-    x = this%qdd
-    if (this%h_old > 0) x = x + (h / this%h_old) * (this%qdd - this%qdd_old)
-    dnorm_old = huge(1.0_wp)
-    do iter = 1, max_newton_iters
-      q1 = q_known + c_q * x
-      v1 = v_known + c_v * x
-      if (this%system_solver) then
-        call sys%newton_correction(this%clamped(t_new), q1, v1, x, dx, status)
-      else
-        call sys%accel(this%clamped(t_new), q1, v1, f, status)
-        if (status == 0) then
-          dx = f - x
-          call lu_solve_vector(this%lu, this%pivots, dx)
+      ! Smooth accelerations: the linear extrapolation leaves a first correction O(h^2) smaller
+      ! than the constant one, so that more steps stop after one correction.
+      x = this%qdd
+      if (this%h_old > 0) x = x + (h / this%h_old) * (this%qdd - this%qdd_old)
+      dnorm_old = huge(1.0_wp)
+      do iter = 1, max_newton_iters
+        q1 = q_known + c_q * x
+        v1 = v_known + c_v * x
+        if (this%system_solver) then
+          call sys%newton_correction(this%clamped(t_new), q1, v1, x, dx, status)
+        else
+          call sys%accel(this%clamped(t_new), q1, v1, f, status)
+          if (status == 0) then
+            dx = f - x
+            call lu_solve_vector(this%lu, this%pivots, dx)
+          end if
         end if
-      end if
-      this%stats%n_rhs_evals = this%stats%n_rhs_evals + 1
-      if (status /= 0) then
-        this%bad_status = status
-        outcome = merge(STEP_FATAL, STEP_RECOVERABLE, status < 0)
-        return
-      end if
-      x = x + dx
-      dnorm = max(weighted_norm(this, c_q * dx, q1), weighted_norm(this, c_v * dx, v1))
-      if (iter > 1) then
-        rate = dnorm / dnorm_old
-        if (rate > max_newton_rate) return
-        this%newton_rate = max(rate_decay * this%newton_rate, rate)
-        this%rate_age = 0
-      end if
-      ! The error left after this correction is about rate * dnorm (linear convergence of
-      ! the chord iteration); the first correction uses the rate of earlier steps.
-      if (dnorm * min(1.0_wp, this%newton_rate) <= newton_tol) exit
-      dnorm_old = dnorm
-    end do
-    if (dnorm * min(1.0_wp, this%newton_rate) > newton_tol) return
+        this%stats%n_rhs_evals = this%stats%n_rhs_evals + 1
+        if (status /= 0) then
+          this%bad_status = status
+          outcome = merge(STEP_FATAL, STEP_RECOVERABLE, status < 0)
+          return
+        end if
+        x = x + dx
+        dnorm = max(weighted_norm(this, c_q, dx, q1), weighted_norm(this, c_v, dx, v1))
+        if (iter > 1) then
+          rate = dnorm / dnorm_old
+          if (rate > max_newton_rate) return
+          this%newton_rate = max(rate_decay * this%newton_rate, rate)
+          this%rate_age = 0
+        end if
+        ! The error left after this correction is about rate * dnorm (linear convergence of
+        ! the chord iteration); the first correction uses the rate of earlier steps.
+        if (dnorm * min(1.0_wp, this%newton_rate) <= newton_tol) exit
+        dnorm_old = dnorm
+      end do
+      if (dnorm * min(1.0_wp, this%newton_rate) > newton_tol) return
 
-    if (iter > slow_newton_iters) this%refresh_jac = .true.
-    ! The iteration matrix goes stale along the motion, and its contraction rate with it (two-
-    ! link, 32 el/link, dt 1e-4: about 2e-4 fresh, 8e-3 after the ~200 steps one served), and
-    ! the first correction times the rate decides whether a step stops after one evaluation.
-    ! A system solver refactors at the state of its last evaluation (no accel needed), for
-    ! about one evaluation's work: worth it once the matrix needs second corrections.
-    this%matrix_age = this%matrix_age + 1
-    if (this%system_solver .and. iter > 1 .and. this%matrix_age >= refactor_age) &
-      this%refactor_here = .true.
-    this%rate_age = this%rate_age + 1
-    if (this%rate_age >= rate_lifetime) this%newton_rate = 1
-    this%q = q_known + c_q * x
-    this%v = v_known + c_v * x
-    this%acc = acc_known + (1 - this%alpha_f) / (1 - this%alpha_m) * x
-    this%qdd = x
-    this%t = t_new
-    this%h_last = h
-    outcome = STEP_OK
+      if (iter > slow_newton_iters) this%refresh_jac = .true.
+      ! The iteration matrix goes stale along the motion, and its contraction rate with it (two-
+      ! link, 32 el/link, dt 1e-4: about 2e-4 fresh, 8e-3 after the ~200 steps one served), and
+      ! the first correction times the rate decides whether a step stops after one evaluation.
+      ! A system solver refactors at the state of its last evaluation (no accel needed), for
+      ! about one evaluation's work: worth it once the matrix needs second corrections.
+      this%matrix_age = this%matrix_age + 1
+      if (this%system_solver .and. iter > 1 .and. this%matrix_age >= refactor_age) &
+        this%refactor_here = .true.
+      this%rate_age = this%rate_age + 1
+      if (this%rate_age >= rate_lifetime) this%newton_rate = 1
+      this%q = q_known + c_q * x
+      this%v = v_known + c_v * x
+      this%acc = acc_known + (1 - this%alpha_f) / (1 - this%alpha_m) * x
+      this%qdd = x
+      this%t = t_new
+      this%h_last = h
+      outcome = STEP_OK
+    end associate
   end procedure take_step
 
-  !> max |d_i| / (atol + rtol |x_i|)
-  pure real(wp) function weighted_norm(this, d, x)
+  !> max |c d_i| / (atol + rtol |x_i|) (c apart: c d as an argument would be a temporary)
+  pure real(wp) function weighted_norm(this, c, d, x)
     type(galpha_solver_t), intent(in) :: this
-    real(wp), intent(in) :: d(:), x(:)
-    weighted_norm = maxval(abs(d) / (this%atol + this%rtol * abs(x)))
+    real(wp), intent(in) :: c, d(:), x(:)
+    weighted_norm = abs(c) * maxval(abs(d) / (this%atol + this%rtol * abs(x)))
   end function weighted_norm
 
 end submodule integrators_galpha_newton
