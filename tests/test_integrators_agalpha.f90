@@ -95,7 +95,7 @@ contains
       call suite%check(err%ok() .and. sys%n_records == size(t_out) .and. sys%times_exact, &
         'runs and records every output time, ' // trim(line))
       ! Local error control of a second-order method: the global error over N ~ tol^(-1/3)
-      ! steps is about tol^(2/3) (observed 13 to 16 tol^(2/3) here); bound 200 tol^(2/3).
+      ! steps is about tol^(2/3) (observed 12 to 16 tol^(2/3) here); bound 200 tol^(2/3).
       call suite%check(errors(i) < 200 * rtols(i)**(2.0_wp / 3), &
         'error ~ rtol^(2/3), ' // trim(line))
     end do
