@@ -49,6 +49,10 @@ module dynamics_augmented
     integer, allocatable :: jd_de(:), jd_coord(:), jd_free(:)
     !> Element coordinates, flat as in element_mass_t.
     integer, allocatable :: dof_first(:), dofs(:)
+    !> free_index of the flat element coordinates, and per mode whether its row enters the
+    !> iteration matrix's stiffness (dynamic modes; stressed modes of elastic elements).
+    integer, allocatable :: free_of(:), el_nm(:)     !< el_nm: modes per element
+    logical, allocatable :: stressed(:)
     type(sparse_lu_t) :: lu
     !> The iteration matrix of implicit integrators in the same form, M replaced by
     !> M + D_x^T (c_q S + c_v S_d) D_x over the stressed modes (see aug_factor_newton).
@@ -59,7 +63,6 @@ module dynamics_augmented
     procedure :: factor_newton => aug_factor_newton
     procedure :: accelerations => aug_accelerations
     procedure :: nodal_equivalent => aug_nodal_equivalent
-    procedure, private :: element_jacobian => aug_element_jacobian
   end type augmented_t
 
   interface
@@ -195,6 +198,15 @@ contains
       end associate
     end do
     call flat_dofs(model, this%dof_first, this%dofs)
+    this%free_of = this%free_index(this%dofs)
+    allocate(this%stressed(size(model%modes)), this%el_nm(model%n_elements))
+    do iel = 1, model%n_elements
+      this%el_nm(iel) = model%elements(iel)%e%n_modes()
+      do j = model%mode_first(iel), model%mode_first(iel) + this%el_nm(iel) - 1
+        this%stressed(j) = model%modes(j)%class == MODE_DYNAMIC .or. &
+          (model%elastic_element(iel) .and. mode_has_stress(model%modes(j)%class))
+      end do
+    end do
     call list_dynamic_modes(this, model)
     call this%lu%setup(n, mass_pattern%rows(1:mass_pattern%n), mass_pattern%cols(1:mass_pattern%n))
     call this%newton%setup(n, newton_pattern%rows(1:newton_pattern%n), &
@@ -251,7 +263,6 @@ contains
     real(wp), intent(in) :: de_val(:)
     type(element_mass_t), intent(in) :: mass
     integer, intent(out) :: info
-    real(wp), allocatable :: de(:, :)
     real(wp) :: rcond
     integer :: iel, k, l, next
     call start_assembly(this, model, this%lu, next, 1.0_wp)
@@ -269,8 +280,8 @@ contains
         end if
         this%de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1) &
           = de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1)
-        call this%element_jacobian(model, iel, de)
-        call add_constraint_rows(this, model, iel, de, this%lu, next)
+        call add_constraint_rows(this, model, iel, el%n_modes(), size(el%dofs), &
+          this%de_val(this%de_offset(iel):), this%lu, next)
       end associate
     end do
     call this%lu%factor(info, rcond)
@@ -296,72 +307,48 @@ contains
     real(wp), intent(in), optional :: mass_scale
     real(wp), intent(out), optional :: traces(2)
     real(wp), intent(in), optional :: de_val(:)
-    real(wp), allocatable :: de(:, :)
     ! Fixed-size element buffers: no allocation per element in a step's factorisation.
-    real(wp) :: s(model%max_modes, model%max_modes), ds(model%max_modes, model%max_dofs)
-    real(wp) :: sds(model%max_modes, model%max_dofs), block(model%max_dofs, model%max_dofs)
-    real(wp) :: rcond, scale, tr(2), coef
-    integer :: iel, j, k, l, next, nd, nm, first, off
+    real(wp) :: s(model%max_modes, model%max_modes), work(model%max_modes)
+    real(wp) :: block(model%max_dofs, model%max_dofs)
+    real(wp) :: rcond, scale, tr(2)
+    integer :: iel, k, l, next, nd, nm, d0, off
     scale = 1.0_wp
     if (present(mass_scale)) scale = mass_scale
     if (present(de_val)) this%de_val = de_val
     call start_assembly(this, model, this%newton, next, scale)
     tr = [0.0_wp, sum(model%lumped, mask=this%free_index > 0)]
     do iel = 1, model%n_elements
-      associate (el => model%elements(iel)%e)
-        nd = size(el%dofs)
-        nm = el%n_modes()
-        first = model%mode_first(iel)
-        call this%element_jacobian(model, iel, de)
-        call el%stiffness(s(1:nm, 1:nm))
-        ! The rows of the modes that carry a stress: dynamic ones, and elastic ones of an
-        ! elastic element.
-        do j = 1, nm
-          if (model%modes(first + j - 1)%class == MODE_DYNAMIC .or. &
-            (model%elastic_element(iel) .and. mode_has_stress(model%modes(first + j - 1)%class))) &
-            then
-            ds(j, 1:nd) = de(j, 1:nd)
-          else
-            ds(j, 1:nd) = 0.0_wp
-          end if
-        end do
-        coef = c_q + c_v * el%damping
-        ! (c_q + c_v d) ds^T S ds in loops: matmul's temporaries cost more than these few
-        ! products.
-        do l = 1, nd
-          do j = 1, nm
-            sds(j, l) = dot_product(s(j, 1:nm), ds(1:nm, l))
-          end do
-        end do
+      d0 = this%dof_first(iel) - 1
+      nd = this%dof_first(iel + 1) - 1 - d0
+      nm = this%el_nm(iel)
+      call model%elements(iel)%e%stiffness(s(1:nm, 1:nm))
+      call stiffness_block(nm, nd, this%de_val(this%de_offset(iel):), s, model%max_modes, &
+        this%stressed(model%mode_first(iel):), c_q + c_v * model%elements(iel)%e%damping, &
+        work, block, model%max_dofs)
+      do k = 1, nd
+        if (this%free_of(d0 + k) > 0) tr(1) = tr(1) + block(k, k)
+      end do
+      off = mass%offset(iel)
+      if (off > 0) then
         do l = 1, nd
           do k = 1, nd
-            block(k, l) = coef * dot_product(ds(1:nm, k), sds(1:nm, l))
+            block(k, l) = block(k, l) + scale * mass%val(off + (l - 1) * nd + k - 1)
           end do
         end do
         do k = 1, nd
-          if (this%free_index(el%dofs(k)) > 0) tr(1) = tr(1) + block(k, k)
+          if (this%free_of(d0 + k) > 0) tr(2) = tr(2) + mass%val(off + (k - 1) * (nd + 1))
         end do
-        off = mass%offset(iel)
-        if (off > 0) then
-          do l = 1, nd
-            do k = 1, nd
-              block(k, l) = block(k, l) + scale * mass%val(off + (l - 1) * nd + k - 1)
-            end do
-          end do
-          do k = 1, nd
-            if (this%free_index(el%dofs(k)) > 0) tr(2) = tr(2) + mass%val(off + (k - 1) * &
-              (nd + 1))
-          end do
-        end if
-        do l = 1, nd
-          do k = 1, nd
-            if (this%free_index(el%dofs(k)) == 0 .or. this%free_index(el%dofs(l)) == 0) cycle
-            next = next + 1
-            call add_entry(this%newton, next, block(k, l))
-          end do
+      end if
+      do l = 1, nd
+        if (this%free_of(d0 + l) == 0) cycle
+        do k = 1, nd
+          if (this%free_of(d0 + k) == 0) cycle
+          next = next + 1
+          call add_entry(this%newton, next, block(k, l))
         end do
-        call add_constraint_rows(this, model, iel, de, this%newton, next)
-      end associate
+      end do
+      call add_constraint_rows(this, model, iel, nm, nd, this%de_val(this%de_offset(iel):), &
+        this%newton, next)
     end do
     if (present(traces)) traces = tr
     call this%newton%factor(info, rcond)
@@ -387,28 +374,56 @@ contains
 
   !> The entries of element iel's rigid and prescribed rows, J_k and J_k^T, in pattern order
   !> from entry next + 1 on; next is left at the last one.
-  subroutine add_constraint_rows(this, model, iel, de, lu, next)
+  subroutine add_constraint_rows(this, model, iel, nm, nd, de, lu, next)
     type(augmented_t), intent(in) :: this
     type(model_t), intent(in) :: model
-    integer, intent(in) :: iel
-    real(wp), intent(in) :: de(:, :)
+    integer, intent(in) :: iel, nm, nd
+    real(wp), intent(in) :: de(nm, nd)
     type(sparse_lu_t), intent(inout) :: lu
     integer, intent(inout) :: next
-    integer :: j, k, row
-    associate (el => model%elements(iel)%e)
-      do j = 1, el%n_modes()
-        row = model%modes(model%mode_first(iel) + j - 1)%row
-        if (row == 0) cycle
-        if (this%con_index(row) == 0) cycle
-        do k = 1, size(el%dofs)
-          if (this%free_index(el%dofs(k)) == 0) cycle
-          call add_entry(lu, next + 1, de(j, k))
-          call add_entry(lu, next + 2, de(j, k))
-          next = next + 2
-        end do
+    integer :: j, k, row, d0
+    d0 = this%dof_first(iel) - 1
+    do j = 1, nm
+      row = model%modes(model%mode_first(iel) + j - 1)%row
+      if (row == 0) cycle
+      if (this%con_index(row) == 0) cycle
+      do k = 1, nd
+        if (this%free_of(d0 + k) == 0) cycle
+        call add_entry(lu, next + 1, de(j, k))
+        call add_entry(lu, next + 2, de(j, k))
+        next = next + 2
       end do
-    end associate
+    end do
   end subroutine add_constraint_rows
+
+  !> coef D^T S D over one element's stressed mode rows (nm x nd, D = de), into blk(1:nd,
+  !> 1:nd): S D column by column in w, then the rows' products. Explicit shapes and the
+  !> leading dimensions of the caller's fixed-size buffers: no temporaries per element.
+  pure subroutine stiffness_block(nm, nd, de, s, lds, stressed, coef, w, blk, ldb)
+    integer, intent(in) :: nm, nd, lds, ldb
+    real(wp), intent(in) :: de(nm, nd), s(lds, nm), coef
+    logical, intent(in) :: stressed(nm)
+    real(wp), intent(inout) :: w(nm)
+    real(wp), intent(out) :: blk(ldb, nd)
+    real(wp) :: acc
+    integer :: i, j, k, l
+    do l = 1, nd
+      do i = 1, nm
+        acc = 0.0_wp
+        do j = 1, nm
+          if (stressed(j)) acc = acc + s(i, j) * de(j, l)
+        end do
+        w(i) = acc
+      end do
+      do k = 1, nd
+        acc = 0.0_wp
+        do i = 1, nm
+          if (stressed(i)) acc = acc + de(i, k) * w(i)
+        end do
+        blk(k, l) = coef * acc
+      end do
+    end do
+  end subroutine stiffness_block
 
   pure subroutine add_entry(lu, k, v)
     type(sparse_lu_t), intent(inout) :: lu
@@ -416,24 +431,4 @@ contains
     real(wp), intent(in) :: v
     lu%val(lu%pos(k)) = lu%val(lu%pos(k)) + v
   end subroutine add_entry
-
-  !> dD/dx of element iel at the last factorisation.
-  pure subroutine aug_element_jacobian(this, model, iel, de)
-    class(augmented_t), intent(in) :: this
-    type(model_t), intent(in) :: model
-    integer, intent(in) :: iel
-    real(wp), allocatable, intent(inout) :: de(:, :)
-    integer :: nm, nd, k, first
-    nm = model%elements(iel)%e%n_modes()
-    nd = size(model%elements(iel)%e%dofs)
-    ! Reused across elements of one kind: no allocation per element.
-    if (allocated(de)) then
-      if (size(de, 1) /= nm .or. size(de, 2) /= nd) deallocate(de)
-    end if
-    if (.not. allocated(de)) allocate(de(nm, nd))
-    first = this%de_offset(iel)
-    do k = 1, nd
-      de(:, k) = this%de_val(first + (k - 1) * nm:first + k * nm - 1)
-    end do
-  end subroutine aug_element_jacobian
 end module dynamics_augmented
