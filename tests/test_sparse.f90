@@ -180,19 +180,13 @@ contains
     type(dynamics_t), intent(inout) :: dyn
     character(len=*), intent(in) :: name
     real(wp), intent(in) :: t, q(:), v(:), a(:), jq(:, :), jv(:, :)
-    real(wp) :: m(size(jq, 1), size(jq, 1)), x(size(jq, 1)), dx(size(jq, 1)), dx_d(size(jq, 1))
+    real(wp) :: x(size(jq, 1)), dx(size(jq, 1)), dx_d(size(jq, 1))
     real(wp) :: c_q, c_v
-    integer :: ipiv(size(jq, 1)), info, i, status
+    integer :: status
     call suite%check(dyn%has_iteration_solver(), name // ': sparse model solves its Newton systems')
     c_q = 0.25e-6_wp
     c_v = 0.5e-3_wp
-    m = -c_q * jq - c_v * jv
-    do i = 1, size(m, 1)
-      m(i, i) = m(i, i) + 1.0_wp
-      x(i) = a(i) + maxval(abs(a)) * cos(2.1_wp * i)
-    end do
-    dx_d = a - x
-    call dgesv(size(x), 1, m, size(x), ipiv, dx_d, size(x), info)
+    call dense_correction(jq, jv, a, c_q, c_v, 2.1_wp, x, dx_d)
     call dyn%iteration_factor(c_q, c_v, status)
     call suite%check(status == 0, name // ': iteration matrix factorised')
     call dyn%newton_correction(t, q, v, x, dx, status)
@@ -202,29 +196,40 @@ contains
     call refactor_where_left(dyn, name, t, q, v, c_q, c_v)
   end subroutine iteration_matrix
 
+  !> A trial iterate x = a + max|a| cos(w i) and the dense correction dx = (I - c_q jq -
+  !> c_v jv)^-1 (a - x).
+  subroutine dense_correction(jq, jv, a, c_q, c_v, w, x, dx)
+    real(wp), intent(in) :: jq(:, :), jv(:, :), a(:), c_q, c_v, w
+    real(wp), intent(out) :: x(:), dx(:)
+    real(wp) :: m(size(a), size(a))
+    integer :: ipiv(size(a)), info, i
+    m = -c_q * jq - c_v * jv
+    do i = 1, size(a)
+      m(i, i) = m(i, i) + 1.0_wp
+      x(i) = a(i) + maxval(abs(a)) * cos(w * i)
+    end do
+    dx = a - x
+    call dgesv(size(x), 1, m, size(x), ipiv, dx, size(x), info)
+  end subroutine dense_correction
+
   !> iteration_factor takes the state of the last evaluation, here a newton_correction at t2
-  !> (the two-link's joints turned by half their travel, the cranks by 0.6 rad), not that of the last accel at t: its correction then equals the one of the matrix
-  !> made from the Jacobian at t2. The model is left at t for the checks that follow.
+  !> (the two-link's joints turned by half their travel, the cranks by 0.6 rad), not that of
+  !> the last accel at t: its correction then equals the one of the matrix made from the
+  !> Jacobian at t2. The model is left at t for the checks that follow.
   subroutine refactor_where_left(dyn, name, t, q, v, c_q, c_v)
     type(dynamics_t), intent(inout) :: dyn
     character(len=*), intent(in) :: name
     real(wp), intent(in) :: t, q(:), v(:), c_q, c_v
-    real(wp) :: m(size(q), size(q)), jq(size(q), size(q)), jv(size(q), size(q))
+    real(wp) :: jq(size(q), size(q)), jv(size(q), size(q))
     real(wp) :: a(size(q)), x(size(q)), dx(size(q)), dx_d(size(q)), t2
-    integer :: ipiv(size(q)), info, i, status
+    integer :: status
     ! The crank mechanisms turn at 150 rad/s.
     t2 = t + merge(0.004_wp, 0.23_wp, name == 'slider_crank' .or. name == 'four_bar')
     call dyn%jacobian(t2, q, v, jq, jv, status)
     call dyn%accel(t2, q, v, a, status)
     call suite%check(status == 0, name // ': accelerations at t2')
     if (status /= 0) return
-    m = -c_q * jq - c_v * jv
-    do i = 1, size(m, 1)
-      m(i, i) = m(i, i) + 1.0_wp
-      x(i) = a(i) + maxval(abs(a)) * sin(1.7_wp * i)
-    end do
-    dx_d = a - x
-    call dgesv(size(x), 1, m, size(x), ipiv, dx_d, size(x), info)
+    call dense_correction(jq, jv, a, c_q, c_v, 1.7_wp, x, dx_d)
     call dyn%accel(t, q, v, a, status)
     call dyn%iteration_factor(c_q, c_v, status)
     call dyn%newton_correction(t2, q, v, x, dx, status)
