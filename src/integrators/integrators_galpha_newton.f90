@@ -80,7 +80,7 @@ contains
 
   !> One step from this%t to t_new = this%t + h; the state is updated only on success.
   module procedure take_step
-    real(wp) :: c_q, c_v, dnorm, dnorm_old, rate
+    real(wp) :: c_q, c_v, dnorm, dnorm_old, rate, first_norm, first_rate
     integer :: iter, status
 
     associate (acc0 => this%work(:, 1), acc_known => this%work(:, 2), &
@@ -121,10 +121,20 @@ contains
         end if
         x = x + dx
         dnorm = max(weighted_norm(this, c_q, dx, q1), weighted_norm(this, c_v, dx, v1))
+        if (iter == 1) first_norm = dnorm
         if (iter > 1) then
           rate = dnorm / dnorm_old
+          if (iter == 2) first_rate = rate
           if (rate > max_newton_rate) return
-          this%newton_rate = max(rate_decay * this%newton_rate, rate)
+          ! A rate of 1 stands for none known (a new matrix, or one unmeasured for long): the
+          ! first measurement replaces it rather than decaying from it, which took about six
+          ! steps of second corrections (two-link, 32 el/link: 1.28 -> 1.14 evaluations per
+          ! step).
+          if (this%newton_rate >= 1) then
+            this%newton_rate = rate
+          else
+            this%newton_rate = max(rate_decay * this%newton_rate, rate)
+          end if
           this%rate_age = 0
         end if
         ! The error left after this correction is about rate * dnorm (linear convergence of
@@ -139,10 +149,14 @@ contains
       ! link, 32 el/link, dt 1e-4: about 2e-4 fresh, 8e-3 after the ~200 steps one served), and
       ! the first correction times the rate decides whether a step stops after one evaluation.
       ! A system solver refactors at the state of its last evaluation (no accel needed), for
-      ! about one evaluation's work: worth it once the matrix needs second corrections.
+      ! about half an evaluation's work: worth it once the matrix needs second corrections.
       this%matrix_age = this%matrix_age + 1
-      if (this%system_solver .and. iter > 1 .and. this%matrix_age >= refactor_age) &
-        this%refactor_here = .true.
+      ! Only where the measured rate itself would have kept the first correction from
+      ! stopping: a step that verified a rate no longer known keeps its matrix (half the
+      ! refactorisations at 32 and 64 el/link, the same evaluations).
+      if (this%system_solver .and. iter > 1 .and. this%matrix_age >= refactor_age) then
+        if (first_rate * first_norm > newton_tol) this%refactor_here = .true.
+      end if
       this%rate_age = this%rate_age + 1
       if (this%rate_age >= rate_lifetime) this%newton_rate = 1
       this%q = q_known + c_q * x
