@@ -46,8 +46,8 @@ module integrators_galpha
   !> (CVODE's CRDOWN).
   real(wp), parameter :: rate_decay = 0.3_wp
   integer, parameter :: rate_lifetime = 20
-  !> A system-solver step that needed a second correction refactors the iteration matrix at
-  !> its end when the matrix is at least this many steps old (see take_step).
+  !> A system-solver step that its matrix's measured rate kept from stopping after one
+  !> correction refactors the matrix at its end if it is this many steps old (take_step).
   integer, parameter :: refactor_age = 2
   !> Local step halvings after failed steps before giving up (fixed step).
   integer, parameter :: max_halvings = 10

@@ -44,6 +44,10 @@ def run_both(tmp_path, name, **kw):
         assert proc.returncode == 0, proc.stderr
         with h5py.File(path) as f:
             assert f.attrs["linear_solver"] == solver
+            # Every Newton matrix factorised is counted: at least the first, at most one per
+            # step besides those after Jacobian refreshes.
+            assert 1 <= f.attrs["n_factorisations"] <= f.attrs["n_steps"] + \
+                f.attrs["n_jac_evals"]
             out[solver] = (f["x"][:], f["time"][:])
     return out
 
