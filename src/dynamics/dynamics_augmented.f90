@@ -264,25 +264,25 @@ contains
     type(element_mass_t), intent(in) :: mass
     integer, intent(out) :: info
     real(wp) :: rcond
-    integer :: iel, k, l, next
+    integer :: iel, k, l, next, nd, d0, off
+    this%de_val = de_val
     call start_assembly(this, model, this%lu, next, 1.0_wp)
     do iel = 1, model%n_elements
-      associate (el => model%elements(iel)%e)
-        if (el%has_inertia()) then
-          do l = 1, size(el%dofs)
-            do k = 1, size(el%dofs)
-              if (this%free_index(el%dofs(k)) == 0 .or. this%free_index(el%dofs(l)) == 0) cycle
-              next = next + 1
-              call add_entry(this%lu, next, &
-                mass%val(mass%offset(iel) + (l - 1) * size(el%dofs) + k - 1))
-            end do
+      d0 = this%dof_first(iel) - 1
+      nd = this%dof_first(iel + 1) - 1 - d0
+      off = mass%offset(iel)
+      if (off > 0) then
+        do l = 1, nd
+          if (this%free_of(d0 + l) == 0) cycle
+          do k = 1, nd
+            if (this%free_of(d0 + k) == 0) cycle
+            next = next + 1
+            call add_entry(this%lu, next, mass%val(off + (l - 1) * nd + k - 1))
           end do
-        end if
-        this%de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1) &
-          = de_val(this%de_offset(iel):this%de_offset(iel) + el%n_modes() * size(el%dofs) - 1)
-        call add_constraint_rows(this, model, iel, el%n_modes(), size(el%dofs), &
-          this%de_val(this%de_offset(iel):), this%lu, next)
-      end associate
+        end do
+      end if
+      call add_constraint_rows(this, model, iel, this%el_nm(iel), nd, &
+        this%de_val(this%de_offset(iel):), this%lu, next)
     end do
     call this%lu%factor(info, rcond)
     if (rcond < 1.0e-14_wp) info = max(info, 1)
