@@ -11,8 +11,7 @@ module reduction_eigen
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use core_linalg, only: sym_gen_eig, chol_factor
   use core_strings, only: int_str
-  use core_arpack, only: dsaupd, dseupd
-  use core_sort, only: sort_by_value
+  use reduction_lanczos, only: lanczos_t, LZ_OP, LZ_OP_BX, LZ_B
   implicit none
   private
   public :: lowest_modes, eigen_solver_choice
@@ -29,9 +28,6 @@ module reduction_eigen
   integer, parameter :: EIGEN_AUTO_DENSE_MAX_N = 200
   integer, parameter :: EIGEN_AUTO_NEV_DIVISOR = 10
 
-  !> ARPACK restarts allowed (iparam(3)); shift-invert about a shift below the spectrum
-  !> usually needs fewer than ten.
-  integer, parameter :: MAX_RESTARTS = 1000
   !> Shifts tried, as multiples of -||K||_1 / ||M||_1 (see arpack_modes).
   real(wp), parameter :: SHIFT_FACTORS(7) = [1.0e-8_wp, 1.0e-6_wp, 1.0e-4_wp, 1.0e-2_wp, &
     1.0_wp, 1.0e2_wp, 1.0e4_wp]
@@ -196,12 +192,10 @@ contains
     integer, intent(in) :: nev
     real(wp), allocatable, intent(out) :: lambda(:), v(:, :)
     type(error_t), intent(inout) :: err
-    real(wp), allocatable :: c(:, :), resid(:), basis(:, :), workd(:), workl(:), d(:), z(:, :)
-    logical, allocatable :: sel(:)
-    integer :: iparam(11), ipntr(11)
-    integer :: n, ncv, lworkl, ido, info, i, j, is, nconv
-    integer, allocatable :: order(:)
-    real(wp) :: scale, sigma, tol, mv(size(k, 1))
+    real(wp), allocatable :: c(:, :)
+    type(lanczos_t) :: lz
+    integer :: n, info, j, is, request
+    real(wp) :: scale, sigma, mv(size(k, 1)), x(size(k, 1))
     n = size(k, 1)
 
     ! A mass matrix that is not positive definite would make ARPACK take the square root of
@@ -233,111 +227,27 @@ contains
       return
     end if
 
-    ncv = min(n, max(2 * nev + 1, nev + 8))
-    lworkl = ncv * (ncv + 8)
-    allocate(resid(n), basis(n, ncv), workd(3 * n), workl(lworkl))
-    ! A fixed, deterministic start vector (info = 1) instead of ARPACK's random one, whose
-    ! seed lives in the library and changes from call to call. Its quasi-random entries
-    ! have a component along every mode.
-    do i = 1, n
-      resid(i) = modulo(i * 0.6180339887498949_wp, 1.0_wp) - 0.5_wp
-    end do
-    iparam = 0
-    iparam(1) = 1              ! exact shifts
-    iparam(3) = MAX_RESTARTS
-    iparam(7) = 3              ! shift-invert, B = M
-    ipntr = 0
-    tol = 0.0_wp               ! machine precision
-    ido = 0
+    call lz%start(n, nev, sigma, 'arpack')
     do
-      call dsaupd(ido, 'G', n, 'LM', nev, tol, resid, ncv, basis, n, iparam, ipntr, workd, &
-        workl, lworkl, info)
-      select case (ido)
-      case (-1)
+      call lz%next(request)
+      select case (request)
+      case (LZ_OP)
         ! y = (K - sigma M)^-1 M x
-        associate (x => workd(ipntr(1):ipntr(1) + n - 1))
-          call dsymv('L', n, 1.0_wp, m, n, x, 1, 0.0_wp, mv, 1)
-        end associate
+        x = lz%input()
+        call dsymv('L', n, 1.0_wp, m, n, x, 1, 0.0_wp, mv, 1)
         call chol_apply(c, mv)
-        workd(ipntr(2):ipntr(2) + n - 1) = mv
-      case (1)
-        ! M x is already at ipntr(3)
-        mv = workd(ipntr(3):ipntr(3) + n - 1)
+      case (LZ_OP_BX)
+        mv = lz%input()
         call chol_apply(c, mv)
-        workd(ipntr(2):ipntr(2) + n - 1) = mv
-      case (2)
-        associate (x => workd(ipntr(1):ipntr(1) + n - 1))
-          call dsymv('L', n, 1.0_wp, m, n, x, 1, 0.0_wp, mv, 1)
-        end associate
-        workd(ipntr(2):ipntr(2) + n - 1) = mv
+      case (LZ_B)
+        x = lz%input()
+        call dsymv('L', n, 1.0_wp, m, n, x, 1, 0.0_wp, mv, 1)
       case default
         exit
       end select
+      call lz%output(mv)
     end do
-    nconv = iparam(5)
-    select case (info)
-    case (0)
-    case (1)
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': no convergence after " // &
-        int_str(iparam(3)) // ' restarts (' // int_str(nconv) // ' of ' // int_str(nev) // &
-        " modes converged); try solver = 'lapack'")
-      return
-    case (3)
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': no shifts could be applied during " // &
-        "a restart (Lanczos basis too small); try solver = 'lapack'")
-      return
-    case (-8)
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': the tridiagonal eigenproblem " // &
-        '(dsteqr) failed in dsaupd')
-      return
-    case (-9999)
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': could not build a Lanczos " // &
-        'factorisation (size ' // int_str(iparam(5)) // ' reached)')
-      return
-    case default
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': dsaupd rejected its arguments " // &
-        '(info = ' // int_str(info) // ')')
-      return
-    end select
-    if (nconv < nev) then
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': only " // int_str(nconv) // ' of ' // &
-        int_str(nev) // ' modes converged')
-      return
-    end if
-
-    ! d and z sized ncv: dseupd writes all converged pairs, which may be more than nev.
-    allocate(sel(ncv), d(ncv), z(n, ncv))
-    sel = .true.
-    call dseupd(.true., 'A', sel, d, z, n, sigma, 'G', n, 'LM', nev, tol, resid, ncv, basis, &
-      n, iparam, ipntr, workd, workl, lworkl, info)
-    select case (info)
-    case (0)
-    case (-8)
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': the tridiagonal eigenproblem " // &
-        '(dsteqr) failed in dseupd')
-      return
-    case (-14)
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': dsaupd found no eigenvalue to " // &
-        'sufficient accuracy')
-      return
-    case (-17)
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': dseupd found a different number " // &
-        'of converged Ritz values than dsaupd')
-      return
-    case default
-      call err%set(ERR_NUMERIC, "eigensolver 'arpack': dseupd rejected its arguments " // &
-        '(info = ' // int_str(info) // ')')
-      return
-    end select
-
-    ! Ascending order (dseupd's order depends on which and the mode).
-    order = [(i, i = 1, nev)]
-    call sort_by_value(order, d(1:nev))
-    allocate(lambda(nev), v(n, nev))
-    do j = 1, nev
-      v(:, j) = z(:, order(j))
-      lambda(j) = d(order(j))
-    end do
+    call lz%finish(lambda, v, err)
   end subroutine arpack_modes
 
   !> Solve (L L^T) x = b in place with the Cholesky factor from chol_factor.
