@@ -149,7 +149,7 @@ contains
       this%red%keep_bases = this%scene%linear%active .and. allocated(this%scene%linear%times)
       call reduction_basis(this, this%red%dyn, this%red%basis, err)
       if (.not. err%ok()) return
-      if (r%static_correction .and. .not. allocated(this%red%basis%k_chol)) then
+      if (r%static_correction .and. .not. this%red%basis%has_k0()) then
         call err%set(ERR_INPUT, 'group &reduction: static_correction needs a positive ' // &
           'definite stiffness at the basis configuration (a dynamic mode has no stiffness)')
         return

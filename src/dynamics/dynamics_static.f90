@@ -28,7 +28,8 @@ module dynamics_static
   use dynamics_static_krylov, only: krylov_statics_t
   implicit none
   private
-  public :: tangent_stiffness, motion_tangent, static_solve, stable_tangent, STABILITY_MARGIN
+  public :: tangent_stiffness, motion_tangent, static_solve, stable_tangent, STABILITY_MARGIN, &
+    has_loads
 
   !> omega^2 above -STABILITY_MARGIN s counts as stable (see the module comment): above the
   !> round-off of the Cholesky factors and of the difference tangent, and below the lowest

@@ -483,7 +483,7 @@ module io_schema_tables
       '', 'MAC below which the basis is replaced'), &
     var_spec_t('reduction', 'eigensolver', VK_CHOICE, '', 'auto', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      'auto|lapack|arpack', 'eigensolver of the basis'), &
+      'auto|lapack|arpack|krylov', 'eigensolver of the basis'), &
     var_spec_t('reduction', 'joints', VK_CHOICE, '', 'free', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       'free|held', 'controlled joints free or held in the basis'), &

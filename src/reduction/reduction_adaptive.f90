@@ -11,11 +11,10 @@ module reduction_adaptive
   use core_kinds, only: wp
   use core_strings, only: real_str
   use core_error, only: error_t
-  use core_linalg, only: chol_factor
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use integrators_driver, only: integrate
-  use reduction_modal, only: modal_result_t, modal_analysis
-  use reduction_basis, only: track_modes, held_joint_basis
+  use reduction_modal, only: modal_result_t, modal_analysis, modal_mass_times
+  use reduction_basis, only: track_modes, held_joint_basis, keep_stiffness
   use reduction_system, only: reduced_t
   use dynamics_control, only: controlled_t
   implicit none
@@ -143,8 +142,8 @@ contains
     type(modal_result_t) :: modes
     real(wp), allocatable :: q_dy(:), v_dy(:), tracked(:, :), mac(:)
     integer, allocatable :: pick(:)
-    integer :: k, n_dy, info
-    logical :: replace, controls_on
+    integer :: k, n_dy
+    logical :: replace, controls_on, held_joints_given
 
     k = red%basis%k()
     n_dy = red%dyn%model%n_dy
@@ -154,8 +153,10 @@ contains
     ! The basis is the open-loop plant's, as at the start.
     controls_on = red%dyn%controls_on
     red%dyn%controls_on = .false.
+    held_joints_given = .false.
+    if (allocated(spec%held)) held_joints_given = size(spec%held) > 0
     call modal_analysis(red%dyn, t, q_dy, min(n_dy, k + 2), modes, err, &
-      solver=spec%eigensolver)
+      solver=spec%eigensolver, dense=held_joints_given)
     red%dyn%controls_on = controls_on
     ! A held-joint basis is replaced by the one of the new configuration, k columns (spare
     ! candidates would let tracking drop part of the joints' motions from the span).
@@ -163,23 +164,24 @@ contains
       if (size(spec%held) > 0) call held_joint_basis(modes%k0, modes%m0, spec%held, k, &
         spec%eigensolver, modes%shapes, modes%frequency_hz, err)
     end if
-    if (err%ok()) call track_modes(red%basis%v, modes%shapes, modes%m0, tracked, mac, pick, err)
+    if (err%ok()) call track_modes(red%basis%v, modes%shapes, &
+      modal_mass_times(red%dyn, modes, red%basis%v), &
+      modal_mass_times(red%dyn, modes, modes%shapes), tracked, mac, pick, err)
     if (.not. err%ok()) then
       call err%prefix('basis update at t = ' // real_str(t) // ': ')
       return
     end if
     replace = spec%mode == 'interval' .or. minval(mac) < spec%mac_threshold
     if (replace) then
-      red%last_eta_dot = matmul(transpose(tracked), matmul(modes%m0, v_dy))
+      red%last_eta_dot = matmul(transpose(tracked), &
+        reshape(modal_mass_times(red%dyn, modes, reshape(v_dy, [n_dy, 1])), [n_dy]))
       red%last_eta = 0.0_wp
       red%basis%v = tracked
       red%basis%frequency_hz = modes%frequency_hz(pick)
       red%basis%q_ref = q_dy
       red%basis%time = t
       call red%expansions%forget()
-      red%basis%k_chol = modes%k0
-      call chol_factor(red%basis%k_chol, info)
-      if (info /= 0) deallocate(red%basis%k_chol)
+      call keep_stiffness(red%basis, red%dyn, modes)
       call red%keep_basis()
       log%n_updates = log%n_updates + 1
     end if

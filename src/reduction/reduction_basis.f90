@@ -5,7 +5,8 @@ module reduction_basis
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use core_strings, only: int_str, real_str
-  use core_linalg, only: chol_factor, lu_factor, lu_solve
+  use core_linalg, only: chol_factor, chol_solve, lu_factor, lu_solve
+  use reduction_krylov, only: k0_factor, k0_solve
   use reduction_eigen, only: lowest_modes
   use dynamics_system, only: dynamics_t
   use model_system, only: model_t
@@ -15,7 +16,7 @@ module reduction_basis
   implicit none
   private
   public :: basis_spec_t, basis_t, compute_basis, track_modes, BANDWIDTH_FRACTION, &
-    held_joint_basis, held_joints
+    held_joint_basis, held_joints, keep_stiffness
 
   !> Share of the prescribed acceleration's energy that defines the motion's bandwidth.
   real(wp), parameter :: BANDWIDTH_FRACTION = 0.99_wp
@@ -40,6 +41,10 @@ module reduction_basis
     !> Cholesky factor of the tangent stiffness K0, for the static correction; empty when K0
     !> is not positive definite (a mechanism mode), which disables the correction.
     real(wp), allocatable :: k_chol(:, :)
+    !> On the Krylov path instead: the element Jacobians at the basis configuration, from
+    !> which the sparse K0 is factored where needed (reduction_krylov's k0_solve); empty when
+    !> K0 is singular.
+    real(wp), allocatable :: de_k0(:)
     real(wp) :: time = 0.0_wp                  !< when the basis was made (trajectory time)
     real(wp) :: cutoff_hz = 0.0_wp             !< cut-off used by 'cutoff' and 'auto'
     real(wp) :: bandwidth_hz = 0.0_wp          !< motion bandwidth used by 'auto'
@@ -47,6 +52,8 @@ module reduction_basis
     character(len=8) :: solver = ''
   contains
     procedure :: k => basis_k
+    procedure :: has_k0 => basis_has_k0
+    procedure :: static_solve => basis_static_solve
   end type basis_t
 
 contains
@@ -56,6 +63,45 @@ contains
     basis_k = 0
     if (allocated(this%v)) basis_k = size(this%v, 2)
   end function basis_k
+
+  !> Whether the basis can give K0^-1 r (static correction and error estimate).
+  logical function basis_has_k0(this)
+    class(basis_t), intent(in) :: this
+    basis_has_k0 = allocated(this%k_chol) .or. allocated(this%de_k0)
+  end function basis_has_k0
+
+  !> dq = K0^-1 r with K0 at the basis configuration (dense Cholesky factor or sparse).
+  subroutine basis_static_solve(this, dyn, r, dq)
+    class(basis_t), intent(in) :: this
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: r(:)
+    real(wp), intent(out) :: dq(:)
+    logical :: ok
+    dq = r
+    if (allocated(this%k_chol)) then
+      call chol_solve(this%k_chol, dq)
+    else if (allocated(this%de_k0)) then
+      call k0_solve(dyn, this%de_k0, r, dq, ok)
+    end if
+  end subroutine basis_static_solve
+
+  !> Keep what the static solve needs from the modal analysis `modes` just made at the basis
+  !> configuration (the kinematics of dyn still there).
+  subroutine keep_stiffness(basis, dyn, modes)
+    type(basis_t), intent(inout) :: basis
+    type(dynamics_t), intent(inout) :: dyn
+    type(modal_result_t), intent(in) :: modes
+    integer :: info
+    if (allocated(basis%k_chol)) deallocate(basis%k_chol)
+    if (allocated(basis%de_k0)) deallocate(basis%de_k0)
+    if (allocated(modes%k0)) then
+      basis%k_chol = modes%k0
+      call chol_factor(basis%k_chol, info)
+      if (info /= 0) deallocate(basis%k_chol)
+    else if (k0_factor(dyn, dyn%kin%de_val)) then
+      basis%de_k0 = dyn%kin%de_val
+    end if
+  end subroutine keep_stiffness
 
   !> The basis at (t, q_dy) of `dyn` with the prescribed modes held (at `held` when given,
   !> else at their motion's value at t). k follows the spec. The kinematic state of dyn is
@@ -70,7 +116,8 @@ contains
     type(modal_result_t) :: modes
     type(kin_state_t) :: kin_saved
     real(wp) :: cutoff
-    integer :: k, n_dy, nev, info
+    integer :: k, n_dy, nev
+    logical :: held_joints_given
 
     n_dy = dyn%model%n_dy
     if (spec%selection == 'count' .and. (spec%n_modes < 1 .or. spec%n_modes > n_dy)) then
@@ -87,13 +134,17 @@ contains
     ! Ask for enough modes to decide k; with a cut-off, double until one lies above it.
     nev = min(n_dy, 8)
     if (spec%selection == 'count') nev = spec%n_modes
+    held_joints_given = .false.
+    if (allocated(spec%held)) held_joints_given = size(spec%held) > 0
     do
-      call modal_analysis(dyn, t, q_dy, nev, modes, err, solver=spec%eigensolver)
+      call modal_analysis(dyn, t, q_dy, nev, modes, err, solver=spec%eigensolver, &
+        dense=held_joints_given)
       if (.not. err%ok()) exit
       if (spec%selection == 'count' .or. nev == n_dy) exit
       if (modes%frequency_hz(nev) > cutoff) exit
       nev = min(n_dy, 2 * nev)
     end do
+    if (err%ok()) call keep_stiffness(basis, dyn, modes)
     if (allocated(dyn%held_rh)) deallocate(dyn%held_rh)
     call dyn%kin%restore_state(kin_saved)
     if (.not. err%ok()) return
@@ -135,9 +186,6 @@ contains
     basis%q_ref = q_dy
     basis%time = t
     basis%solver = modes%solver
-    basis%k_chol = modes%k0
-    call chol_factor(basis%k_chol, info)
-    if (info /= 0) deallocate(basis%k_chol)
   end subroutine compute_basis
 
   !> A basis for joints under feedback control (Craig-Bampton's fixed-interface idea): the
@@ -258,8 +306,9 @@ contains
   !> Order and signs of the candidate modes w (n_dy, nc) to follow the current basis v
   !> (n_dy, k): column i of the result is the candidate with the largest MAC against v(:, i)
   !> (each used once), with its sign flipped so that v(:, i)^T M w_i > 0. `mac(i)` is that MAC.
-  subroutine track_modes(v, w, m, tracked, mac, pick, err)
-    real(wp), intent(in) :: v(:, :), w(:, :), m(:, :)
+  !> mv = M v and mw = M w with the current mass matrix.
+  subroutine track_modes(v, w, mv, mw, tracked, mac, pick, err)
+    real(wp), intent(in) :: v(:, :), w(:, :), mv(:, :), mw(:, :)
     real(wp), intent(out) :: tracked(:, :)
     real(wp), intent(out) :: mac(:)
     integer, intent(out) :: pick(:)
@@ -272,12 +321,12 @@ contains
       call err%set(ERR_NUMERIC, 'mode tracking: fewer candidate modes than basis vectors')
       return
     end if
-    cross = matmul(transpose(v), matmul(m, w))
+    cross = matmul(transpose(v), mw)
     do i = 1, size(v, 2)
-      nv(i) = dot_product(v(:, i), matmul(m, v(:, i)))
+      nv(i) = dot_product(v(:, i), mv(:, i))
     end do
     do j = 1, size(w, 2)
-      nw(j) = dot_product(w(:, j), matmul(m, w(:, j)))
+      nw(j) = dot_product(w(:, j), mw(:, j))
     end do
     macs = cross**2 / spread(nv, 2, size(w, 2)) / spread(nw, 1, size(v, 2))
     free = .true.

@@ -1,33 +1,42 @@
 !> Modal analysis at a configuration with the prescribed modes locked:
 !>   K_T v = omega^2 M0 v   on the dynamic coordinates (reduction_eigen: dense LAPACK dsygvd
-!> or ARPACK shift-invert Lanczos for the lowest modes of large models).
+!> or ARPACK shift-invert Lanczos for the lowest modes of large models, on the dense matrices
+!> or, for large models on the sparse path, on the augmented sparse factors: reduction_krylov).
 !> The eigenvectors come back M0-normalised; they are the basis of the reduced models.
 module reduction_modal
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
+  use core_strings, only: int_str
   use reduction_eigen, only: lowest_modes
+  use reduction_krylov, only: krylov_modes, krylov_modes_applies, mbar_times
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: tangent_stiffness, motion_tangent
   implicit none
   private
-  public :: modal_result_t, modal_analysis
+  public :: modal_result_t, modal_analysis, modal_mass_times
 
   real(wp), parameter :: TWO_PI = 6.28318530717958647692_wp
+  !> 'auto' takes the Krylov path (no dense matrices) from this many dynamic coordinates on,
+  !> where it applies and a few modes are asked for: below it the dense path is fast and
+  !> keeps K0 and Mbar for the reduced model's error estimate and the MAC (docs/theory.md
+  !> 8.2 has the measured costs).
+  integer, parameter :: KRYLOV_AUTO_MIN_N = 1000
 
   type :: modal_result_t
     real(wp), allocatable :: omega2(:)        !< eigenvalues [rad^2/s^2]
     real(wp), allocatable :: frequency_hz(:)  !< sqrt(omega2) / 2 pi (negative sign: unstable)
     real(wp), allocatable :: shapes(:, :)     !< (n_dy, n_modes), M0-normalised
     real(wp), allocatable :: node_shapes(:, :, :)  !< (n_x, n_modes) nodal: DF_dy v
+    !> Dense tangent and mass matrix (not allocated on the Krylov path, which forms neither).
     real(wp), allocatable :: m0(:, :), k0(:, :)
-    character(len=8) :: solver = ''            !< eigensolver that ran: 'lapack' or 'arpack'
+    character(len=8) :: solver = ''            !< eigensolver that ran: lapack, arpack, krylov
   end type modal_result_t
 
 contains
 
-  !> n_modes = 0 asks for all of them (always LAPACK). solver: 'auto' (default), 'lapack' or
-  !> 'arpack', as reduction_eigen's lowest_modes.
-  subroutine modal_analysis(dyn, t, q_dy, n_modes, res, err, solver, along_motion)
+  !> n_modes = 0 asks for all of them (always LAPACK). solver: 'auto' (default), 'lapack',
+  !> 'arpack' (as reduction_eigen's lowest_modes) or 'krylov' (reduction_krylov).
+  subroutine modal_analysis(dyn, t, q_dy, n_modes, res, err, solver, along_motion, dense)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     integer, intent(in) :: n_modes
@@ -36,8 +45,11 @@ contains
     character(len=*), intent(in), optional :: solver
     !> With the prescribed motion's rates at t (dynamic stiffening: motion_tangent), not held.
     logical, intent(in), optional :: along_motion
-    logical :: moving
-    real(wp), allocatable :: lambda(:), v(:, :)
+    !> The caller needs res%k0 and res%m0 (a held-joint basis): no Krylov path.
+    logical, intent(in), optional :: dense
+    logical :: moving, need_dense
+    character(len=:), allocatable :: why_not
+    real(wp), allocatable :: lambda(:), v(:, :), shapes_x(:, :)
     character(len=:), allocatable :: name
     integer :: n, nm
     n = dyn%model%n_dy
@@ -55,9 +67,33 @@ contains
         'coordinates')
       return
     end if
-    allocate(res%k0(n, n))
     moving = .false.
     if (present(along_motion)) moving = along_motion
+    need_dense = .false.
+    if (present(dense)) need_dense = dense
+    why_not = krylov_modes_applies(dyn, moving)
+    if (need_dense) why_not = 'the held-joint basis needs the dense K0 and Mbar'
+    if (name == 'auto' .and. why_not == '' .and. n >= KRYLOV_AUTO_MIN_N .and. &
+      nm <= n / 10) name = 'krylov'
+    if (name == 'krylov') then
+      if (why_not /= '') then
+        call err%set(ERR_INPUT, "eigensolver 'krylov': " // why_not // "; use 'auto'")
+      else if (nm > n - 2) then
+        call err%set(ERR_INPUT, "eigensolver 'krylov': needs at most n - 2 modes (n = " // &
+          int_str(n) // ', asked ' // int_str(nm) // ')')
+      else
+        call krylov_modes(dyn, t, q_dy, nm, res%omega2, res%shapes, shapes_x, err)
+      end if
+      if (.not. err%ok()) then
+        call err%prefix('modal analysis: ')
+        return
+      end if
+      res%frequency_hz = sign(sqrt(abs(res%omega2)), res%omega2) / TWO_PI
+      res%node_shapes = reshape(shapes_x, [dyn%model%n_x, nm, 1])
+      res%solver = 'krylov'
+      return
+    end if
+    allocate(res%k0(n, n))
     if (moving) then
       call motion_tangent(dyn, t, q_dy, res%k0, err)
     else
@@ -79,4 +115,18 @@ contains
     allocate(res%node_shapes(dyn%model%n_x, nm, 1))
     res%node_shapes(:, :, 1) = matmul(dyn%kin%df(:, dyn%model%n_rh + 1:), res%shapes)
   end subroutine modal_analysis
+
+  !> Mbar w at the configuration of the modal analysis res, which must be the last one the
+  !> kinematics of dyn solved (the Krylov path keeps no Mbar).
+  function modal_mass_times(dyn, res, w) result(mw)
+    type(dynamics_t), intent(inout) :: dyn
+    type(modal_result_t), intent(in) :: res
+    real(wp), intent(in) :: w(:, :)
+    real(wp) :: mw(size(w, 1), size(w, 2))
+    if (allocated(res%m0)) then
+      mw = matmul(res%m0, w)
+    else
+      mw = mbar_times(dyn, w)
+    end if
+  end function modal_mass_times
 end module reduction_modal

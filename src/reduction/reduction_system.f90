@@ -280,9 +280,8 @@ contains
     if (.not. err%ok()) return
     estimate = 0.0_wp
     dq = 0.0_wp
-    if (allocated(this%basis%k_chol)) then
-      dq = r
-      call chol_solve(this%basis%k_chol, dq)
+    if (this%basis%has_k0()) then
+      call this%basis%static_solve(this%dyn, r, dq)
       estimate = this%dyn%model%largest_translation(nodal_motion(this, dq))
     else
       this%has_estimate = .false.

@@ -1,0 +1,210 @@
+!> The lowest modes of a large model without dense matrices (docs/theory.md 8.2):
+!>   K0 v = omega^2 Mbar v on the dynamic coordinates, prescribed modes locked,
+!> by shift-invert Lanczos (reduction_lanczos) with OP = (K0 - sigma Mbar)^-1 Mbar applied in
+!> the augmented sparse form of dynamics_augmented: y = (K0 - sigma Mbar)^-1 DF_dy^T f is the
+!> solution of
+!>     [ K_x - sigma M   J_k^T ] [ y_x ]   [ f ]
+!>     [ J_k             0     ] [ mu  ] = [ 0 ],     y = J_d y_x,
+!> with K_x = D_x^T S D_x over the dynamic modes (the iteration matrix of the implicit
+!> integrators with mass_scale = -sigma), and Mbar x = DF_dy^T M DF_dy x by one solve, an
+!> element pass and one transposed solve. Each Lanczos step is O(n): the dense path forms DF
+!> (n_x x n_q) and Mbar by O(n^3) work and O(n^2) memory.
+!>
+!> K0 must be the whole tangent for the two to agree: no elastic (calculable) modes, no loads
+!> (their stiffness is differenced on the dense tangent), not along a motion.
+module reduction_krylov
+  use core_kinds, only: wp
+  use core_error, only: error_t, ERR_NUMERIC
+  use reduction_lanczos, only: lanczos_t, LZ_OP, LZ_OP_BX, LZ_B
+  use dynamics_system, only: dynamics_t
+  use dynamics_static, only: has_loads
+  implicit none
+  private
+  public :: krylov_modes, krylov_modes_applies, mbar_times, k0_factor, k0_solve
+
+  !> sigma = -SHIFT_FACTOR tr(K_x) / tr(M) over the free nodal coordinates: far below the
+  !> elastic eigenvalues (their nu = 1 / (lambda - sigma) stay well apart), yet it keeps
+  !> K0 - sigma Mbar regular where K0 is singular (modes without stiffness), as the dense
+  !> ARPACK path's first shift does.
+  real(wp), parameter :: SHIFT_FACTOR = 1.0e-8_wp
+
+contains
+
+  !> '' when the Krylov path gives this model's tangent exactly, else why not.
+  function krylov_modes_applies(dyn, along_motion) result(why_not)
+    type(dynamics_t), intent(in) :: dyn
+    logical, intent(in) :: along_motion
+    character(len=:), allocatable :: why_not
+    why_not = ''
+    if (.not. dyn%sparse) then
+      why_not = 'the model is on the dense path (&scene linear_solver)'
+    else if (dyn%model%n_elastic > 0) then
+      why_not = 'the model has elastic (calculable) modes'
+    else if (has_loads(dyn)) then
+      why_not = 'the model has loads (their stiffness needs the dense tangent)'
+    else if (along_motion) then
+      why_not = 'modes along a motion need the dense tangent'
+    end if
+  end function krylov_modes_applies
+
+  !> The nev lowest modes at (t, q_dy) with the prescribed modes locked: omega^2 ascending,
+  !> shapes Mbar-normalised with their largest component positive, node_shapes = DF_dy v.
+  !> Leaves the kinematics solved at the state.
+  subroutine krylov_modes(dyn, t, q_dy, nev, lambda, v, node_shapes, err)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    integer, intent(in) :: nev
+    real(wp), allocatable, intent(out) :: lambda(:), v(:, :), node_shapes(:, :)
+    type(error_t), intent(out) :: err
+    type(lanczos_t) :: lz
+    real(wp) :: g(size(q_dy)), traces(2), sigma, y(size(q_dy), 1), x(size(q_dy))
+    real(wp), allocatable :: mv(:, :)
+    integer :: n, info, request, j
+    logical :: was_locked
+    n = size(q_dy)
+    was_locked = dyn%locked
+    dyn%locked = .true.
+    call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, g, err)
+    if (.not. err%ok()) then
+      dyn%locked = was_locked
+      return
+    end if
+    dyn%aug%de_val = dyn%kin%de_val
+    call dyn%aug%factor_newton(dyn%model, dyn%mass, 1.0_wp, 0.0_wp, info, mass_scale=0.0_wp, &
+      traces=traces)
+    if (.not. traces(2) > 0) then
+      call err%set(ERR_NUMERIC, "eigensolver 'krylov': no free coordinate has mass")
+      dyn%locked = was_locked
+      return
+    end if
+    sigma = -SHIFT_FACTOR * traces(1) / traces(2)
+    call dyn%aug%factor_newton(dyn%model, dyn%mass, 1.0_wp, 0.0_wp, info, mass_scale=-sigma)
+    if (info /= 0) then
+      call err%set(ERR_NUMERIC, "eigensolver 'krylov': K0 - sigma Mbar is singular (a " // &
+        'dynamic coordinate without mass?)')
+      dyn%locked = was_locked
+      return
+    end if
+    call lz%start(n, nev, sigma, 'krylov')
+    do
+      call lz%next(request)
+      select case (request)
+      case (LZ_OP)
+        x = lz%input()
+        call shifted_solve(dyn, nodal_mass(dyn, reshape(x, [n, 1])), y)
+      case (LZ_OP_BX)
+        x = lz%input()
+        call shifted_solve(dyn, dyn%aug%nodal_equivalent(dyn%model, reshape(x, [n, 1])), y)
+      case (LZ_B)
+        y = mbar_times(dyn, reshape(lz%input(), [n, 1]))
+      case default
+        exit
+      end select
+      call lz%output(y(:, 1))
+    end do
+    call lz%finish(lambda, v, err)
+    dyn%locked = was_locked
+    if (.not. err%ok()) return
+    ! Normalised again and the eigenvalues as Rayleigh quotients: sigma + 1 / nu cancels,
+    ! and K0 v is exact (the dynamic modes' stresses are linear in q).
+    mv = mbar_times(dyn, v)
+    do j = 1, nev
+      v(:, j) = v(:, j) / sqrt(dot_product(v(:, j), mv(:, j)))
+      lambda(j) = dot_product(v(:, j), stiffness_times(dyn, v(:, j)))
+      if (v(maxloc(abs(v(:, j)), 1), j) < 0) v(:, j) = -v(:, j)
+    end do
+    allocate(node_shapes(dyn%model%n_x, nev))
+    call dyn%kin%apply_df_many(dyn%model, full_columns(dyn, v), node_shapes)
+  end subroutine krylov_modes
+
+  !> Mbar w = DF_dy^T M DF_dy w for columns w (n_dy, k) at the kinematics' current state,
+  !> with the element masses of the last evaluation.
+  function mbar_times(dyn, w) result(mw)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: w(:, :)
+    real(wp) :: mw(size(w, 1), size(w, 2))
+    real(wp) :: f(dyn%model%n_x, size(w, 2)), g_q(dyn%model%n_q)
+    integer :: j
+    f = nodal_mass(dyn, w)
+    do j = 1, size(w, 2)
+      call dyn%kin%apply_dft(dyn%model, f(:, j), g_q)
+      mw(:, j) = g_q(dyn%model%n_rh + 1:)
+    end do
+  end function mbar_times
+
+  !> Nodal forces M DF_dy w.
+  function nodal_mass(dyn, w) result(f)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: w(:, :)
+    real(wp) :: f(dyn%model%n_x, size(w, 2))
+    real(wp) :: dx(dyn%model%n_x, size(w, 2))
+    call dyn%kin%apply_df_many(dyn%model, full_columns(dyn, w), dx)
+    f = dyn%mass%times(dyn%model, dx)
+  end function nodal_mass
+
+  !> y = (K0 - sigma Mbar)^-1 DF_dy^T f with the shifted factors.
+  subroutine shifted_solve(dyn, f, y)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: f(:, :)
+    real(wp), intent(out) :: y(:, :)
+    call dyn%aug%accelerations(dyn%model, f, y, newton=.true.)
+  end subroutine shifted_solve
+
+  !> K0 v: the dynamic modes' stresses at q_dy = v (linear, no reference stress).
+  function stiffness_times(dyn, v) result(kv)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: v(:)
+    real(wp) :: kv(size(v)), q(dyn%model%n_q)
+    q = 0.0_wp
+    q(dyn%model%n_rh + 1:) = v
+    kv = dyn%stresses(q, 0.0_wp * q)
+  end function stiffness_times
+
+  !> Columns (n_q, k) with zero prescribed part.
+  function full_columns(dyn, w) result(dq)
+    type(dynamics_t), intent(in) :: dyn
+    real(wp), intent(in) :: w(:, :)
+    real(wp) :: dq(dyn%model%n_q, size(w, 2))
+    dq = 0.0_wp
+    dq(dyn%model%n_rh + 1:, :) = w
+  end function full_columns
+
+  !> Factor K0 = DF_dy^T K_x DF_dy in augmented form (the iteration matrix without mass) with
+  !> the element Jacobians de_k0 of a configuration; false where it is singular (a dynamic
+  !> coordinate without stiffness). It takes the iteration matrix's factors, which a reduced
+  !> run does not use otherwise, and leaves dyn%aug%de_val = de_k0.
+  logical function k0_factor(dyn, de_k0) result(ok)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: de_k0(:)
+    integer :: info
+    call dyn%aug%factor_newton(dyn%model, dyn%mass, 1.0_wp, 0.0_wp, info, mass_scale=0.0_wp, &
+      de_val=de_k0)
+    ok = info == 0
+  end function k0_factor
+
+  !> dq = K0^-1 r at the configuration of de_k0 (the static correction of a reduced model
+  !> whose basis came from the Krylov path), refactored here since the factors may have
+  !> served another matrix since. One step of iterative refinement with the exact K0 dq
+  !> (the stresses) takes out the saddle-point system's round-off. The element Jacobians of
+  !> the current state are put back for the evaluations that follow.
+  subroutine k0_solve(dyn, de_k0, r, dq, ok)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: de_k0(:), r(:)
+    real(wp), intent(out) :: dq(:)
+    logical, intent(out) :: ok
+    real(wp) :: saved(size(dyn%aug%de_val)), z(size(r), 1)
+    saved = dyn%aug%de_val
+    dq = 0.0_wp
+    ok = k0_factor(dyn, de_k0)
+    if (ok) then
+      call dyn%aug%accelerations(dyn%model, &
+        dyn%aug%nodal_equivalent(dyn%model, reshape(r, [size(r), 1])), z, newton=.true.)
+      dq = z(:, 1)
+      z(:, 1) = r - stiffness_times(dyn, dq)
+      call dyn%aug%accelerations(dyn%model, dyn%aug%nodal_equivalent(dyn%model, z), z, &
+        newton=.true.)
+      dq = dq + z(:, 1)
+    end if
+    dyn%aug%de_val = saved
+  end subroutine k0_solve
+end module reduction_krylov
