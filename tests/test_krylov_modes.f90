@@ -1,0 +1,181 @@
+!> The Krylov modal path (reduction_krylov: shift-invert Lanczos on the augmented sparse
+!> factors, no dense matrices) against the dense one on small models: the same modes to
+!> round-off with prescribed, rigid and dynamic modes and a free hinge (a zero eigenvalue);
+!> reduced runs, their static correction, error estimate and basis updates alike; clear
+!> errors where it does not apply.
+program test_krylov_modes
+  use core_kinds, only: wp
+  use core_error, only: error_t
+  use core_strings, only: real_str
+  use analysis_run, only: run_t
+  use reduction_modal, only: modal_result_t, modal_analysis
+  use test_scenes, only: itxt
+  use testing, only: suite_t
+  implicit none
+  type(suite_t) :: suite
+  character(len=*), parameter :: SHORT = "&dynamic t_end = 1e-3, output_dt = 1e-3 /"
+  character(len=*), parameter :: DYN = "&dynamic t_end = 0.3, output_dt = 2e-3, " // &
+    "integrator = 'bdf', rtol = 1e-8, atol = 1e-10 /"
+  !> 100 rtol x the arm's reach [m]
+  real(wp), parameter :: TIP_BOUND = 100 * 1.0e-8_wp * 1.22_wp
+
+  call suite%init('krylov modes: sparse shift-invert Lanczos against the dense path')
+  call check_modes('prescribed joints, axial modes dynamic', &
+    scene("mode = 'prescribed', motion = 'p2'", "elongation = 'dynamic', "), 4)
+  call check_modes('free elbow (a zero eigenvalue)', scene("mode = 'dynamic'", ""), 3)
+  call check_reduced()
+  call check_updates()
+  call check_refusals()
+  call suite%finish()
+
+contains
+
+  !> The two-link arm, 4 beams per link; elbow: the hinge's mode and motion; extra: more
+  !> settings of link 1.
+  function scene(elbow, extra) result(text)
+    character(len=*), intent(in) :: elbow, extra
+    character(len=:), allocatable :: text
+    character, parameter :: nl = new_line('a')
+    text = "&node label = 'base', x = 0, y = 0, fixed = .true. /" // nl // &
+      "&node label = 'elbow', x = 0.545, y = 0 /" // nl // &
+      "&node label = 'tip', x = 1.22, y = 0 /" // nl // &
+      "&link label = 'l1', from = 'base', to = 'elbow', n_elements = 4, " // extra // &
+      "E = 7.3e10, A = 9e-4, I = 1.69e-8, rho = 2700 /" // nl // &
+      "&link label = 'l2', from = 'elbow', to = 'tip', n_elements = 4, E = 7.3e10, " // &
+      "A = 4e-4, I = 3.33e-9, rho = 2700 /" // nl // &
+      "&hinge label = 'j1', node = 'base', link = 'l1', mode = 'prescribed', motion = 'p1' /" &
+      // nl // "&hinge label = 'j2', node = 'elbow', link = 'l2', " // elbow // " /" // nl // &
+      "&motion label = 'p1', law = 'cubic', end = 1.5707963, duration = 0.25 /" // nl // &
+      "&motion label = 'p2', law = 'cubic', end = 1.5707963, duration = 0.25 /" // nl // &
+      "&mass node = 'elbow', m = 1 /" // nl // "&mass node = 'tip', m = 3 /" // nl // &
+      "&output nodes = 'tip' /" // nl
+  end function scene
+
+  subroutine load_run(name, text, run, err)
+    character(len=*), intent(in) :: name, text
+    type(run_t), intent(out) :: run
+    type(error_t), intent(out) :: err
+    integer :: u
+    open(newunit=u, file='test_krylov_' // name // '.nml', status='replace', action='write')
+    write(u, '(a)') text
+    close(u)
+    run%verbose = .false.
+    call run%load('test_krylov_' // name // '.nml', err)
+    if (err%ok()) call run%execute(err)
+  end subroutine load_run
+
+  subroutine must_run(name, text, run)
+    character(len=*), intent(in) :: name, text
+    type(run_t), intent(out) :: run
+    type(error_t) :: err
+    call load_run(name, text, run, err)
+    call suite%check(err%ok(), name // ' runs')
+    if (.not. err%ok()) then
+      write(*, '(a)') '    ' // err%message
+      call suite%finish()
+    end if
+  end subroutine must_run
+
+  !> nev modes at the initial configuration by LAPACK and by the Krylov path. Both normalise
+  !> to Mbar and make the largest component positive, so the shapes compare entry by entry;
+  !> eigenvalues are Rayleigh quotients on both paths (second order in the vectors' error).
+  !> Observed: eigenvalues within 1e-13 of the largest, shapes 1e-12 of their largest entry.
+  subroutine check_modes(label, text, nev)
+    character(len=*), intent(in) :: label, text
+    integer, intent(in) :: nev
+    type(run_t) :: run
+    type(modal_result_t) :: dense, sparse
+    type(error_t) :: err
+    real(wp) :: q0(64), d_lambda, d_shape, d_nodal
+    integer :: n
+    call must_run('modes', text // SHORT, run)
+    n = run%dyn%model%n_dy
+    q0 = 0.0_wp
+    call modal_analysis(run%dyn, 0.0_wp, q0(:n), nev, dense, err, 'lapack')
+    call suite%check(err%ok(), label // ': dense modes')
+    call modal_analysis(run%dyn, 0.0_wp, q0(:n), nev, sparse, err, 'krylov')
+    call suite%check(err%ok() .and. sparse%solver == 'krylov', label // ': Krylov modes')
+    if (.not. err%ok()) then
+      write(*, '(a)') '    ' // err%message
+      return
+    end if
+    call suite%check(.not. allocated(sparse%m0) .and. .not. allocated(sparse%k0), &
+      label // ': the Krylov path forms no dense matrix')
+    d_lambda = maxval(abs(sparse%omega2 - dense%omega2)) / maxval(abs(dense%omega2))
+    d_shape = maxval(abs(sparse%shapes - dense%shapes)) / maxval(abs(dense%shapes))
+    d_nodal = maxval(abs(sparse%node_shapes - dense%node_shapes)) / &
+      maxval(abs(dense%node_shapes))
+    call suite%check(d_lambda < 1.0e-10_wp, label // ': eigenvalues agree (' // &
+      real_str(d_lambda) // ' of the largest)')
+    call suite%check(d_shape < 1.0e-8_wp .and. d_nodal < 1.0e-8_wp, label // &
+      ': shapes agree (' // real_str(d_shape) // ', nodal ' // real_str(d_nodal) // ')')
+  end subroutine check_modes
+
+  !> Largest tip distance between two runs [m].
+  real(wp) function tip_difference(a, b) result(d)
+    type(run_t), intent(in) :: a, b
+    integer :: ic(3)
+    ic = a%dyn%model%node_coord(1:3, a%dyn%model%find_node('tip'))
+    d = maxval(hypot(a%dyn%x_hist(ic(1), :) - b%dyn%x_hist(ic(1), :), &
+                     a%dyn%x_hist(ic(2), :) - b%dyn%x_hist(ic(2), :)))
+  end function tip_difference
+
+  !> Reduced runs on either basis, with the static correction (K0^-1 r: dense Cholesky against
+  !> the sparse augmented K0) and the error estimate. The bases agree to round-off; BDF's step
+  !> choices amplify that, so the paths agree to its global error, bounded by 100 rtol times
+  !> the reach (observed 9e-10 m; estimates 8e-9 relative).
+  subroutine check_reduced()
+    type(run_t) :: dense, sparse
+    character(len=*), parameter :: red = "&reduction n_modes = 3, static_correction = .true., "
+    real(wp) :: d_tip, d_est
+    call must_run('red_lapack', scene("mode = 'prescribed', motion = 'p2'", "") // DYN // &
+      red // "eigensolver = 'lapack' /", dense)
+    call must_run('red_krylov', scene("mode = 'prescribed', motion = 'p2'", "") // DYN // &
+      red // "eigensolver = 'krylov' /", sparse)
+    call suite%check(sparse%red%basis%solver == 'krylov' .and. sparse%red%has_estimate, &
+      'reduced run on the Krylov basis keeps its error estimate')
+    d_tip = tip_difference(dense, sparse)
+    d_est = maxval(abs(dense%red%estimate - sparse%red%estimate)) / maxval(dense%red%estimate)
+    call suite%check(d_tip < TIP_BOUND, 'statically corrected tip paths agree (' // &
+      real_str(d_tip) // ' m)')
+    call suite%check(d_est < 1.0e-6_wp, 'error estimates agree (' // real_str(d_est) // &
+      ' relative; largest ' // real_str(maxval(dense%red%estimate)) // ' m)')
+  end subroutine check_reduced
+
+  !> Basis updates: the MAC through Mbar products on the Krylov path. The states at the
+  !> checks differ by the paths' difference (see check_reduced), the MACs as much (observed
+  !> 6e-10 apart, tips 7e-10 m).
+  subroutine check_updates()
+    type(run_t) :: dense, sparse
+    character(len=*), parameter :: red = "&reduction n_modes = 2, update = 'mac', " // &
+      "update_interval = 0.02, mac_threshold = 0.99999, "
+    real(wp) :: d_tip, d_mac
+    call must_run('upd_lapack', scene("mode = 'prescribed', motion = 'p2'", "") // DYN // &
+      red // "eigensolver = 'lapack' /", dense)
+    call must_run('upd_krylov', scene("mode = 'prescribed', motion = 'p2'", "") // DYN // &
+      red // "eigensolver = 'krylov' /", sparse)
+    d_tip = tip_difference(dense, sparse)
+    d_mac = maxval(abs(dense%updates%min_mac - sparse%updates%min_mac))
+    call suite%check(dense%updates%n_updates > 0 .and. &
+      sparse%updates%n_updates == dense%updates%n_updates .and. d_mac < 1.0e-6_wp, &
+      'MAC checks agree (' // itxt(sparse%updates%n_updates) // ' updates, MAC ' // &
+      real_str(d_mac) // ' apart)')
+    call suite%check(d_tip < TIP_BOUND, 'updated runs agree (' // real_str(d_tip) // ' m)')
+  end subroutine check_updates
+
+  !> Where K0 is not the whole tangent, or there are no sparse factors, 'krylov' is refused
+  !> with the reason; 'auto' takes the dense path there.
+  subroutine check_refusals()
+    type(run_t) :: run
+    type(error_t) :: err
+    character(len=*), parameter :: red = "&reduction n_modes = 2, eigensolver = 'krylov' /"
+    character(len=:), allocatable :: base
+    base = scene("mode = 'prescribed', motion = 'p2'", "")
+    call load_run('gravity', base // "&scene gravity = 0, -9.81 /" // SHORT // red, run, err)
+    call suite%check(.not. err%ok() .and. index(err%message, "'krylov'") > 0 .and. &
+      index(err%message, 'loads') > 0, 'refused with loads: ' // err%message)
+    call load_run('dense', base // "&scene linear_solver = 'dense' /" // SHORT // red, run, err)
+    call suite%check(.not. err%ok() .and. index(err%message, 'dense path') > 0, &
+      'refused on the dense path: ' // err%message)
+  end subroutine check_refusals
+end program test_krylov_modes
