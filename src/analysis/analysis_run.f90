@@ -287,7 +287,8 @@ contains
       ! radians): the kinematics gets there in steps if it must.
       this%dyn%kin%continuation = .true.
       call modal_analysis(this%dyn, this%scene%modal%time, this%q_static, &
-        this%scene%modal%n_modes, this%modal, err, along_motion=this%scene%modal%along_motion)
+        this%scene%modal%n_modes, this%modal, err, solver=this%scene%modal%solver, &
+        along_motion=this%scene%modal%along_motion)
       this%dyn%kin%continuation = .false.
       if (.not. err%ok()) return
       if (this%verbose) write(*, '(a,*(f0.3,:,", "))') 'modal: frequencies [Hz]: ', &

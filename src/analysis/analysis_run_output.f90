@@ -214,6 +214,8 @@ contains
     call h5%write_real_1d('/modal/frequency_hz', this%modal%frequency_hz, err, units='Hz')
     if (err%ok()) call h5%write_real_2d('/modal/shapes', this%modal%shapes, err)
     if (err%ok()) call h5%write_real_attr('/modal', 'time', this%scene%modal%time, err)
+    if (err%ok()) call h5%write_string_attr('/modal', 'eigensolver', trim(this%modal%solver), &
+      err)
     do i = 1, size(this%scene%output_nodes)
       if (err%ok()) call h5%write_real_2d('/modal/nodes/' // this%scene%output_nodes(i)%s // &
         '/shape', node_shape(this, i, this%modal%node_shapes(:, :, 1)), err, units='m')

@@ -45,6 +45,7 @@ contains
     call rd_int(g, 'n_modes', scene%modal%n_modes, err)
     call rd_real(g, 'time', scene%modal%time, err)
     call rd_logical(g, 'along_motion', scene%modal%along_motion, err)
+    call rd_choice(g, 'solver', scene%modal%solver, err)
   end subroutine read_modal
 
   subroutine read_buckling(g, scene, err)

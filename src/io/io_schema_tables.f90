@@ -383,7 +383,7 @@ module io_schema_tables
     var_spec_t('static', 'solver', VK_CHOICE, '', 'auto', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       'auto|dense|krylov', 'Newton: difference tangent or Newton-Krylov')]
-  type(var_spec_t), parameter :: MODAL_VARS(3) = [ &
+  type(var_spec_t), parameter :: MODAL_VARS(4) = [ &
     var_spec_t('modal', 'n_modes', VK_INT, '', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'lowest modes kept, 0 = all'), &
@@ -392,7 +392,10 @@ module io_schema_tables
       '', 'time of the prescribed motions'), &
     var_spec_t('modal', 'along_motion', VK_LOGICAL, '', '.false.', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'dynamic stiffening of the motion at time')]
+      '', 'dynamic stiffening of the motion at time'), &
+    var_spec_t('modal', 'solver', VK_CHOICE, '', 'auto', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'auto|lapack|arpack|krylov', 'eigensolver')]
   type(var_spec_t), parameter :: LINEAR_VARS(5) = [ &
     var_spec_t('linear', 'inputs', VK_STRING_LIST, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -501,7 +504,7 @@ module io_schema_tables
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(158) = [ &
+  type(var_spec_t), parameter :: SCHEMA(159) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

@@ -154,6 +154,7 @@ module model_scene
     real(wp) :: time = 0.0_wp       !< prescribed motions are evaluated (and locked) at this time
     !> ... or, .true., kept moving: the motion's dynamic stiffening enters the modes.
     logical :: along_motion = .false.
+    character(len=:), allocatable :: solver   !< eigensolver: 'auto', 'lapack', 'arpack', 'krylov'
   end type modal_rec_t
 
   !> Linearised buckling (docs/input.md, &buckling).
@@ -209,7 +210,7 @@ module model_scene
     logical :: static_correction = .false.
     character(len=:), allocatable :: update        !< 'none', 'interval' or 'mac'
     real(wp) :: update_interval = 0.0_wp, mac_threshold = 0.9_wp
-    character(len=:), allocatable :: eigensolver   !< 'auto', 'lapack' or 'arpack'
+    character(len=:), allocatable :: eigensolver   !< 'auto', 'lapack', 'arpack' or 'krylov'
     !> 'free' (modes of the free structure) or 'held' (the controlled joints held: their unit
     !> motions plus the modes with them held)
     character(len=:), allocatable :: joints

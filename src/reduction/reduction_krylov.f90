@@ -1,4 +1,4 @@
-!> The lowest modes of a large model without dense matrices (docs/theory.md 8.2):
+!> The lowest modes of a large model without dense matrices (docs/theory.md 8.1):
 !>   K0 v = omega^2 Mbar v on the dynamic coordinates, prescribed modes locked,
 !> by shift-invert Lanczos (reduction_lanczos) with OP = (K0 - sigma Mbar)^-1 Mbar applied in
 !> the augmented sparse form of dynamics_augmented: y = (K0 - sigma Mbar)^-1 DF_dy^T f is the

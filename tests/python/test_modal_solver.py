@@ -1,0 +1,60 @@
+"""`&modal solver` end to end: the Krylov path (no dense matrices, docs/theory.md 8.1) gives
+the dense solvers' modes, 'auto' takes it on large models, and it is refused with the reason
+where it does not apply."""
+import h5py
+import numpy as np
+import pytest
+
+from helpers import ARM, BIN, assert_clean_error, run_scene
+
+pytestmark = pytest.mark.skipif(not BIN.is_file(), reason="flexmor binary not built")
+
+
+def arm(n_elements, modal, extra=""):
+    return (ARM.replace("n_elements = 2", f"n_elements = {n_elements}")
+            + "&motion label = 'm1', law = 'cubic', start = 0, end = 0.5, duration = 0.05 /\n"
+            + "&mass node = 'tip', m = 0.1 /\n&output nodes = 'tip' /\n" + extra
+            + f"&modal {modal} /\n")
+
+
+def modes(tmp_path, name, text):
+    proc, out = run_scene(tmp_path, text, name=name)
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        return (f["modal/frequency_hz"][:], f["modal/shapes"][:],
+                f["modal/nodes/tip/shape"][:], f["modal"].attrs["eigensolver"])
+
+
+def test_krylov_matches_dense(tmp_path):
+    # 40 beams: 80 dynamic coordinates. Both paths normalise to Mbar and make the largest
+    # entry positive, so shapes compare entry by entry; observed 1e-14 (frequencies) and
+    # 1e-12 (shapes) relative.
+    f_d, v_d, tip_d, used_d = modes(tmp_path, "dense", arm(40, "n_modes = 5, solver = 'lapack'"))
+    f_k, v_k, tip_k, used_k = modes(tmp_path, "krylov", arm(40, "n_modes = 5, solver = 'krylov'"))
+    assert (used_d, used_k) == ("lapack", "krylov")
+    assert np.max(np.abs(f_k - f_d) / f_d) < 1e-10
+    assert np.max(np.abs(v_k - v_d)) < 1e-8 * np.max(np.abs(v_d))
+    assert np.max(np.abs(tip_k - tip_d)) < 1e-8 * np.max(np.abs(tip_d))
+
+
+def test_auto_takes_krylov_on_large_models(tmp_path):
+    # 60 beams: 120 dynamic coordinates, above the Krylov path's threshold of 100.
+    *_, used = modes(tmp_path, "auto", arm(60, "n_modes = 4"))
+    assert used == "krylov"
+    # All modes: LAPACK whatever the size.
+    *_, used = modes(tmp_path, "all", arm(60, "n_modes = 0"))
+    assert used == "lapack"
+
+
+@pytest.mark.parametrize("extra, reason", [
+    ("&scene gravity = 0, -9.81 /\n", "loads"),
+    ("&scene linear_solver = 'dense' /\n", "dense path"),
+])
+def test_krylov_refused_with_reason(tmp_path, extra, reason):
+    proc, out = run_scene(tmp_path, arm(8, "n_modes = 2, solver = 'krylov'", extra))
+    assert_clean_error(proc, out, "eigensolver 'krylov'", reason)
+
+
+def test_unknown_solver(tmp_path):
+    proc, out = run_scene(tmp_path, arm(8, "n_modes = 2, solver = 'qr'"))
+    assert_clean_error(proc, out, "&modal", "solver", "krylov")
