@@ -34,6 +34,9 @@ module dynamics_augmented
 
   type :: augmented_t
     integer :: n_free = 0, n_con = 0
+    !> Counts the factorisations of `newton`, so that a caller can tell whether the factors
+    !> it left there are still the ones it made.
+    integer :: newton_serial = 0
     integer, allocatable :: free_index(:)     !< coordinate -> unknown (0 if not free)
     integer, allocatable :: con_index(:)      !< kinematic row -> multiplier unknown (0: none)
     !> Element Jacobians dD/dx of the last factorisation, flat (offset per element)
@@ -353,6 +356,7 @@ contains
     if (present(traces)) traces = tr
     call this%newton%factor(info, rcond)
     if (rcond < 1.0e-14_wp) info = max(info, 1)
+    this%newton_serial = this%newton_serial + 1
   end subroutine aug_factor_newton
 
   !> Zero the values, put the lumped masses (times mass_scale) on the diagonal (the first n

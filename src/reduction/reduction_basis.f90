@@ -45,6 +45,7 @@ module reduction_basis
     !> which the sparse K0 is factored where needed (reduction_krylov's k0_solve); empty when
     !> K0 is singular.
     real(wp), allocatable :: de_k0(:)
+    integer :: k0_serial = -1                  !< see k0_solve
     real(wp) :: time = 0.0_wp                  !< when the basis was made (trajectory time)
     real(wp) :: cutoff_hz = 0.0_wp             !< cut-off used by 'cutoff' and 'auto'
     real(wp) :: bandwidth_hz = 0.0_wp          !< motion bandwidth used by 'auto'
@@ -72,7 +73,7 @@ contains
 
   !> dq = K0^-1 r with K0 at the basis configuration (dense Cholesky factor or sparse).
   subroutine basis_static_solve(this, dyn, r, dq)
-    class(basis_t), intent(in) :: this
+    class(basis_t), intent(inout) :: this
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: r(:)
     real(wp), intent(out) :: dq(:)
@@ -81,7 +82,7 @@ contains
     if (allocated(this%k_chol)) then
       call chol_solve(this%k_chol, dq)
     else if (allocated(this%de_k0)) then
-      call k0_solve(dyn, this%de_k0, r, dq, ok)
+      call k0_solve(dyn, this%de_k0, this%k0_serial, r, dq, ok)
     end if
   end subroutine basis_static_solve
 
@@ -100,6 +101,7 @@ contains
       if (info /= 0) deallocate(basis%k_chol)
     else if (k0_factor(dyn, dyn%kin%de_val)) then
       basis%de_k0 = dyn%kin%de_val
+      basis%k0_serial = dyn%aug%newton_serial
     end if
   end subroutine keep_stiffness
 

@@ -183,19 +183,27 @@ contains
   end function k0_factor
 
   !> dq = K0^-1 r at the configuration of de_k0 (the static correction of a reduced model
-  !> whose basis came from the Krylov path), refactored here since the factors may have
-  !> served another matrix since. One step of iterative refinement with the exact K0 dq
-  !> (the stresses) takes out the saddle-point system's round-off. The element Jacobians of
-  !> the current state are put back for the evaluations that follow.
-  subroutine k0_solve(dyn, de_k0, r, dq, ok)
+  !> whose basis came from the Krylov path). `serial` is the iteration matrix's
+  !> factorisation count when K0 was last factored there: the factors are made again only if
+  !> something else has factored that matrix since. One step of iterative refinement with the
+  !> exact K0 dq (the stresses) takes out the saddle-point system's round-off. The element
+  !> Jacobians of the current state are put back for the evaluations that follow.
+  subroutine k0_solve(dyn, de_k0, serial, r, dq, ok)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: de_k0(:), r(:)
+    integer, intent(inout) :: serial
     real(wp), intent(out) :: dq(:)
     logical, intent(out) :: ok
     real(wp) :: saved(size(dyn%aug%de_val)), z(size(r), 1)
     saved = dyn%aug%de_val
     dq = 0.0_wp
-    ok = k0_factor(dyn, de_k0)
+    ok = .true.
+    if (dyn%aug%newton_serial /= serial) then
+      ok = k0_factor(dyn, de_k0)
+      serial = dyn%aug%newton_serial
+    else
+      dyn%aug%de_val = de_k0
+    end if
     if (ok) then
       call dyn%aug%accelerations(dyn%model, &
         dyn%aug%nodal_equivalent(dyn%model, reshape(r, [size(r), 1])), z, newton=.true.)
