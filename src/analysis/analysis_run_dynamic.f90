@@ -151,7 +151,8 @@ contains
       if (.not. err%ok()) return
       if (r%static_correction .and. .not. this%red%basis%has_k0()) then
         call err%set(ERR_INPUT, 'group &reduction: static_correction needs a positive ' // &
-          'definite stiffness at the basis configuration (a dynamic mode has no stiffness)')
+          'definite stiffness at the basis configuration (a dynamic mode has no stiffness), ' &
+          // "or, with loads, the dense tangent (eigensolver = 'auto', 'lapack' or 'arpack')")
         return
       end if
     end associate

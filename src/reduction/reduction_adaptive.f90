@@ -156,7 +156,7 @@ contains
     held_joints_given = .false.
     if (allocated(spec%held)) held_joints_given = size(spec%held) > 0
     call modal_analysis(red%dyn, t, q_dy, min(n_dy, k + 2), modes, err, &
-      solver=spec%eigensolver, dense=held_joints_given)
+      solver=spec%eigensolver, dense=held_joints_given, for_basis=.true.)
     red%dyn%controls_on = controls_on
     ! A held-joint basis is replaced by the one of the new configuration, k columns (spare
     ! candidates would let tracking drop part of the joints' motions from the span).

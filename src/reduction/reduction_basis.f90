@@ -7,6 +7,7 @@ module reduction_basis
   use core_strings, only: int_str, real_str
   use core_linalg, only: chol_factor, chol_solve, lu_factor, lu_solve
   use reduction_krylov, only: k0_factor, k0_solve
+  use dynamics_static, only: has_loads
   use reduction_eigen, only: lowest_modes
   use dynamics_system, only: dynamics_t
   use model_system, only: model_t
@@ -99,6 +100,9 @@ contains
       basis%k_chol = modes%k0
       call chol_factor(basis%k_chol, info)
       if (info /= 0) deallocate(basis%k_chol)
+    else if (has_loads(dyn)) then
+      ! K_T is K0 plus the loads' stiffness, which the sparse factors do not hold.
+      return
     else if (k0_factor(dyn, dyn%kin%de_val)) then
       basis%de_k0 = dyn%kin%de_val
       basis%k0_serial = dyn%aug%newton_serial
@@ -140,7 +144,7 @@ contains
     if (allocated(spec%held)) held_joints_given = size(spec%held) > 0
     do
       call modal_analysis(dyn, t, q_dy, nev, modes, err, solver=spec%eigensolver, &
-        dense=held_joints_given)
+        dense=held_joints_given, for_basis=.true.)
       if (.not. err%ok()) exit
       if (spec%selection == 'count' .or. nev == n_dy) exit
       if (modes%frequency_hz(nev) > cutoff) exit

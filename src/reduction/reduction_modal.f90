@@ -10,7 +10,7 @@ module reduction_modal
   use reduction_eigen, only: lowest_modes
   use reduction_krylov, only: krylov_modes, krylov_modes_applies, mbar_times
   use dynamics_system, only: dynamics_t
-  use dynamics_static, only: tangent_stiffness, motion_tangent
+  use dynamics_static, only: tangent_stiffness, motion_tangent, has_loads
   implicit none
   private
   public :: modal_result_t, modal_analysis, modal_mass_times
@@ -37,7 +37,8 @@ contains
 
   !> n_modes = 0 asks for all of them (always LAPACK). solver: 'auto' (default), 'lapack',
   !> 'arpack' (as reduction_eigen's lowest_modes) or 'krylov' (reduction_krylov).
-  subroutine modal_analysis(dyn, t, q_dy, n_modes, res, err, solver, along_motion, dense)
+  subroutine modal_analysis(dyn, t, q_dy, n_modes, res, err, solver, along_motion, dense, &
+      for_basis)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     integer, intent(in) :: n_modes
@@ -48,6 +49,10 @@ contains
     logical, intent(in), optional :: along_motion
     !> The caller needs res%k0 and res%m0 (a held-joint basis): no Krylov path.
     logical, intent(in), optional :: dense
+    !> A reduced model's basis: with loads 'auto' keeps the dense path, whose K_T gives the
+    !> static correction and the error estimate (the Krylov path gives them from K0 alone,
+    !> so only without loads).
+    logical, intent(in), optional :: for_basis
     logical :: moving, need_dense
     character(len=:), allocatable :: why_not
     real(wp), allocatable :: lambda(:), v(:, :), shapes_x(:, :)
@@ -74,6 +79,9 @@ contains
     if (present(dense)) need_dense = dense
     why_not = krylov_modes_applies(dyn, moving)
     if (need_dense) why_not = 'the held-joint basis needs the dense K0 and Mbar'
+    if (present(for_basis)) then
+      if (for_basis .and. has_loads(dyn) .and. name == 'auto') why_not = 'loads'
+    end if
     if (name == 'auto' .and. why_not == '' .and. n >= KRYLOV_AUTO_MIN_N .and. &
       nm <= n / 10) name = 'krylov'
     if (name == 'krylov') then
