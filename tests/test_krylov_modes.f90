@@ -10,7 +10,7 @@ program test_krylov_modes
   use core_strings, only: real_str
   use analysis_run, only: run_t
   use reduction_modal, only: modal_result_t, modal_analysis
-  use test_scenes, only: itxt
+  use test_scenes, only: itxt, node_distance
   use testing, only: suite_t
   implicit none
   type(suite_t) :: suite
@@ -68,12 +68,8 @@ contains
     character(len=*), intent(in) :: name, text
     type(run_t), intent(out) :: run
     type(error_t), intent(out) :: err
-    integer :: u
-    open(newunit=u, file='test_krylov_' // name // '.nml', status='replace', action='write')
-    write(u, '(a)') text
-    close(u)
     run%verbose = .false.
-    call run%load('test_krylov_' // name // '.nml', err)
+    call run%load_text(text, 'test_krylov_' // name // '.nml', err)
     if (err%ok()) call run%execute(err)
   end subroutine load_run
 
@@ -126,14 +122,6 @@ contains
       ': shapes agree (' // real_str(d_shape) // ', nodal ' // real_str(d_nodal) // ')')
   end subroutine check_modes
 
-  !> Largest tip distance between two runs [m].
-  real(wp) function tip_difference(a, b) result(d)
-    type(run_t), intent(in) :: a, b
-    integer :: ic(3)
-    ic = a%dyn%model%node_coord(1:3, a%dyn%model%find_node('tip'))
-    d = maxval(hypot(a%dyn%x_hist(ic(1), :) - b%dyn%x_hist(ic(1), :), &
-                     a%dyn%x_hist(ic(2), :) - b%dyn%x_hist(ic(2), :)))
-  end function tip_difference
 
   !> Reduced runs on either basis, with the static correction (K0^-1 r: dense Cholesky against
   !> the sparse augmented K0) and the error estimate. The bases agree to round-off; BDF's step
@@ -149,7 +137,7 @@ contains
       red // "eigensolver = 'krylov' /", sparse)
     call suite%check(sparse%red%basis%solver == 'krylov' .and. sparse%red%has_estimate, &
       'reduced run on the Krylov basis keeps its error estimate')
-    d_tip = tip_difference(dense, sparse)
+    d_tip = node_distance(dense, sparse, 'tip')
     d_est = maxval(abs(dense%red%estimate - sparse%red%estimate)) / maxval(dense%red%estimate)
     call suite%check(d_tip < TIP_BOUND, 'statically corrected tip paths agree (' // &
       real_str(d_tip) // ' m)')
@@ -169,7 +157,7 @@ contains
       red // "eigensolver = 'lapack' /", dense)
     call must_run('upd_krylov', scene("mode = 'prescribed', motion = 'p2'", "") // DYN // &
       red // "eigensolver = 'krylov' /", sparse)
-    d_tip = tip_difference(dense, sparse)
+    d_tip = node_distance(dense, sparse, 'tip')
     d_mac = maxval(abs(dense%updates%min_mac - sparse%updates%min_mac))
     call suite%check(dense%updates%n_updates > 0 .and. &
       sparse%updates%n_updates == dense%updates%n_updates .and. d_mac < 1.0e-6_wp, &

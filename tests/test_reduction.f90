@@ -7,7 +7,7 @@ program test_reduction
   use core_error, only: error_t
   use analysis_run, only: run_t
   use reduction_modal, only: modal_result_t, modal_analysis
-  use test_scenes, only: itxt
+  use test_scenes, only: itxt, node_distance
   use testing, only: suite_t
   implicit none
   type(suite_t) :: suite
@@ -71,14 +71,6 @@ contains
     end if
   end subroutine run_scene
 
-  !> Largest tip distance between two runs [m].
-  real(wp) function tip_difference(a, b) result(d)
-    type(run_t), intent(in) :: a, b
-    integer :: ic(3)
-    ic = a%dyn%model%node_coord(1:3, a%dyn%model%find_node('tip'))
-    d = maxval(hypot(a%dyn%x_hist(ic(1), :) - b%dyn%x_hist(ic(1), :), &
-                     a%dyn%x_hist(ic(2), :) - b%dyn%x_hist(ic(2), :)))
-  end function tip_difference
 
   subroutine check_full_basis()
     type(run_t) :: red
@@ -86,7 +78,7 @@ contains
     real(wp) :: d
     call run_scene('all_modes', scene(DYN_TIGHT // " &reduction n_modes = " // itxt(N_DY) // &
       " /"), red)
-    d = tip_difference(red, full)
+    d = node_distance(red, full, 'tip')
     write(line, '(a,es9.2,a)') 'all modes reproduce the full run (tip difference ', d, ' m)'
     call suite%check(d < 1.0e-7_wp, trim(line))
     ! With k = 1 the residual reaches about 5e2 on this scene.
@@ -127,7 +119,7 @@ contains
         " /"), red(k))
       res(k) = maxval(red(k)%red%residual)
       est(k) = maxval(red(k)%red%estimate)
-      err_tip(k) = tip_difference(red(k), full)
+      err_tip(k) = node_distance(red(k), full, 'tip')
       write(line, '(a,i0,a,es9.2,a,es9.2,a,es9.2,a)') 'k = ', k, ': residual ', res(k), &
         ', estimate ', est(k), ' m, tip error ', err_tip(k), ' m'
       write(*, '(4x,a)') trim(line)
@@ -138,7 +130,7 @@ contains
       'the error estimate is within a factor 10 of the true tip error')
     call run_scene('k1_corrected', scene(DYN // " &reduction n_modes = 1, " // &
       "static_correction = .true. /"), corrected)
-    err_corr = tip_difference(corrected, full)
+    err_corr = node_distance(corrected, full, 'tip')
     write(line, '(a,es9.2,a,es9.2,a)') 'statically corrected 1-mode tip error ', err_corr, &
       ' m (uncorrected ', err_tip(1), ' m): the same order, the error is dynamic'
     call suite%check(err_corr < 2 * err_tip(1), trim(line))
@@ -227,8 +219,8 @@ contains
     write(line, '(a,es9.2,a,es9.2,a)') 'trajectory continuous across updates (2nd difference ', &
       jump, ' at updates, ', smooth, ' elsewhere)'
     call suite%check(jump <= 1.5_wp * smooth, trim(line))
-    d_fixed = tip_difference(fixed, full)
-    d_upd = tip_difference(upd, full)
+    d_fixed = node_distance(fixed, full, 'tip')
+    d_upd = node_distance(upd, full, 'tip')
     write(line, '(a,es9.2,a,es9.2,a)') 'updated basis tip error ', d_upd, ' m (fixed ', &
       d_fixed, ' m) stays of the same order'
     call suite%check(d_upd < 3 * d_fixed, trim(line))
@@ -237,9 +229,9 @@ contains
     ! The checks split the integration, so the step sequence differs: the paths agree to the
     ! integrator's global error, 100 rtol x 1.22 m reach (an update would move it ~1e-3 m).
     call suite%check(mac_low%updates%n_updates == 0 .and. size(mac_low%updates%time) == 19 &
-      .and. tip_difference(mac_low, fixed) < 100 * 1.0e-7_wp * 1.22_wp, &
+      .and. node_distance(mac_low, fixed, 'tip') < 100 * 1.0e-7_wp * 1.22_wp, &
       'mac threshold never reached: checks without updates, same path as the fixed basis (' &
-      // es(tip_difference(mac_low, fixed)) // ' m)')
+      // es(node_distance(mac_low, fixed, 'tip')) // ' m)')
     call run_scene('mac_high', scene(DYN // " &reduction n_modes = 2, update = 'mac', " // &
       "update_interval = 0.025, mac_threshold = 0.99999 /"), mac_high)
     write(line, '(a,i0,a,f8.5)') 'mac threshold 0.99999: ', mac_high%updates%n_updates, &
@@ -256,7 +248,7 @@ contains
     call run_scene('bdf_k2', scene(DYN_TIGHT // " &reduction n_modes = 2 /"), bdf)
     call run_scene('erk_k2', scene("&dynamic t_end = 0.5, output_dt = 2e-3, " // &
       "integrator = 'erk', rtol = 1e-9, atol = 1e-11 / &reduction n_modes = 2 /"), erk)
-    d = tip_difference(bdf, erk)
+    d = node_distance(bdf, erk, 'tip')
     write(line, '(a,es9.2,a,i0,a,i0,a)') 'explicit RK agrees with BDF on 2 modes (', d, &
       ' m; steps ', erk%stats%n_steps, ' vs ', bdf%stats%n_steps, ')'
     call suite%check(d < 1.0e-7_wp, trim(line))

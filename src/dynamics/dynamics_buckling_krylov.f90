@@ -20,7 +20,7 @@ module dynamics_buckling_krylov
   use core_sort, only: sort_by_value
   use core_arpack, only: dnaupd, dneupd
   use dynamics_system, only: dynamics_t
-  use dynamics_static_krylov, only: krylov_statics_t
+  use dynamics_static_krylov, only: krylov_statics_t, krylov_tangent_unsupported
   implicit none
   private
   public :: krylov_buckling, krylov_buckling_applies
@@ -32,16 +32,8 @@ contains
     type(dynamics_t), intent(in) :: dyn
     logical, intent(in) :: has_held
     character(len=:), allocatable :: why_not
-    why_not = ''
-    if (.not. dyn%sparse) then
-      why_not = 'the model is on the dense path (&scene linear_solver)'
-    else if (dyn%model%n_elastic > 0) then
-      why_not = 'the model has elastic (calculable) modes'
-    else if (size(dyn%model%moment_lambda) > 0) then
-      why_not = 'the model has moments fixed in space'
-    else if (has_held) then
-      why_not = 'the buckling problem has supports of its own'
-    end if
+    why_not = krylov_tangent_unsupported(dyn)
+    if (why_not == '' .and. has_held) why_not = 'the buckling problem has supports of its own'
   end function krylov_buckling_applies
 
   !> The at most n_modes largest theta > cutoff * (the largest |theta| found) and their shapes

@@ -18,10 +18,11 @@
 module dynamics_static_krylov
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC
+  use core_gmres, only: gmres_step, gmres_correct
   use dynamics_system, only: dynamics_t
   implicit none
   private
-  public :: krylov_statics_t
+  public :: krylov_statics_t, krylov_tangent_unsupported
 
   !> GMRES stops at this residual relative to |g|: Newton then contracts by about this much
   !> per iteration, far below the 0.25 at which static_solve would call convergence slow.
@@ -57,6 +58,23 @@ module dynamics_static_krylov
   end interface
 
 contains
+
+  !> Why the Krylov eigenproblems (buckling, modes) cannot reproduce this model's dense
+  !> tangent, '' when they can: they need the sparse factors of K0 and its stresses linear in
+  !> q (no elastic modes), and the dense path takes the symmetric part of the tangent of a
+  !> moment fixed in space, which products cannot give.
+  function krylov_tangent_unsupported(dyn) result(why_not)
+    type(dynamics_t), intent(in) :: dyn
+    character(len=:), allocatable :: why_not
+    why_not = ''
+    if (.not. dyn%sparse) then
+      why_not = 'the model is on the dense path (&scene linear_solver)'
+    else if (dyn%model%n_elastic > 0) then
+      why_not = 'the model has elastic (calculable) modes'
+    else if (size(dyn%model%moment_lambda) > 0) then
+      why_not = 'the model has moments fixed in space'
+    end if
+  end function krylov_tangent_unsupported
 
   !> Newton from q_dy to the equilibrium g(q_dy) = 0 at the model's current load factor, with
   !> the preconditioner factored once at the start; converged when a correction is at most
@@ -205,9 +223,9 @@ contains
     real(wp), intent(out) :: dq(:)
     type(error_t), intent(out) :: err
     real(wp) :: v(size(g), RESTART + 1), hm(RESTART + 1, RESTART), cs(RESTART), sn(RESTART)
-    real(wp) :: s(RESTART + 1), w(size(g)), z(size(g)), u(size(g)), y(RESTART)
-    real(wp) :: beta, g_norm, tmp, r(size(g))
-    integer :: j, i, n_done, pass
+    real(wp) :: s(RESTART + 1), w(size(g)), z(size(g)), u(size(g))
+    real(wp) :: beta, g_norm, r(size(g))
+    integer :: j, n_done
     character(len=160) :: msg
     u = 0.0_wp
     dq = 0.0_wp
@@ -233,38 +251,11 @@ contains
         call this%product(dyn, t, q_dy, z, w, err)
         if (.not. err%ok()) return
         n_done = n_done + 1
-        ! Modified Gram-Schmidt, twice: the products carry difference noise, and a basis that
-        ! loses orthogonality stalls the residual estimate.
-        hm(:, j) = 0.0_wp
-        do pass = 1, 2
-          do i = 1, j
-            tmp = dot_product(v(:, i), w)
-            hm(i, j) = hm(i, j) + tmp
-            w = w - tmp * v(:, i)
-          end do
-        end do
-        hm(j + 1, j) = norm2(w)
-        if (hm(j + 1, j) > 0) v(:, j + 1) = w / hm(j + 1, j)
-        do i = 1, j - 1
-          tmp = cs(i) * hm(i, j) + sn(i) * hm(i + 1, j)
-          hm(i + 1, j) = -sn(i) * hm(i, j) + cs(i) * hm(i + 1, j)
-          hm(i, j) = tmp
-        end do
-        tmp = hypot(hm(j, j), hm(j + 1, j))
-        cs(j) = hm(j, j) / tmp
-        sn(j) = hm(j + 1, j) / tmp
-        hm(j, j) = tmp
-        hm(j + 1, j) = 0.0_wp
-        s(j + 1) = -sn(j) * s(j)
-        s(j) = cs(j) * s(j)
+        call gmres_step(j, w, v, hm, cs, sn, s)
         if (abs(s(j + 1)) <= GMRES_TOL * g_norm .or. n_done >= MAX_PRODUCTS .or. &
             j == RESTART) exit
       end do
-      ! Back substitution for the cycle's coefficients, then its correction to u.
-      do i = j, 1, -1
-        y(i) = (s(i) - dot_product(hm(i, i + 1:j), y(i + 1:j))) / hm(i, i)
-      end do
-      u = u + matmul(v(:, 1:j), y(1:j))
+      call gmres_correct(j, v, hm, s, u)
       ! The true residual (not the recurrence's): one more product, and a check on the noise.
       call this%apply_p(dyn, u, dq)
       call this%product(dyn, t, q_dy, dq, w, err)

@@ -20,9 +20,10 @@ module reduction_krylov
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC
   use reduction_lanczos, only: lanczos_t, LZ_OP, LZ_OP_BX, LZ_B
+  use core_gmres, only: gmres_step, gmres_correct
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: has_loads
-  use dynamics_static_krylov, only: krylov_statics_t
+  use dynamics_static_krylov, only: krylov_statics_t, krylov_tangent_unsupported
   implicit none
   private
   public :: krylov_modes, krylov_modes_applies, mbar_times, k0_factor, k0_solve
@@ -58,16 +59,8 @@ contains
     type(dynamics_t), intent(in) :: dyn
     logical, intent(in) :: along_motion
     character(len=:), allocatable :: why_not
-    why_not = ''
-    if (.not. dyn%sparse) then
-      why_not = 'the model is on the dense path (&scene linear_solver)'
-    else if (dyn%model%n_elastic > 0) then
-      why_not = 'the model has elastic (calculable) modes'
-    else if (size(dyn%model%moment_lambda) > 0) then
-      why_not = 'the model has moments fixed in space'
-    else if (along_motion) then
-      why_not = 'modes along a motion need the dense tangent'
-    end if
+    why_not = krylov_tangent_unsupported(dyn)
+    if (why_not == '' .and. along_motion) why_not = 'modes along a motion need the dense tangent'
   end function krylov_modes_applies
 
   !> The nev lowest modes at (t, q_dy) with the prescribed modes locked: omega^2 ascending,
@@ -224,8 +217,8 @@ contains
     real(wp), intent(out) :: y(:)
     type(error_t), intent(inout) :: err
     real(wp) :: v(size(b), RESTART + 1), hm(RESTART + 1, RESTART), cs(RESTART), sn(RESTART)
-    real(wp) :: s(RESTART + 1), w(size(b), 1), r(size(b)), c(RESTART), b_norm, beta, tmp
-    integer :: i, j, pass, done
+    real(wp) :: s(RESTART + 1), w(size(b), 1), r(size(b)), b_norm, beta
+    integer :: j, done
     y = 0.0_wp
     b_norm = norm2(b)
     if (b_norm == 0) return
@@ -246,35 +239,10 @@ contains
         call apply_loaded(v(:, j), w(:, 1))
         if (.not. err%ok()) return
         done = done + 1
-        hm(:, j) = 0.0_wp
-        do pass = 1, 2
-          do i = 1, j
-            tmp = dot_product(v(:, i), w(:, 1))
-            hm(i, j) = hm(i, j) + tmp
-            w(:, 1) = w(:, 1) - tmp * v(:, i)
-          end do
-        end do
-        hm(j + 1, j) = norm2(w(:, 1))
-        if (hm(j + 1, j) > 0) v(:, j + 1) = w(:, 1) / hm(j + 1, j)
-        do i = 1, j - 1
-          tmp = cs(i) * hm(i, j) + sn(i) * hm(i + 1, j)
-          hm(i + 1, j) = -sn(i) * hm(i, j) + cs(i) * hm(i + 1, j)
-          hm(i, j) = tmp
-        end do
-        tmp = hypot(hm(j, j), hm(j + 1, j))
-        cs(j) = hm(j, j) / tmp
-        sn(j) = hm(j + 1, j) / tmp
-        hm(j, j) = tmp
-        hm(j + 1, j) = 0.0_wp
-        s(j + 1) = -sn(j) * s(j)
-        s(j) = cs(j) * s(j)
+        call gmres_step(j, w(:, 1), v, hm, cs, sn, s)
         if (abs(s(j + 1)) <= GMRES_TOL * b_norm .or. done >= MAX_PRODUCTS) exit
       end do
-      j = min(j, RESTART)
-      do i = j, 1, -1
-        c(i) = (s(i) - dot_product(hm(i, i + 1:j), c(i + 1:j))) / hm(i, i)
-      end do
-      y = y + matmul(v(:, 1:j), c(1:j))
+      call gmres_correct(min(j, RESTART), v, hm, s, y)
       ! The true residual, not the recurrence's: the noise must not fake convergence.
       call apply_loaded(y, w(:, 1))
       if (.not. err%ok()) return

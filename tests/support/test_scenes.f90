@@ -13,7 +13,8 @@ module test_scenes
   use analysis_run, only: run_t
   implicit none
   private
-  public :: rtxt, itxt, source_dir, make_dynamics, make_dynamics_from, run_to_file
+  public :: rtxt, itxt, source_dir, make_dynamics, make_dynamics_from, run_to_file, &
+    node_distance
 
 contains
 
@@ -89,4 +90,14 @@ contains
     if (err%ok()) call run%execute(err)
     if (err%ok()) call run%write(path, err)
   end subroutine run_to_file
+
+  !> Largest distance [m] between a node's planar paths in two runs of one model.
+  real(wp) function node_distance(a, b, label) result(d)
+    type(run_t), intent(in) :: a, b
+    character(len=*), intent(in) :: label
+    integer :: ic(3)
+    ic = a%dyn%model%node_coord(1:3, a%dyn%model%find_node(label))
+    d = maxval(hypot(a%dyn%x_hist(ic(1), :) - b%dyn%x_hist(ic(1), :), &
+                     a%dyn%x_hist(ic(2), :) - b%dyn%x_hist(ic(2), :)))
+  end function node_distance
 end module test_scenes
