@@ -6,7 +6,7 @@ program flexmor_main
   use, intrinsic :: iso_fortran_env, only: error_unit
   use core_kinds, only: wp
   use core_error, only: error_t
-  use core_linalg, only: single_thread_blas
+  use core_linalg, only: single_thread_blas, steady_heap
   use io_cli, only: cli_args_t, parse_cli
   use io_fs, only: check_output_path, install_interrupt_guard
   use core_version, only: FLEXMOR_VERSION
@@ -18,6 +18,7 @@ program flexmor_main
   integer :: i
 
   call single_thread_blas()
+  call steady_heap()
   call parse_cli('usage: flexmor FILE.nml [-o OUT.h5] [-q]', [character(len=80) :: &
     '  runs the static, modal and dynamic analyses FILE.nml asks for and writes one', &
     '  HDF5 file (default: FILE.h5 in the current directory). See README.md.', &

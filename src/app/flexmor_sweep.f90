@@ -7,7 +7,7 @@ program flexmor_sweep_main
   use, intrinsic :: iso_fortran_env, only: error_unit
   use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_Comm_rank, MPI_Barrier, MPI_COMM_WORLD
   use core_error, only: error_t
-  use core_linalg, only: single_thread_blas
+  use core_linalg, only: single_thread_blas, steady_heap
   use io_cli, only: cli_args_t, parse_cli
   use io_fs, only: install_interrupt_guard
   use core_version, only: FLEXMOR_VERSION
@@ -22,6 +22,7 @@ program flexmor_sweep_main
   call MPI_Init()
   call MPI_Comm_rank(MPI_COMM_WORLD, rank)
   call single_thread_blas()
+  call steady_heap()
   args%verbose = rank == 0
   call parse_cli('usage: flexmor-sweep SWEEP.nml [-o OUT.h5] [-q] [--check]', &
     [character(len=90) :: &

@@ -3,7 +3,7 @@ module core_linalg
   use core_kinds, only: wp
   implicit none
   private
-  public :: single_thread_blas, lu_factor, lu_solve, lu_solve_vector, chol_factor, chol_solve, sym_gen_eig, &
+  public :: single_thread_blas, steady_heap, lu_factor, lu_solve, lu_solve_vector, chol_factor, chol_solve, sym_gen_eig, &
     gen_eig_values, solve_dense
 
   interface
@@ -58,6 +58,9 @@ module core_linalg
   interface
     subroutine single_thread_blas() bind(C, name='flexmor_single_thread_blas')
     end subroutine single_thread_blas
+    !> Process set-up of the executables: see core_heap.c.
+    subroutine steady_heap() bind(C, name='flexmor_steady_heap')
+    end subroutine steady_heap
   end interface
 
 contains

@@ -49,12 +49,12 @@ module reduction_krylov
     type(krylov_statics_t) :: kry
     real(wp) :: t = 0.0_wp
     real(wp), allocatable :: q_dy(:)
-    integer :: n_products = 0
   end type shifted_t
 
 contains
 
-  !> '' when the Krylov path gives this model's tangent exactly, else why not.
+  !> '' when the Krylov path gives this model's tangent as the dense path has it, else why
+  !> not.
   function krylov_modes_applies(dyn, along_motion) result(why_not)
     type(dynamics_t), intent(in) :: dyn
     logical, intent(in) :: along_motion
@@ -205,7 +205,6 @@ contains
     kz = 0.0_wp
     if (.not. err%ok()) return
     call op%kry%load_product(dyn, op%t, op%q_dy, z, kz, err)
-    op%n_products = op%n_products + 1
   end function load_times
 
   !> y with (I + P^-1 K_L) y = b by restarted GMRES (modified Gram-Schmidt, twice: the
