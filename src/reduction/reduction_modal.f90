@@ -18,9 +18,10 @@ module reduction_modal
   real(wp), parameter :: TWO_PI = 6.28318530717958647692_wp
   !> 'auto' takes the Krylov path (no dense matrices) from this many dynamic coordinates on,
   !> where it applies and at most a tenth of the modes are asked for. Measured on the
-  !> two-link (4 modes, Release, least of 3), dense LAPACK / dense ARPACK / Krylov: 32 dynamic
-  !> coordinates 1.6 / 1.4 / 1.9 ms, 64: 3.0 / 3.7 / 2.7 ms, 128: 15 / 16 / 3.4 ms, 256: 63 /
-  !> 62 / 11 ms, 1024: 1.9 / 1.4 / 0.066 s.
+  !> two-link (scripts/bench_modal.py, 4 modes), LAPACK / dense ARPACK / Krylov: 64 dynamic
+  !> coordinates 1.2 / 1.3 / 0.7 ms, 128: 4.6 / 3.4 / 1.6 ms, 1024: 1.42 / 1.20 / 0.012 s;
+  !> under gravity (GMRES, two evaluations per product) LAPACK / Krylov 4.5 / 5.4 ms at 64,
+  !> 18 / 6.7 ms at 128.
   integer, parameter :: KRYLOV_AUTO_MIN_N = 100
 
   type :: modal_result_t
