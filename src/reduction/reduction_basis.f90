@@ -72,14 +72,17 @@ contains
     basis_has_k0 = allocated(this%k_chol) .or. allocated(this%de_k0)
   end function basis_has_k0
 
-  !> dq = K0^-1 r with K0 at the basis configuration (dense Cholesky factor or sparse).
-  subroutine basis_static_solve(this, dyn, r, dq)
+  !> dq = K0^-1 r with K0 at the basis configuration (dense Cholesky factor or sparse); ok
+  !> false (dq = 0) where there is none or the sparse K0 could not be factored again.
+  subroutine basis_static_solve(this, dyn, r, dq, ok)
     class(basis_t), intent(inout) :: this
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: r(:)
     real(wp), intent(out) :: dq(:)
-    logical :: ok
+    logical, intent(out) :: ok
     dq = r
+    ok = this%has_k0()
+    if (.not. ok) dq = 0.0_wp
     if (allocated(this%k_chol)) then
       call chol_solve(this%k_chol, dq)
     else if (allocated(this%de_k0)) then

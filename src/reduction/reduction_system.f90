@@ -10,7 +10,7 @@
 !> translation is the estimate, and which the static correction adds to the output.
 module reduction_system
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_MODEL
+  use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use core_linalg, only: chol_factor, chol_solve
   use model_system, only: model_t
   use dynamics_system, only: dynamics_t, check_finite
@@ -275,13 +275,19 @@ contains
     real(wp), intent(out) :: residual, estimate, dq(:)
     type(error_t), intent(out) :: err
     real(wp) :: a(size(eta)), r(size(dq))
+    logical :: ok
     call reduced_accel(this, t, eta, eta_dot, a, err)
     if (err%ok()) call full_residual(this, t, q_dy, v_dy, a, r, residual, err)
     if (.not. err%ok()) return
     estimate = 0.0_wp
     dq = 0.0_wp
     if (this%basis%has_k0()) then
-      call this%basis%static_solve(this%dyn, r, dq)
+      call this%basis%static_solve(this%dyn, r, dq, ok)
+      if (.not. ok) then
+        call err%set(ERR_NUMERIC, 'reduced model: the stiffness K0 at the basis ' // &
+          'configuration, regular when the basis was made, is singular on refactoring')
+        return
+      end if
       estimate = this%dyn%model%largest_translation(nodal_motion(this, dq))
     else
       this%has_estimate = .false.
