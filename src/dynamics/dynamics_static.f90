@@ -25,7 +25,7 @@ module dynamics_static
   use core_linalg, only: lu_factor, lu_solve, chol_factor, gen_eig_values
   use dynamics_system, only: dynamics_t
   use core_progress, only: progress_t
-  use dynamics_static_krylov, only: krylov_statics_t
+  use dynamics_static_krylov, only: krylov_statics_t, difference_step
   implicit none
   private
   public :: tangent_stiffness, motion_tangent, static_solve, stable_tangent, STABILITY_MARGIN, &
@@ -90,7 +90,7 @@ contains
     if (present(accurate)) extrapolate = accurate
     call dyn%mode_stiffness(k, d_mode)
     if (has_loads(dyn)) then
-      h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+      h = difference_step(dyn)
       do j = 1, size(q_dy)
         call central_difference(dyn, t, q_dy, j, h, d1, err)
         if (.not. err%ok()) exit
@@ -146,7 +146,7 @@ contains
       return
     end if
     if (present(accel)) a0 = accel
-    h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+    h = difference_step(dyn)
     do j = 1, size(q_dy)
       call force_difference(h, d1)
       if (err%ok()) call force_difference(2 * h, d2)

@@ -22,7 +22,7 @@ module dynamics_static_krylov
   use dynamics_system, only: dynamics_t
   implicit none
   private
-  public :: krylov_statics_t, krylov_tangent_unsupported
+  public :: krylov_statics_t, krylov_tangent_unsupported, difference_step
 
   !> GMRES stops at this residual relative to |g|: Newton then contracts by about this much
   !> per iteration, far below the 0.25 at which static_solve would call convergence slow.
@@ -58,6 +58,13 @@ module dynamics_static_krylov
   end interface
 
 contains
+
+  !> The step of the tangents' central differences in q_dy: 6e-6 of the model's size (at least
+  !> 1 mm), the same for every coordinate and path so that dense and Krylov tangents agree.
+  pure real(wp) function difference_step(dyn) result(h)
+    type(dynamics_t), intent(in) :: dyn
+    h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+  end function difference_step
 
   !> Why the Krylov eigenproblems (buckling, modes) cannot reproduce this model's dense
   !> tangent, '' when they can: they need the sparse factors of K0 and its stresses linear in
@@ -119,7 +126,7 @@ contains
     integer :: info
     call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, g, err)
     if (.not. err%ok()) return
-    this%h = 6.0e-6_wp * max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+    this%h = difference_step(dyn)
     dyn%aug%de_val = dyn%kin%de_val
     this%shift = 0.0_wp
     call dyn%aug%factor_newton(dyn%model, dyn%mass, 1.0_wp, 0.0_wp, info, &

@@ -23,7 +23,8 @@ module reduction_krylov
   use core_gmres, only: gmres_step, gmres_correct
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: has_loads
-  use dynamics_static_krylov, only: krylov_statics_t, krylov_tangent_unsupported
+  use dynamics_static_krylov, only: krylov_statics_t, krylov_tangent_unsupported, &
+    difference_step
   implicit none
   private
   public :: krylov_modes, krylov_modes_applies, mbar_times, k0_factor, k0_solve
@@ -84,12 +85,8 @@ contains
     op%loaded = has_loads(dyn)
     op%t = t
     op%q_dy = q_dy
-    if (op%loaded) then
-      ! The difference step of the load products, and the state at q_dy
-      call op%kry%precondition(dyn, t, q_dy, err)
-    else
-      call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, g, err)
-    end if
+    op%kry%h = difference_step(dyn)
+    call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, g, err)
     if (.not. err%ok()) then
       dyn%locked = was_locked
       return
