@@ -4,7 +4,7 @@ module core_linalg
   implicit none
   private
   public :: single_thread_blas, steady_heap, lu_factor, lu_solve, lu_solve_vector, chol_factor, chol_solve, sym_gen_eig, &
-    gen_eig_values, solve_dense
+    gen_eig_values, solve_dense, gemv_add
 
   interface
     subroutine dgetrf(m, n, a, lda, ipiv, info)
@@ -44,6 +44,13 @@ module core_linalg
       real(wp), intent(out) :: w(*), work(*)
       integer, intent(out) :: iwork(*), info
     end subroutine dsygvd
+    subroutine dgemv(trans, m, n, alpha, a, lda, x, incx, beta, y, incy)
+      import :: wp
+      character, intent(in) :: trans
+      integer, intent(in) :: m, n, lda, incx, incy
+      real(wp), intent(in) :: alpha, beta, a(lda, *), x(*)
+      real(wp), intent(inout) :: y(*)
+    end subroutine dgemv
     subroutine dggev(jobvl, jobvr, n, a, lda, b, ldb, alphar, alphai, beta, vl, ldvl, vr, &
         ldvr, work, lwork, info)
       import :: wp
@@ -195,4 +202,15 @@ contains
       end if
     end do
   end subroutine gen_eig_values
+
+  !> y = y + a x with a taken as the contiguous rows x cols matrix it is (explicit shape: a
+  !> tensor's storage passes as its matrix, an array element starts a block of columns). BLAS
+  !> reads y once, where a loop of column updates reads and writes it once per column.
+  subroutine gemv_add(rows, cols, a, x, y)
+    integer, intent(in) :: rows, cols
+    real(wp), intent(in) :: a(rows, cols), x(cols)
+    real(wp), intent(inout) :: y(rows)
+    if (rows == 0 .or. cols == 0) return
+    call dgemv('N', rows, cols, 1.0_wp, a, rows, x, 1, 1.0_wp, y, 1)
+  end subroutine gemv_add
 end module core_linalg

@@ -27,7 +27,7 @@
 module reduction_expansion
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_MODEL
-  use core_linalg, only: chol_factor, chol_solve
+  use core_linalg, only: chol_factor, chol_solve, gemv_add
   use model_system, only: model_t
   use dynamics_system, only: dynamics_t
   use reduction_basis, only: basis_t
@@ -250,12 +250,13 @@ contains
   pure logical function exp_needs_update(this, p, eta, tol)
     class(expansion_t), intent(in) :: this
     real(wp), intent(in) :: p(:), eta(:), tol
-    real(wp) :: d(2)
+    real(wp) :: d(2), dz(this%m)
     if (.not. this%valid) then
       exp_needs_update = .true.
       return
     end if
-    d = this%spread([p, eta] - this%z0)
+    call step_from_centre(this, p, eta, dz)
+    d = this%spread(dz)
     exp_needs_update = d(2)**2 > tol * d(1)**2
   end function exp_needs_update
 
@@ -275,26 +276,14 @@ contains
   end function exp_spread
 
   !> The reduced mass a + sum_l b(:, :, l) dz_l + sum_lr c(:, :, l, r) dz_l dz_r (m x m).
-  pure function mass_at(this, dz) result(mz)
+  function mass_at(this, dz) result(mz)
     type(expansion_t), intent(in) :: this
     real(wp), intent(in) :: dz(:)
     real(wp) :: mz(this%m, this%m)
     mz = this%a
-    call add_product(this%m**2, this%m, this%b, dz, mz)
-    call add_product(this%m**2, this%m**2, this%c, outer(dz, dz), mz)
+    call gemv_add(this%m**2, this%m, this%b, dz, mz)
+    call gemv_add(this%m**2, this%m**2, this%c, outer(dz, dz), mz)
   end function mass_at
-
-  !> y = y + a v, with a and y taken as the contiguous arrays they are (the coefficient
-  !> tensors as matrices: one pass over each, no temporaries).
-  pure subroutine add_product(rows, cols, a, v, y)
-    integer, intent(in) :: rows, cols
-    real(wp), intent(in) :: a(rows, cols), v(cols)
-    real(wp), intent(inout) :: y(rows)
-    integer :: j
-    do j = 1, cols
-      y = y + a(:, j) * v(j)
-    end do
-  end subroutine add_product
 
   !> u v^T as a vector, element (a, b) at a + (b - 1) size(u).
   pure function outer(u, v) result(w)
@@ -306,6 +295,16 @@ contains
     end do
   end function outer
 
+  !> dz = (p, eta) - z0, without the temporary of an array constructor (called per
+  !> evaluation).
+  pure subroutine step_from_centre(this, p, eta, dz)
+    type(expansion_t), intent(in) :: this
+    real(wp), intent(in) :: p(:), eta(:)
+    real(wp), intent(out) :: dz(:)
+    dz(1:this%nr) = p - this%z0(1:this%nr)
+    dz(this%nr + 1:this%m) = eta - this%z0(this%nr + 1:this%m)
+  end subroutine step_from_centre
+
   !> Modal accelerations at (t, eta, eta_dot) from the expansion: O(m^4), no model pass.
   !> p, pd, pdd: the prescribed coordinates and their rates at t (dynamics_t%prescribed).
   subroutine exp_accel(this, dyn, t, p, pd, pdd, eta, eta_dot, acc, err)
@@ -315,24 +314,31 @@ contains
     real(wp), intent(out) :: acc(:)
     type(error_t), intent(out) :: err
     real(wp) :: dz(this%m), zd(this%m), mz(this%m, this%m), f(this%m), v(this%m)
-    real(wp) :: w(this%m, this%m), quad(this%m**2), rhs(this%k), mee(this%k, this%k)
+    real(wp) :: w(this%m, this%m), quad(this%m, this%m), rhs(this%k), mee(this%k, this%k)
     integer :: l, info, nr
     nr = this%nr
-    dz = [p, eta] - this%z0
-    zd = [pd, eta_dot]
+    call step_from_centre(this, p, eta, dz)
+    zd(1:nr) = pd
+    zd(nr + 1:) = eta_dot
     mz = mass_at(this, dz)
-    f = this%f1 + matmul(this%f2, dz)
+    f = this%f1
+    call gemv_add(this%m, this%m, this%f2, dz, f)
     if (this%loads_vary) f = f + projected_load(this, dyn%load_factor * dyn%loads_at(t) - &
       this%load0, dz)
     ! Inertia forces (g0 + g1 dz)[zd, zd]: the tensors contracted with zd zd^T first.
-    quad = outer(zd, zd)
+    do l = 1, this%m
+      quad(:, l) = zd * zd(l)
+    end do
     v = 0.0_wp
-    call add_product(this%m, this%m**2, this%g0, quad, v)
+    call gemv_add(this%m, this%m**2, this%g0, quad, v)
     w = 0.0_wp
-    call add_product(this%m**2, this%m**2, this%g1, quad, w)
-    call add_product(this%m, this%m, w, dz, v)
-    f = f - v
-    rhs = f(nr + 1:) - this%s0 - matmul(this%kz, dz) - matmul(this%dz, zd)
+    call gemv_add(this%m**2, this%m**2, this%g1, quad, w)
+    call gemv_add(this%m, this%m, w, dz, v)
+    ! The stresses s0 + kz dz + dz zd go to the right with v.
+    v(nr + 1:) = v(nr + 1:) + this%s0
+    call gemv_add(this%k, this%m, this%kz, dz, v(nr + 1:))
+    call gemv_add(this%k, this%m, this%dz, zd, v(nr + 1:))
+    rhs = f(nr + 1:) - v(nr + 1:)
     do l = 1, nr
       rhs = rhs - mz(nr + 1:, l) * pdd(l)
     end do
@@ -377,9 +383,9 @@ contains
       end do
     end do
     x = this%x0
-    call add_product(size(x), this%m, this%x1, dz, x)
-    call add_product(size(x), this%m**2, this%x2, 0.5_wp * outer(dz, dz), x)
-    call add_product(size(x), size(w3), this%x3, w3, x)
+    call gemv_add(size(x), this%m, this%x1, dz, x)
+    call gemv_add(size(x), this%m**2, this%x2, 0.5_wp * outer(dz, dz), x)
+    call gemv_add(size(x), size(w3), this%x3, w3, x)
   end function exp_coordinates
 
   !> Permutations of the triple (l, a, b), l <= a <= b, over 6 (X3's term of the series).
@@ -416,18 +422,18 @@ contains
     real(wp), intent(in) :: dq(:), eta_old(:), eta_new(:), rtol, atol
     real(wp), intent(out) :: norm
     real(wp) :: dx(size(this%x0)), x_old(size(this%x0)), x_new(size(this%x0))
-    integer :: j
-    ! One pass over X1's modal columns for the three products.
+    integer :: n
+    n = size(this%x0)
     dx = 0.0_wp
     x_old = this%xr
     x_new = this%xr
-    do j = 1, this%k
-      associate (col => this%x1(:, this%nr + j))
-        dx = dx + dq(j) * col
-        x_old = x_old + eta_old(j) * col
-        x_new = x_new + eta_new(j) * col
-      end associate
-    end do
+    if (this%k > 0) then
+      ! X1's modal columns are contiguous: they pass as an n x k matrix from their first
+      ! element.
+      call gemv_add(n, this%k, this%x1(1, this%nr + 1), dq, dx)
+      call gemv_add(n, this%k, this%x1(1, this%nr + 1), eta_old, x_old)
+      call gemv_add(n, this%k, this%x1(1, this%nr + 1), eta_new, x_new)
+    end if
     norm = model%error_norm(dx, max(abs(x_old), abs(x_new)), rtol, atol)
   end subroutine exp_error_norm
 end module reduction_expansion
