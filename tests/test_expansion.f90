@@ -30,6 +30,7 @@ program test_expansion
   call check_energies(2, 3)
   call check_centre_time()
   call check_second_many()
+  call check_turns()
   ! 1 GiB of series: all 64 at 389 coordinates (305 kB each), 13 at 10^5 (78 MB), 4 at least.
   call suite%check(kept_slots(389, 6) == 64 .and. kept_slots(10**5, 6) == 13 .and. &
     kept_slots(10**8, 6) == 4, 'kept expansions within the memory budget')
@@ -38,17 +39,40 @@ program test_expansion
   ! the coordinates' series (order 4).
   call setup('lumped', run)
   call check_energies(3, 4)
+  ! A base shaken along x: a prescribed translation is no turn, and the joints' turns are
+  ! not used unless every prescribed coordinate is one.
+  call setup('consistent', run, "&node label = 'base', x = 0, y = 0, fixed = .true., " // &
+    "fix_x = .false., motion_x = 'shake' /" // new_line('a') // &
+    "&motion label = 'shake', law = 'harmonic', frequency = 5, amplitude = 0.01 /")
+  call suite%check(.not. ex%turned, 'a shaken base: no turns')
+  ! A released truss from the tip to the ground ties the arm to it: no joint turns a part
+  ! rigidly (the series by element passes, still at its order).
+  call setup('consistent', run, "&node label = 'base', x = 0, y = 0, fixed = .true. /" // &
+    new_line('a') // "&node label = 'anchor', x = 1.22, y = -0.5, fixed = .true. /" // &
+    new_line('a') // "&truss label = 's', from = 'tip', to = 'anchor', E = 2e9, A = 1e-6, " // &
+    "mode = 'released' /")
+  call suite%check(.not. ex%turned, 'an arm tied to the ground: no turns')
+  call check_coordinates()
   call suite%finish()
 
 contains
 
   !> The reduced run (full evaluation) of scene(mass) and the expansion at (T0, eta0).
-  subroutine setup(mass, r)
+  subroutine setup(mass, r, base)
     character(len=*), intent(in) :: mass
     type(run_t), intent(out) :: r
-    integer :: u
+    character(len=*), intent(in), optional :: base
+    character(len=*), parameter :: FIXED_BASE = &
+      "&node label = 'base', x = 0, y = 0, fixed = .true. /"
+    character(len=:), allocatable :: text
+    integer :: u, at
+    text = scene(mass)
+    if (present(base)) then
+      at = index(text, FIXED_BASE)
+      text = text(1:at - 1) // base // text(at + len(FIXED_BASE):)
+    end if
     open(newunit=u, file='test_expansion.nml', status='replace', action='write')
-    write(u, '(a)') scene(mass)
+    write(u, '(a)') text
     close(u)
     r%verbose = .false.
     call r%load('test_expansion.nml', err)
@@ -169,6 +193,33 @@ contains
     call suite%check(maxval(abs(a - b)) <= 1.0e-9_wp * maxval(abs(a)), &
       'accelerations at the expansion point (round-off: 1e-9 relative)')
   end subroutine check_at_point
+
+  !> The joints turn the arm beyond them rigidly: the series' columns along them come from the
+  !> turns' products. Against the element passes and solves: X2 to round-off; X3 to the
+  !> truncation of the passes' one-sided differences (THIRD_STEP 1e-6 of the model's size:
+  !> about 1e-6 relative); and so the accelerations off the expansion point.
+  subroutine check_turns()
+    type(expansion_t) :: passes
+    real(wp) :: x2_scale, x3_scale, a(3), b(3), p(2), pd(2), pdd(2)
+    call suite%check(ex%turned, 'both joints are turns')
+    passes%use_turns = .false.
+    call passes%build(run%red%dyn, run%red%basis, T0, eta0, err)
+    call suite%check(err%ok() .and. .not. passes%turned, 'expansion by element passes')
+    x2_scale = maxval(abs(passes%x2))
+    x3_scale = maxval(abs(passes%x3))
+    call suite%check(maxval(abs(ex%x2 - passes%x2)) <= 1.0e-10_wp * x2_scale, &
+      'X2 along the turns: products against solves (1e-10 relative)')
+    call suite%check(maxval(abs(ex%x3 - passes%x3)) <= 1.0e-4_wp * x3_scale, &
+      'X3 along the turns: products against differences (1e-4 relative)')
+    call run%red%dyn%prescribed(T0 + TAU, p, pd, pdd)
+    call ex%accel(run%red%dyn, T0 + TAU, p, pd, pdd, eta0 + d_eta, eta_dot, a, err)
+    call passes%accel(run%red%dyn, T0 + TAU, p, pd, pdd, eta0 + d_eta, eta_dot, b, err)
+    call suite%check(maxval(abs(a - b)) <= 1.0e-5_wp * maxval(abs(b)), &
+      'accelerations off the point: turns against passes (1e-5 relative)')
+    write(*, '(a, 3es10.2)') '      X2, X3, accelerations (relative): ', &
+      maxval(abs(ex%x2 - passes%x2)) / x2_scale, maxval(abs(ex%x3 - passes%x3)) / x3_scale, &
+      maxval(abs(a - b)) / maxval(abs(b))
+  end subroutine check_turns
 
   !> Largest nodal distance between the series and the exact kinematics at z0 + s (d_p, d_eta).
   real(wp) function coordinate_error(s) result(e)

@@ -31,6 +31,7 @@ module reduction_expansion
   use model_system, only: model_t
   use dynamics_system, only: dynamics_t
   use reduction_basis, only: basis_t
+  use reduction_turns, only: turn_t, find_turns, turn_derivative
   implicit none
   private
   public :: expansion_t, expansion_set_t, expansion_unsupported, AHEAD_FRACTION, kept_slots
@@ -51,6 +52,9 @@ module reduction_expansion
   !> zd factors).
   type :: expansion_t
     logical :: valid = .false.
+    !> Take the series' columns along prescribed coordinates that turn part of the model
+    !> rigidly from the turns' products (reduction_turns); turned: this expansion did.
+    logical :: use_turns = .true., turned = .false.
     integer :: nr = 0, k = 0, m = 0
     real(wp), allocatable :: z0(:), x0(:), xr(:)     !< xr = DF_dy q_ref (error norm)
     real(wp), allocatable :: x1(:, :), x2(:, :, :)   !< (n_x, m), (n_x, m, m)
@@ -107,17 +111,24 @@ module reduction_expansion
       real(wp), intent(in) :: t, eta(:)
       type(error_t), intent(out) :: err
     end subroutine exp_build
-    !> X2 at the kinematics' current solution (reduction_expansion_series).
-    module subroutine second_terms(dyn, x1, x2)
+    !> X2 at the kinematics' current solution (reduction_expansion_series): the pairs
+    !> first <= a <= b by an element pass and a solve, those with a turn (a < first) from the
+    !> turns' products.
+    module subroutine second_terms(dyn, x1, x2, turns, first)
       type(dynamics_t), intent(inout) :: dyn
       real(wp), intent(in) :: x1(:, :)
       real(wp), intent(out) :: x2(:, :, :)
+      type(turn_t), intent(in) :: turns(:)
+      integer, intent(in) :: first
     end subroutine second_terms
-    !> X3's distinct columns and tri (reduction_expansion_series).
-    module subroutine third_terms(this, dyn, size_x)
+    !> X3's distinct columns and tri (reduction_expansion_series); the columns along the
+    !> first first - 1 directions (turns) from the turns' products.
+    module subroutine third_terms(this, dyn, size_x, turns, first)
       type(expansion_t), intent(inout) :: this
       type(dynamics_t), intent(inout) :: dyn
       real(wp), intent(in) :: size_x
+      type(turn_t), intent(in) :: turns(:)
+      integer, intent(in) :: first
     end subroutine third_terms
   end interface
 

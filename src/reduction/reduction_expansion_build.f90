@@ -17,7 +17,8 @@ contains
     real(wp), allocatable :: x2mx2(:, :)
     real(wp) :: p(dyn%model%n_rh), pd(dyn%model%n_rh), pdd(dyn%model%n_rh), hl, size_x, vg
     type(element_mass_t) :: mass_l
-    integer :: n, nr, k, m, l, i
+    type(turn_t), allocatable :: turns(:)
+    integer :: n, nr, k, m, l, i, first
     nr = dyn%model%n_rh
     k = size(eta)
     m = nr + k
@@ -42,14 +43,19 @@ contains
     if (allocated(this%x1)) deallocate(this%x1, this%x2, this%xr)
     allocate(this%x1(n, m), this%x2(n, m, m), this%xr(n))
     call dyn%kin%apply_df_many(dyn%model, tz, this%x1)
-    call second_terms(dyn, this%x1, this%x2)
+    this%turned = .false.
+    if (this%use_turns) call find_turns(dyn%model, this%x0, this%x1, turns, this%turned)
+    first = 1
+    if (this%turned) first = nr + 1
+    if (.not. allocated(turns)) allocate(turns(0))
+    call second_terms(dyn, this%x1, this%x2, turns, first)
     block
       real(wp) :: qr(dyn%model%n_q)
       qr(1:nr) = 0.0_wp
       qr(nr + 1:) = basis%q_ref
       call dyn%kin%apply_df(dyn%model, qr, this%xr)
     end block
-    call third_terms(this, dyn, size_x)
+    call third_terms(this, dyn, size_x, turns, first)
     ! Mass products at z0 and the quadratic velocity forces of the elements there.
     mx1 = dyn%mass%times(dyn%model, this%x1)
     mx2 = dyn%mass%times(dyn%model, reshape(this%x2, [n, m * m]))

@@ -18,37 +18,62 @@ submodule (reduction_expansion) reduction_expansion_series
 contains
 
   !> x2(:, a, b) = D2F[T_a, T_b] (and its mirror) from the nodal shapes x1 = DF T at the
-  !> kinematics' current solution.
+  !> kinematics' current solution: by polarised element terms and one solve for
+  !> first <= a <= b, as turns' products for a < first.
   module procedure second_terms
-    real(wp) :: rhs(dyn%model%n_c, n_pairs(size(x1, 2), 1))
+    real(wp) :: rhs(dyn%model%n_c, n_pairs(size(x1, 2), first))
     integer :: a, b, m, k
     m = size(x1, 2)
-    call polarised_rhs(dyn, dyn%kin%x, x1, 1, rhs)
-    call dyn%kin%jacobian_solve(rhs)
     x2 = 0.0_wp
-    do a = 1, m
-      do b = a, m
-        do k = 1, dyn%model%n_c
-          x2(dyn%model%calc_coord(k), a, b) = rhs(k, pair_column(a, b, 1, m))
+    if (first <= m) then
+      call polarised_rhs(dyn, dyn%kin%x, x1, first, rhs)
+      call dyn%kin%jacobian_solve(rhs)
+      do a = first, m
+        do b = a, m
+          do k = 1, dyn%model%n_c
+            x2(dyn%model%calc_coord(k), a, b) = rhs(k, pair_column(a, b, first, m))
+          end do
         end do
+      end do
+    end if
+    do a = 1, first - 1
+      do b = a, m
+        call turn_derivative(turns(a), x1(:, b), x2(:, a, b))
+      end do
+    end do
+    do a = 1, m
+      do b = a + 1, m
         x2(:, b, a) = x2(:, a, b)
       end do
     end do
   end procedure second_terms
 
   !> X3(:, l, a, b) for l <= a <= b, the distinct columns of the symmetric X3, in the order of
-  !> tri(l, a, b); the kinematics stays at z0.
+  !> tri(l, a, b); the kinematics stays at z0. Along a turn l (l < first) a column is the
+  !> turn's product of X2(:, a, b); the others come from the element differences and one
+  !> solve with all their columns.
   module procedure third_terms
     real(wp) :: x1h(size(this%x1, 1), this%m), xh(size(this%x0)), h
     real(wp), allocatable :: rhs(:, :), w(:, :), p(:, :), jw(:, :)
-    integer :: l, a, b, c, k, np, m
+    integer :: l, a, b, c, k, np, m, n_turned
     m = this%m
     if (allocated(this%x3)) deallocate(this%x3, this%tri)
     allocate(this%x3(size(this%x0), m * (m + 1) * (m + 2) / 6), this%tri(m, m, m))
-    allocate(rhs(dyn%model%n_c, size(this%x3, 2)))
     this%tri = 0
+    ! The turns' columns first, then those from differences (one solve for all of them).
     c = 0
-    do l = 1, m
+    do l = 1, first - 1
+      do a = l, m
+        do b = a, m
+          c = c + 1
+          this%tri(l, a, b) = c
+          call turn_derivative(turns(l), this%x2(:, a, b), this%x3(:, c))
+        end do
+      end do
+    end do
+    n_turned = c
+    allocate(rhs(dyn%model%n_c, size(this%x3, 2) - n_turned))
+    do l = first, m
       h = THIRD_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
       xh = this%x0 + h * this%x1(:, l) + (0.5_wp * h**2) * this%x2(:, l, l)
       do a = l, m
@@ -63,14 +88,14 @@ contains
         end do
       end do
       call polarised_rhs(dyn, xh, x1h, l, p, w, jw)
-      rhs(:, c + 1:c + np) = (p - jw) / h
+      rhs(:, c - n_turned + 1:c - n_turned + np) = (p - jw) / h
       deallocate(w, p, jw)
       c = c + np
     end do
-    call dyn%kin%jacobian_solve(rhs)
-    this%x3 = 0.0_wp
+    if (size(rhs, 2) > 0) call dyn%kin%jacobian_solve(rhs)
+    this%x3(:, n_turned + 1:) = 0.0_wp
     do k = 1, dyn%model%n_c
-      this%x3(dyn%model%calc_coord(k), :) = rhs(k, :)
+      this%x3(dyn%model%calc_coord(k), n_turned + 1:) = rhs(k, :)
     end do
   end procedure third_terms
 
