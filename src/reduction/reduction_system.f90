@@ -134,11 +134,22 @@ contains
     type(error_t), intent(out) :: err
     real(wp), intent(out), optional :: mr_out(:, :)
     real(wp) :: q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
-    real(wp) :: mr(size(eta), size(eta)), w(this%dyn%model%n_x, size(eta))
-    integer :: info
+    real(wp) :: w(this%dyn%model%n_x, size(eta))
     call this%full_state(eta, eta_dot, q_dy, v_dy)
     call this%dyn%prepare(t, q_dy, v_dy, err)
     if (.not. err%ok()) return
+    call prepared_accel(this, t, a, w, err, mr_out)
+  end subroutine reduced_accel
+
+  !> reduced_accel at the state the model was prepared at; w: the basis's nodal shapes there.
+  subroutine prepared_accel(this, t, a, w, err, mr_out)
+    class(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: t
+    real(wp), intent(out) :: a(:), w(:, :)
+    type(error_t), intent(out) :: err
+    real(wp), intent(out), optional :: mr_out(:, :)
+    real(wp) :: mr(size(a), size(a))
+    integer :: info
     call basis_shapes(this, w)
     mr = matmul(transpose(w), this%dyn%mass%times(this%dyn%model, w))
     a = matmul(this%dyn%nodal_force, w) - matmul(this%dyn%sigma_now, this%basis%v)
@@ -150,7 +161,7 @@ contains
     end if
     call chol_solve(mr, a)
     call check_finite(a, t, err)
-  end subroutine reduced_accel
+  end subroutine prepared_accel
 
   subroutine red_accel(this, t, q, v, a, status)
     class(reduced_t), intent(inout) :: this
@@ -274,10 +285,17 @@ contains
     real(wp), intent(in) :: t, eta(:), eta_dot(:), q_dy(:), v_dy(:)
     real(wp), intent(out) :: residual, estimate, dq(:)
     type(error_t), intent(out) :: err
-    real(wp) :: a(size(eta)), r(size(dq))
+    real(wp) :: a(size(eta)), r(size(dq)), a_full(size(dq))
+    real(wp) :: w(this%dyn%model%n_x, size(eta))
     logical :: ok
-    call reduced_accel(this, t, eta, eta_dot, a, err)
-    if (err%ok()) call full_residual(this, t, q_dy, v_dy, a, r, residual, err)
+    ! The full evaluation prepares the model at the state; the reduced one then shares it.
+    call this%dyn%evaluate(t, q_dy, v_dy, a_full, err)
+    if (.not. err%ok()) then
+      call err%prefix('error indicator: ')
+      return
+    end if
+    call prepared_accel(this, t, a, w, err)
+    if (err%ok()) call full_residual(this, w, a, a_full, r, residual)
     if (.not. err%ok()) return
     estimate = 0.0_wp
     dq = 0.0_wp
@@ -318,24 +336,16 @@ contains
   end subroutine expanded_store
 
   !> The residual of the full equations r = DF_dy^T (f - M W a_eta) - sigma_dy (W = DF_dy V)
-  !> just after reduced_accel, by one transposed solve, and its norm sqrt(r^T Mbar^-1 r):
-  !> Mbar^-1 r = a_full - V a_eta with the full model's accelerations a_full at this state.
-  subroutine full_residual(this, t, q_dy, v_dy, a_eta, r, norm, err)
+  !> at the prepared state, by one transposed solve, and its norm sqrt(r^T Mbar^-1 r):
+  !> Mbar^-1 r = a_full - V a_eta with the full model's accelerations a_full there.
+  subroutine full_residual(this, w, a_eta, a_full, r, norm)
     type(reduced_t), intent(inout) :: this
-    real(wp), intent(in) :: t, q_dy(:), v_dy(:), a_eta(:)
+    real(wp), intent(in) :: w(:, :), a_eta(:), a_full(:)
     real(wp), intent(out) :: r(:), norm
-    type(error_t), intent(inout) :: err
-    real(wp) :: g(this%dyn%model%n_x, 1), r_q(this%dyn%model%n_q), a_full(size(r))
-    real(wp) :: w(this%dyn%model%n_x, size(a_eta))
-    call basis_shapes(this, w)
+    real(wp) :: g(this%dyn%model%n_x, 1), r_q(this%dyn%model%n_q)
     g = this%dyn%mass%times(this%dyn%model, matmul(w, reshape(a_eta, [size(a_eta), 1])))
     call this%dyn%kin%apply_dft(this%dyn%model, this%dyn%nodal_force - g(:, 1), r_q)
     r = r_q(this%dyn%model%n_rh + 1:) - this%dyn%sigma_now
-    call this%dyn%evaluate(t, q_dy, v_dy, a_full, err)
-    if (.not. err%ok()) then
-      call err%prefix('error indicator: ')
-      return
-    end if
     norm = sqrt(max(0.0_wp, dot_product(r, a_full - matmul(this%basis%v, a_eta))))
   end subroutine full_residual
 
