@@ -76,7 +76,8 @@ contains
     integer, intent(in) :: j
     type(turn_t), intent(out) :: turn
     logical, intent(out) :: ok
-    integer :: state(size(d)), i, ix, iy, n_moving, n_centre, own
+    integer :: state(size(d)), i, n_moving, n_centre, own
+    integer, allocatable :: pairs(:, :)
     logical :: covered(size(d))
     real(wp) :: length, c(2), ci(2)
     ok = .false.
@@ -96,56 +97,44 @@ contains
       end if
     end do
     ! Positions move as J (x - c) about one point c, or stay.
+    pairs = position_pairs(model)
     n_moving = 0
     c = 0.0_wp
-    do i = 1, size(model%node_coord, 2)
-      ix = model%node_coord(1, i)
-      iy = model%node_coord(2, i)
-      if (ix <= 0 .or. iy <= 0) cycle
-      covered([ix, iy]) = .true.
-      if (norm2(d([ix, iy])) <= TURN_TOL * length) cycle
-      ci = [x0(ix) - d(iy), x0(iy) + d(ix)]
-      if (n_moving > 0 .and. norm2(ci - c) > TURN_TOL * length) return
-      if (n_moving == 0) c = ci
-      n_moving = n_moving + 1
-      state([ix, iy]) = TURNS
+    do i = 1, size(pairs, 2)
+      associate (ix => pairs(1, i), iy => pairs(2, i))
+        covered([ix, iy]) = .true.
+        if (norm2(d([ix, iy])) <= TURN_TOL * length) cycle
+        ci = [x0(ix) - d(iy), x0(iy) + d(ix)]
+        if (n_moving > 0 .and. norm2(ci - c) > TURN_TOL * length) return
+        if (n_moving == 0) c = ci
+        n_moving = n_moving + 1
+        state([ix, iy]) = TURNS
+      end associate
     end do
     ! A coordinate of no node that moves cannot be turned (one that stays has zero
     ! derivatives along the turn, as the turn's product gives).
     if (n_moving == 0 .or. any(.not. covered .and. abs(d) > TURN_TOL * length)) return
     ! Exactly one node that stays sits at c: the joint's.
     n_centre = 0
-    do i = 1, size(model%node_coord, 2)
-      ix = model%node_coord(1, i)
-      iy = model%node_coord(2, i)
-      if (ix <= 0 .or. iy <= 0) cycle
-      if (state(ix) /= STAYS) cycle
-      if (norm2([x0(ix), x0(iy)] - c) > TURN_TOL * length) cycle
+    do i = 1, size(pairs, 2)
+      if (state(pairs(1, i)) /= STAYS) cycle
+      if (norm2(x0(pairs(:, i)) - c) > TURN_TOL * length) cycle
       n_centre = n_centre + 1
-      turn%centre = [ix, iy]
+      turn%centre = pairs(:, i)
     end do
     if (n_centre /= 1) return
     state(turn%centre) = CENTRE
-    if (.not. elements_allow(model, x0, state, own, c)) return
-    allocate(turn%moving(2, n_moving))
-    n_moving = 0
-    do i = 1, size(model%node_coord, 2)
-      ix = model%node_coord(1, i)
-      iy = model%node_coord(2, i)
-      if (ix <= 0 .or. iy <= 0) cycle
-      if (state(ix) /= TURNS) cycle
-      n_moving = n_moving + 1
-      turn%moving(:, n_moving) = [ix, iy]
-    end do
+    if (.not. elements_allow(model, x0, pairs, state, own, c)) return
+    turn%moving = pairs(:, pack([(i, i = 1, size(pairs, 2))], state(pairs(1, :)) == TURNS))
     ok = .true.
   end subroutine find_turn
 
   !> No element but the joint's own (own) ties a turned coordinate to one that stays, and every
   !> element with a turned coordinate keeps its deformation under a finite turn about c.
-  function elements_allow(model, x0, state, own, c) result(allow)
+  function elements_allow(model, x0, pairs, state, own, c) result(allow)
     type(model_t), intent(in) :: model
     real(wp), intent(in) :: x0(:), c(2)
-    integer, intent(in) :: state(:), own
+    integer, intent(in) :: pairs(:, :), state(:), own
     logical :: allow
     real(wp) :: x_turned(size(x0)), xe(model%max_dofs), e(model%max_modes), et(model%max_modes)
     real(wp) :: de(model%max_modes, model%max_dofs), rot(2, 2)
@@ -155,12 +144,9 @@ contains
       [2, 2])
     x_turned = x0
     where (state == TURNS .and. model%coord_kind == COORD_PHI) x_turned = x0 + CHECK_ANGLE
-    do i = 1, size(model%node_coord, 2)
-      associate (ix => model%node_coord(1, i), iy => model%node_coord(2, i))
-        if (ix <= 0 .or. iy <= 0) cycle
-        if (state(ix) /= TURNS) cycle
-        x_turned([ix, iy]) = c + matmul(rot, x0([ix, iy]) - c)
-      end associate
+    do i = 1, size(pairs, 2)
+      if (state(pairs(1, i)) /= TURNS) cycle
+      x_turned(pairs(:, i)) = c + matmul(rot, x0(pairs(:, i)) - c)
     end do
     do iel = 1, model%n_elements
       if (iel == own) cycle
@@ -182,4 +168,13 @@ contains
     end do
     allow = .true.
   end function elements_allow
+
+  !> The x and y coordinates (2, :) of the nodes that have both.
+  pure function position_pairs(model) result(pairs)
+    type(model_t), intent(in) :: model
+    integer, allocatable :: pairs(:, :)
+    logical :: both(size(model%node_coord, 2))
+    both = model%node_coord(1, :) > 0 .and. model%node_coord(2, :) > 0
+    pairs = reshape(pack(model%node_coord(1:2, :), spread(both, 1, 2)), [2, count(both)])
+  end function position_pairs
 end module reduction_turns
