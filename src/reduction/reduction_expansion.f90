@@ -5,7 +5,8 @@
 !> expanded to third order about a point z0,
 !>     x(z) = x0 + X1 dz + X2[dz, dz] / 2 + X3[dz, dz, dz] / 6,   dz = z - z0,
 !> X1 = DF T and X2 = D2F[T., T.] from solves with the kinematic factors at z0 (T: z -> q), X3
-!> by differences of X2. With W = dx/dz, x_dot = W zd and x_ddot = W zdd + (X2 + X3[dz])[zd,
+!> by differences of X2; along joints that turn part of a planar model rigidly, X2 and X3
+!> from the turns' O(n) products instead (reduction_turns). With W = dx/dz, x_dot = W zd and x_ddot = W zdd + (X2 + X3[dz])[zd,
 !> zd], so that the reduced mass W^T M W, the inertia forces W^T (M x_ddot + h), the loads
 !> W^T f and the stresses V^T sigma are polynomials in dz and zd whose coefficients (up to m^4
 !> numbers, m = n_rh + k) are projected once per expansion: an evaluation then costs O(m^4),

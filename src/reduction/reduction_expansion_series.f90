@@ -7,7 +7,9 @@
 !> J = D' at x(z). The derivative along z_l is a one-sided difference of element quantities
 !> only, (R_ab - J X2_ab)(x_h) / h with x_h = x0 + h X1_l + h^2 X2_ll / 2 and the directions
 !> X1 + h X2_l (at x0 the bracket is X2's solve residual, round-off): one element pass per l
-!> for both terms, and no kinematic solve at z0 + h e_l.
+!> for both terms, and no kinematic solve at z0 + h e_l. Along a joint that turns part of the
+!> model rigidly (the first `first - 1` directions, reduction_turns) neither is needed: its
+!> columns are the turn's products of the columns one order lower.
 submodule (reduction_expansion) reduction_expansion_series
   implicit none
 
