@@ -32,7 +32,9 @@ module reduction_expansion
   use model_system, only: model_t
   use dynamics_system, only: dynamics_t
   use reduction_basis, only: basis_t
-  use reduction_turns, only: turn_t, find_turns, turn_derivative
+  use reduction_turns, only: turn_t, find_turns, turn_derivative, apply_turns, &
+    apply_turns_transposed
+  use reduction_frames, only: frames_t
   implicit none
   private
   public :: expansion_t, expansion_set_t, expansion_unsupported, AHEAD_FRACTION, kept_slots
@@ -56,6 +58,12 @@ module reduction_expansion
     !> Take the series' columns along prescribed coordinates that turn part of the model
     !> rigidly from the turns' products (reduction_turns); turned: this expansion did.
     logical :: use_turns = .true., turned = .false.
+    !> Keep the turns' angles exact (reduction_frames) where they allow: the series are then
+    !> in the modal coordinates only, the joints at their angles in z0.
+    logical :: use_frames = .true.
+    type(frames_t) :: frames
+    type(turn_t), allocatable :: turns(:)
+    integer, allocatable :: turn_order(:)
     integer :: nr = 0, k = 0, m = 0
     real(wp), allocatable :: z0(:), x0(:), xr(:)     !< xr = DF_dy q_ref (error norm)
     real(wp), allocatable :: x1(:, :), x2(:, :, :)   !< (n_x, m), (n_x, m, m)
@@ -83,15 +91,19 @@ module reduction_expansion
     procedure :: coordinates => exp_coordinates
     procedure :: energy => exp_energy
     procedure :: error_norm => exp_error_norm
+    procedure :: exact_turns => exp_exact_turns
   end type expansion_t
 
   !> The expansions kept during a run, the one in use and the counts for the output.
   type :: expansion_set_t
     real(wp) :: tol = 1.0e-3_wp
+    logical :: use_frames = .true.                   !< the expansions' use_frames
     type(expansion_t), allocatable :: item(:)        !< kept_slots(...) once one is made
     integer :: current = 0
     integer :: last_use(MAX_KEPT) = 0, clock = 0
     integer :: n_expansions = 0
+    !> The joint angles of the last state looked up (find): the error norm's configuration.
+    real(wp), allocatable :: p_last(:)
     !> Largest nodal translation [m] between the exact kinematics and the expansion in use,
     !> measured where it is left for a new one (set_note_stale).
     real(wp) :: manifold_error = 0.0_wp
@@ -151,6 +163,7 @@ contains
     real(wp), intent(in) :: p(:), eta(:)
     integer :: i
     found = .false.
+    this%p_last = p
     if (.not. allocated(this%item)) return
     if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta, &
       this%tol)
@@ -181,6 +194,8 @@ contains
     integer :: i
     tc = t
     if (this%current == 0 .or. size(p) == 0) return
+    ! With exact turns the joints' travel costs no range.
+    if (this%item(this%current)%frames%on) return
     lo = 0.0_wp
     tau = 1.0e-9_wp * max(1.0_wp, abs(t))
     do i = 1, 80
@@ -234,6 +249,7 @@ contains
     if (.not. allocated(this%item)) allocate(this%item(kept_slots(dyn%model%n_x, &
       dyn%model%n_rh + size(eta))))
     slot = minloc(merge(this%last_use(1:size(this%item)), -1, this%item%valid), 1)
+    this%item(slot)%use_frames = this%use_frames
     call this%item(slot)%build(dyn, basis, t, eta, err)
     if (.not. err%ok()) return
     this%current = slot
@@ -314,8 +330,15 @@ contains
     real(wp), intent(in) :: p(:), eta(:)
     real(wp), intent(out) :: dz(:)
     dz(1:this%nr) = p - this%z0(1:this%nr)
+    if (this%frames%on) dz(1:this%nr) = 0.0_wp
     dz(this%nr + 1:this%m) = eta - this%z0(this%nr + 1:this%m)
   end subroutine step_from_centre
+
+  !> Whether this expansion keeps the joints' angles exact (reduction_frames).
+  pure logical function exp_exact_turns(this)
+    class(expansion_t), intent(in) :: this
+    exp_exact_turns = this%valid .and. this%frames%on
+  end function exp_exact_turns
 
   !> Modal accelerations at (t, eta, eta_dot) from the expansion: O(m^4), no model pass.
   !> p, pd, pdd: the prescribed coordinates and their rates at t (dynamics_t%prescribed).
@@ -327,6 +350,7 @@ contains
     type(error_t), intent(out) :: err
     real(wp) :: dz(this%m), zd(this%m), mz(this%m, this%m), f(this%m), v(this%m)
     real(wp) :: w(this%m, this%m), quad(this%m, this%m), rhs(this%k), mee(this%k, this%k)
+    real(wp) :: cm(this%m, this%m), fc(this%m)
     integer :: l, info, nr
     nr = this%nr
     call step_from_centre(this, p, eta, dz)
@@ -335,8 +359,13 @@ contains
     mz = mass_at(this, dz)
     f = this%f1
     call gemv_add(this%m, this%m, this%f2, dz, f)
+    if (this%frames%on) then
+      call this%frames%correction(p - this%z0(1:nr), dz, zd, cm, fc)
+      mz = mz + cm
+      f = f + fc
+    end if
     if (this%loads_vary) f = f + projected_load(this, dyn%load_factor * dyn%loads_at(t) - &
-      this%load0, dz)
+      this%load0, p, dz)
     ! Inertia forces (g0 + g1 dz)[zd, zd]: the tensors contracted with zd zd^T first.
     do l = 1, this%m
       quad(:, l) = zd * zd(l)
@@ -364,16 +393,21 @@ contains
     acc = rhs
   end subroutine exp_accel
 
-  !> W^T f for loads f that change in time: O(n m^2).
-  function projected_load(this, f, dz) result(g)
+  !> W^T f for loads f that change in time at joint angles p: O(n m^2).
+  function projected_load(this, f, p, dz) result(g)
     type(expansion_t), intent(in) :: this
-    real(wp), intent(in) :: f(:), dz(:)
+    real(wp), intent(in) :: f(:), p(:), dz(:)
     real(wp) :: g(this%m)
+    real(wp) :: ft(size(f))
     integer :: l, i
+    ft = f
+    ! W = L W0 with the turns exact: W^T f = W0^T (L^T f).
+    if (this%frames%on) call apply_turns_transposed(this%turns, this%turn_order, p - &
+      this%z0(1:this%nr), ft)
     do i = 1, this%m
-      g(i) = dot_product(f, this%x1(:, i))
+      g(i) = dot_product(ft, this%x1(:, i))
       do l = 1, this%m
-        g(i) = g(i) + dz(l) * dot_product(f, this%x2(:, i, l))
+        g(i) = g(i) + dz(l) * dot_product(ft, this%x2(:, i, l))
       end do
     end do
   end function projected_load
@@ -383,9 +417,9 @@ contains
     class(expansion_t), intent(in) :: this
     real(wp), intent(in) :: z(:)
     real(wp) :: x(size(this%x0))
-    real(wp) :: dz(this%m), w3(size(this%x3, 2))
+    real(wp) :: dz(this%m), w3(size(this%x3, 2)), xs(size(this%x0), 1)
     integer :: a, b, l
-    dz = z - this%z0
+    call step_from_centre(this, z(1:this%nr), z(this%nr + 1:), dz)
     ! X3[dz, dz, dz] / 6 over l <= a <= b: each distinct triple with its multiplicity
     do b = 1, this%m
       do a = 1, b
@@ -398,6 +432,12 @@ contains
     call gemv_add(size(x), this%m, this%x1, dz, x)
     call gemv_add(size(x), this%m**2, this%x2, 0.5_wp * outer(dz, dz), x)
     call gemv_add(size(x), size(w3), this%x3, w3, x)
+    if (this%frames%on) then
+      xs(:, 1) = x
+      call apply_turns(this%turns, this%turn_order, z(1:this%nr) - this%z0(1:this%nr), xs, &
+        .true.)
+      x = xs(:, 1)
+    end if
   end function exp_coordinates
 
   !> Permutations of the triple (l, a, b), l <= a <= b, over 6 (X3's term of the series).
@@ -419,33 +459,41 @@ contains
     real(wp), intent(in) :: z(:), zd(:), f(:), x(:)
     real(wp) :: en(2)
     real(wp) :: dz(this%m), mz(this%m, this%m)
-    dz = z - this%z0
+    call step_from_centre(this, z(1:this%nr), z(this%nr + 1:), dz)
     mz = mass_at(this, dz)
+    if (this%frames%on) mz = mz + this%frames%kinetic(z(1:this%nr) - this%z0(1:this%nr), dz)
     en(1) = 0.5_wp * dot_product(zd, matmul(mz, zd))
     en(2) = this%es0 + dot_product(this%es1, dz) + 0.5_wp * dot_product(dz, &
       matmul(this%es2, dz)) + this%vg0 - dot_product(this%gw1, dz) - 0.5_wp * &
       dot_product(dz, matmul(this%gw2, dz)) - dot_product(f, x)
+    if (this%frames%on) en(2) = en(2) + this%frames%potential(z(1:this%nr) - &
+      this%z0(1:this%nr), dz)
   end function exp_energy
 
   !> The full model's error norm (dynamics_t%error_norm) with DF_dy V = X1's modal columns.
-  subroutine exp_error_norm(this, model, dq, eta_old, eta_new, rtol, atol, norm)
+  !> p: the joint angles (with the turns exact, the nodal fields turn with them).
+  subroutine exp_error_norm(this, model, dq, eta_old, eta_new, rtol, atol, p, norm)
     class(expansion_t), intent(in) :: this
     type(model_t), intent(in) :: model
-    real(wp), intent(in) :: dq(:), eta_old(:), eta_new(:), rtol, atol
+    real(wp), intent(in) :: dq(:), eta_old(:), eta_new(:), rtol, atol, p(:)
     real(wp), intent(out) :: norm
-    real(wp) :: dx(size(this%x0)), x_old(size(this%x0)), x_new(size(this%x0))
+    ! dx, x_old, x_new: the step and the nodal vectors that scale it.
+    real(wp) :: xs(size(this%x0), 3)
     integer :: n
     n = size(this%x0)
-    dx = 0.0_wp
-    x_old = this%xr
-    x_new = this%xr
+    xs(:, 1) = 0.0_wp
+    xs(:, 2) = this%xr
+    xs(:, 3) = this%xr
     if (this%k > 0) then
       ! X1's modal columns are contiguous: they pass as an n x k matrix from their first
       ! element.
-      call gemv_add(n, this%k, this%x1(1, this%nr + 1), dq, dx)
-      call gemv_add(n, this%k, this%x1(1, this%nr + 1), eta_old, x_old)
-      call gemv_add(n, this%k, this%x1(1, this%nr + 1), eta_new, x_new)
+      call gemv_add(n, this%k, this%x1(1, this%nr + 1), dq, xs(:, 1))
+      call gemv_add(n, this%k, this%x1(1, this%nr + 1), eta_old, xs(:, 2))
+      call gemv_add(n, this%k, this%x1(1, this%nr + 1), eta_new, xs(:, 3))
     end if
-    norm = model%error_norm(dx, max(abs(x_old), abs(x_new)), rtol, atol)
+    ! With the turns exact, W = L W0: all three are fields (DF_dy q).
+    if (this%frames%on) call apply_turns(this%turns, this%turn_order, p - &
+      this%z0(1:this%nr), xs, .false.)
+    norm = model%error_norm(xs(:, 1), max(abs(xs(:, 2)), abs(xs(:, 3))), rtol, atol)
   end subroutine exp_error_norm
 end module reduction_expansion

@@ -3,6 +3,7 @@
 !> kinematic factors, so an expansion costs tens of full evaluations.
 submodule (reduction_expansion) reduction_expansion_build
   use dynamics_augmented, only: element_mass_t
+  use reduction_turns, only: turn_order
   implicit none
 
   !> Nodal motion of the masses' difference step, relative to the model's size (truncation
@@ -17,7 +18,6 @@ contains
     real(wp), allocatable :: x2mx2(:, :)
     real(wp) :: p(dyn%model%n_rh), pd(dyn%model%n_rh), pdd(dyn%model%n_rh), hl, size_x, vg
     type(element_mass_t) :: mass_l
-    type(turn_t), allocatable :: turns(:)
     integer :: n, nr, k, m, l, i, first
     nr = dyn%model%n_rh
     k = size(eta)
@@ -44,18 +44,21 @@ contains
     allocate(this%x1(n, m), this%x2(n, m, m), this%xr(n))
     call dyn%kin%apply_df_many(dyn%model, tz, this%x1)
     this%turned = .false.
-    if (this%use_turns) call find_turns(dyn%model, this%x0, this%x1, turns, this%turned)
+    this%frames%on = .false.
+    if (allocated(this%turns)) deallocate(this%turns)
+    if (this%use_turns) call find_turns(dyn%model, this%x0, this%x1, this%turns, this%turned)
     first = 1
     if (this%turned) first = nr + 1
-    if (.not. allocated(turns)) allocate(turns(0))
-    call second_terms(dyn, this%x1, this%x2, turns, first)
+    if (.not. allocated(this%turns)) allocate(this%turns(0))
+    this%turn_order = turn_order(this%turns)
+    call second_terms(dyn, this%x1, this%x2, this%turns, first)
     block
       real(wp) :: qr(dyn%model%n_q)
       qr(1:nr) = 0.0_wp
       qr(nr + 1:) = basis%q_ref
       call dyn%kin%apply_df(dyn%model, qr, this%xr)
     end block
-    call third_terms(this, dyn, size_x, turns, first)
+    call third_terms(this, dyn, size_x, this%turns, first)
     ! Mass products at z0 and the quadratic velocity forces of the elements there.
     mx1 = dyn%mass%times(dyn%model, this%x1)
     mx2 = dyn%mass%times(dyn%model, reshape(this%x2, [n, m * m]))
@@ -71,6 +74,9 @@ contains
     ! dyn%load is what loads_at(t) holds without the loads' motion laws.
     this%load0 = dyn%load_factor * dyn%load
     fw0 = element_weights(dyn, this%x0, this%vg0)
+    if (this%turned .and. this%use_frames) call this%frames%setup(dyn%model, dyn%mass, &
+      this%x0, this%x1, this%x2, this%x3, this%tri, this%turns, this%load0, &
+      dyn%load_factor * dyn%model%gravity(1:2))
     this%a = matmul(transpose(this%x1), mx1)
     this%f1 = matmul(this%load0 + fw0, this%x1)
     this%gw1 = matmul(fw0, this%x1)
@@ -86,6 +92,7 @@ contains
       hl = MASS_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
       xl = this%x0 + hl * this%x1(:, l)
       call element_masses(dyn, xl, mass_l)
+      call this%frames%mass_change(dyn%model, mass_l, l, hl, this%x1, this%x2)
       ! X1^T dM [X1, X2] along X1_l = (dM X1)^T [X1, X2]: dM is symmetric
       dmx = matmul(transpose(mass_l%difference_times(dyn%mass, dyn%model, this%x1)), x12) / hl
       fwl = (element_weights(dyn, xl, vg) - fw0) / hl

@@ -73,7 +73,7 @@ contains
     real(wp), intent(out) :: norm
     if (this%expanded .and. this%expansions%current > 0) then
       call this%expansions%item(this%expansions%current)%error_norm(this%dyn%model, dq, &
-        q_old, q_new, rtol, atol, norm)
+        q_old, q_new, rtol, atol, this%expansions%p_last, norm)
       return
     end if
     call this%dyn%error_norm(matmul(this%basis%v, dq), this%basis%q_ref + &

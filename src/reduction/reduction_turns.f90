@@ -19,7 +19,8 @@ module reduction_turns
   use model_system, only: model_t, COORD_PHI
   implicit none
   private
-  public :: turn_t, find_turns, turn_derivative
+  public :: turn_t, find_turns, turn_derivative, turn_order, apply_turns, apply_turns_transposed
+  public :: rotation, position_pairs, CHECK_ANGLE
 
   !> Relative tolerance of the tests on X1's entries (they come from solves: round-off about
   !> 1e-14 of their size).
@@ -31,6 +32,7 @@ module reduction_turns
   type :: turn_t
     integer :: centre(2) = 0                 !< x and y coordinates of the node turned about
     integer, allocatable :: moving(:, :)     !< (2, :) x and y coordinates of the turned nodes
+    integer, allocatable :: angles(:)        !< angle coordinates that turn with them
   end type turn_t
 
   integer, parameter :: STAYS = 0, TURNS = 1, CENTRE = 2
@@ -68,6 +70,96 @@ contains
       end do
     end associate
   end subroutine turn_derivative
+
+  !> The turns deepest first (a turn's part lies inside its parent's, so it has fewer nodes):
+  !> turning them in this order, each about its centre's current place, carries every part
+  !> with its parents.
+  pure function turn_order(turns) result(order)
+    type(turn_t), intent(in) :: turns(:)
+    integer :: order(size(turns))
+    integer :: sizes(size(turns)), j
+    sizes = [(size(turns(j)%moving, 2), j = 1, size(turns))]
+    do j = 1, size(turns)
+      order(j) = minloc(sizes, 1)
+      sizes(order(j)) = huge(1)
+    end do
+  end function turn_order
+
+  !> The configurations v(:, c) of joint angles p0 turned to p0 + delta (positions) or fields
+  !> of one, derivatives of x along z (.not. positions: the angles keep their values), in
+  !> place.
+  pure subroutine apply_turns(turns, order, delta, v, positions)
+    type(turn_t), intent(in) :: turns(:)
+    integer, intent(in) :: order(:)
+    real(wp), intent(in) :: delta(:)
+    real(wp), intent(inout) :: v(:, :)
+    logical, intent(in) :: positions
+    real(wp) :: cx, cy, co, si, rx, ry
+    integer :: o, j, i, ix, iy, c
+    ! Called per error norm: no array temporaries.
+    do o = 1, size(order)
+      j = order(o)
+      if (delta(j) == 0) cycle
+      co = cos(delta(j))
+      si = sin(delta(j))
+      do c = 1, size(v, 2)
+        cx = v(turns(j)%centre(1), c)
+        cy = v(turns(j)%centre(2), c)
+        do i = 1, size(turns(j)%moving, 2)
+          ix = turns(j)%moving(1, i)
+          iy = turns(j)%moving(2, i)
+          rx = v(ix, c) - cx
+          ry = v(iy, c) - cy
+          v(ix, c) = cx + co * rx - si * ry
+          v(iy, c) = cy + si * rx + co * ry
+        end do
+        if (positions) then
+          do i = 1, size(turns(j)%angles)
+            v(turns(j)%angles(i), c) = v(turns(j)%angles(i), c) + delta(j)
+          end do
+        end if
+      end do
+    end do
+  end subroutine apply_turns
+
+  !> f <- L^T f for the linear map L of apply_turns on fields (the generalised forces of nodal
+  !> loads f at the turned configuration, on the fields of the unturned one).
+  pure subroutine apply_turns_transposed(turns, order, delta, f)
+    type(turn_t), intent(in) :: turns(:)
+    integer, intent(in) :: order(:)
+    real(wp), intent(in) :: delta(:)
+    real(wp), intent(inout) :: f(:)
+    real(wp) :: co, si, bx, by, mx, my
+    integer :: o, j, i, ix, iy
+    ! L = T_1 ... T_n with T_1 the last turn applied: L^T applies the transposes first to last.
+    do o = size(order), 1, -1
+      j = order(o)
+      if (delta(j) == 0) cycle
+      co = cos(delta(j))
+      si = sin(delta(j))
+      mx = 0.0_wp
+      my = 0.0_wp
+      do i = 1, size(turns(j)%moving, 2)
+        ix = turns(j)%moving(1, i)
+        iy = turns(j)%moving(2, i)
+        bx = co * f(ix) + si * f(iy)
+        by = -si * f(ix) + co * f(iy)
+        mx = mx + f(ix) - bx
+        my = my + f(iy) - by
+        f(ix) = bx
+        f(iy) = by
+      end do
+      f(turns(j)%centre(1)) = f(turns(j)%centre(1)) + mx
+      f(turns(j)%centre(2)) = f(turns(j)%centre(2)) + my
+    end do
+  end subroutine apply_turns_transposed
+
+  !> The rotation by angle a.
+  pure function rotation(a) result(r)
+    real(wp), intent(in) :: a
+    real(wp) :: r(2, 2)
+    r = reshape([cos(a), sin(a), -sin(a), cos(a)], [2, 2])
+  end function rotation
 
   !> Whether prescribed coordinate j (X1 column d) is a turn, and which.
   subroutine find_turn(model, x0, d, j, turn, ok)
@@ -126,6 +218,7 @@ contains
     state(turn%centre) = CENTRE
     if (.not. elements_allow(model, x0, pairs, state, own, c)) return
     turn%moving = pairs(:, pack([(i, i = 1, size(pairs, 2))], state(pairs(1, :)) == TURNS))
+    turn%angles = pack([(i, i = 1, size(d))], state == TURNS .and. model%coord_kind == COORD_PHI)
     ok = .true.
   end subroutine find_turn
 
@@ -140,8 +233,7 @@ contains
     real(wp) :: de(model%max_modes, model%max_dofs), rot(2, 2)
     integer :: iel, nd, nm, k, i
     allow = .false.
-    rot = reshape([cos(CHECK_ANGLE), sin(CHECK_ANGLE), -sin(CHECK_ANGLE), cos(CHECK_ANGLE)], &
-      [2, 2])
+    rot = rotation(CHECK_ANGLE)
     x_turned = x0
     where (state == TURNS .and. model%coord_kind == COORD_PHI) x_turned = x0 + CHECK_ANGLE
     do i = 1, size(pairs, 2)

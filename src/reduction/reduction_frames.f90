@@ -1,0 +1,306 @@
+!> Exact joint angles for an expansion (reduction_expansion; docs/theory.md section 9, "Exact
+!> turns"). When every prescribed coordinate turns a part of a planar model rigidly
+!> (reduction_turns), the configuration at joint angles p0 + delta and modal coordinates eta is
+!> that at (p0, eta) with the parts turned, x = L(delta) y + angles, and every field of the
+!> series turns with L. Each element with inertia lies in one part j (its nodes and the node
+!> turned about), turned by psi_j (the sum of delta over j and its parents), so that on its
+!> coordinates L v = R_j (v + 1 tau_j(v)): a rotation and a translation tau_j, linear in the
+!> fields' values at the parts' centres,
+!>     s_j = s_parent + (R_parent - R_j) v_centre,   tau_j = R_j^T s_j.
+!> The masses being invariant under rotation, the reduced mass at (p0 + delta, eta) is that at
+!> (p0, eta) plus, over the parts,
+!>     C = tau^T G + G^T tau + m_j tau^T tau,   G = momenta r_j . W of the part's masses,
+!> and the weights (r_j of unit gravities: weights are the masses times a uniform translation)
+!> and nodal loads change likewise. The expansion keeps W, G and the centres' rows as series
+!> in the modal step only; the angles enter through R exactly, so that the joints may travel
+!> any distance on one expansion. The inertia forces of C are its Christoffel terms.
+module reduction_frames
+  use core_kinds, only: wp
+  use model_system, only: model_t
+  use dynamics_augmented, only: element_mass_t
+  use reduction_turns, only: turn_t, rotation
+  implicit none
+  private
+  public :: frames_t
+
+  real(wp), parameter :: EYE(2, 2) = reshape([1.0_wp, 0.0_wp, 0.0_wp, 1.0_wp], [2, 2])
+
+  !> The parts of an expansion and their projected series (a: column of W, l, r: the dz
+  !> factors, j: part).
+  type :: frames_t
+    logical :: on = .false.
+    integer :: nr = 0, m = 0
+    integer, allocatable :: parent(:), order(:)   !< order: parents first
+    logical, allocatable :: inside(:, :)          !< inside(i, j): delta_i turns part j
+    integer, allocatable :: centre(:, :), coord_part(:), el_part(:)
+    integer, allocatable :: pair_of(:)            !< the other position coordinate of a node
+    real(wp), allocatable :: mass(:), mass_el(:)  !< translational mass: all, elements only
+    real(wp) :: g(2) = 0.0_wp                     !< gravity with the load factor
+    !> The centres' rows of x0, X1, X2 and X3 (2, [m, [m, [m,]]] j).
+    real(wp), allocatable :: y0(:, :), c1(:, :, :), c2(:, :, :, :), c3(:, :, :, :, :)
+    !> Momenta G = r . W (all masses) to second order, weights r_el . W to first.
+    real(wp), allocatable :: g0(:, :, :), g1(:, :, :, :), g2(:, :, :, :, :)
+    real(wp), allocatable :: w0(:, :, :), w1(:, :, :, :), moment0(:, :)
+    !> Nodal loads f and J f of each part on W to first order, and their sum.
+    real(wp), allocatable :: l0(:, :, :), l1(:, :, :, :), lsum(:, :)
+    real(wp), allocatable :: r0(:, :)             !< element momenta at x0 (n, 2 nr)
+  contains
+    procedure :: setup => frames_setup
+    procedure :: mass_change => frames_mass_change
+    procedure :: correction => frames_correction
+    procedure :: kinetic => frames_kinetic
+    procedure :: potential => frames_potential
+  end type frames_t
+
+  interface
+    !> The parts of the turns and the series' projections at x0 with the element masses
+    !> `mass` there, constant nodal loads load0 and gravity (both with the load factor); on
+    !> stays .false. where a part's masses would not turn with it (reduction_frames_setup).
+    module subroutine frames_setup(this, model, mass, x0, x1, x2, x3, tri, turns, load0, &
+      gravity)
+      class(frames_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      type(element_mass_t), intent(in) :: mass
+      real(wp), intent(in) :: x0(:), x1(:, :), x2(:, :, :), x3(:, :), load0(:), gravity(2)
+      integer, intent(in) :: tri(:, :, :)
+      type(turn_t), intent(in) :: turns(:)
+    end subroutine frames_setup
+    !> The first-order change of the element masses along X1_l (element masses mass_l at
+    !> x0 + h X1_l): into G's and the weights' terms along l (reduction_frames_setup).
+    module subroutine frames_mass_change(this, model, mass_l, l, h, x1, x2)
+      class(frames_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      type(element_mass_t), intent(in) :: mass_l
+      integer, intent(in) :: l
+      real(wp), intent(in) :: h, x1(:, :), x2(:, :, :)
+    end subroutine frames_mass_change
+  end interface
+
+contains
+
+  !> The mass c and generalised forces f (both m) the turns by delta add at the modal step dz
+  !> (dz(1:nr) = 0) and rates zd: C, minus C's Christoffel terms less those at delta = 0
+  !> (the expansion's own inertia forces hold these), plus the weights' and loads' change.
+  subroutine frames_correction(this, delta, dz, zd, c, f)
+    class(frames_t), intent(in) :: this
+    real(wp), intent(in) :: delta(:), dz(:), zd(:)
+    real(wp), intent(out) :: c(:, :), f(:)
+    real(wp) :: ser(2, this%m, 6, this%nr), s(2, this%m, this%nr), rot(2, 2, this%nr)
+    real(wp) :: c_ref(this%m, this%m), unturned(2, 2, this%nr), gam(this%m), gr(2), ge(2)
+    real(wp) :: lw(2)
+    integer :: j, a, l
+    call part_series(this, delta, dz, zd, ser, rot)
+    unturned = spread(EYE, 3, this%nr)
+    call frame_terms(this, unturned, zd, ser, c_ref, f, s)
+    call frame_terms(this, rot, zd, ser, c, gam, s)
+    f = f - gam
+    do j = 1, this%nr
+      gr = matmul(transpose(rot(:, :, j)), this%g) - this%g
+      do a = this%nr + 1, this%m
+        ge = this%w0(:, a, j)
+        lw = this%l0(:, a, j)
+        do l = this%nr + 1, this%m
+          ge = ge + dz(l) * this%w1(:, a, l, j)
+          lw = lw + dz(l) * this%l1(:, a, l, j)
+        end do
+        f(a) = f(a) + gr(1) * ge(1) + gr(2) * ge(2) + (rot(1, 1, j) - 1) * lw(1) - &
+          rot(2, 1, j) * lw(2) + (this%mass_el(j) * this%g(1) + this%lsum(1, j)) * s(1, a, j) + &
+          (this%mass_el(j) * this%g(2) + this%lsum(2, j)) * s(2, a, j)
+      end do
+    end do
+  end subroutine frames_correction
+
+  !> The mass the turns by delta add at the modal step dz (the kinetic energy's).
+  function frames_kinetic(this, delta, dz) result(c)
+    class(frames_t), intent(in) :: this
+    real(wp), intent(in) :: delta(:), dz(:)
+    real(wp) :: c(this%m, this%m)
+    real(wp) :: ser(2, this%m, 6, this%nr), s(2, this%m, this%nr), rot(2, 2, this%nr)
+    real(wp) :: gam(this%m), zd(this%m)
+    zd = 0.0_wp
+    call part_series(this, delta, dz, zd, ser, rot)
+    call frame_terms(this, rot, zd, ser, c, gam, s)
+  end function frames_kinetic
+
+  !> Each part's rotation and, from its series at dz, the centre's W rows, G and their rates
+  !> (series_rates): ser(:, :, 1:3, j) for W, ser(:, :, 4:6, j) for G.
+  subroutine part_series(this, delta, dz, zd, ser, rot)
+    type(frames_t), intent(in) :: this
+    real(wp), intent(in) :: delta(:), dz(:), zd(:)
+    real(wp), intent(out) :: ser(:, :, :, :), rot(:, :, :)
+    integer :: j
+    do j = 1, this%nr
+      rot(:, :, j) = rotation(sum(delta, mask=this%inside(:, j)))
+      call series_rates(this%m, this%nr, this%c1(:, :, j), this%c2(:, :, :, j), &
+        this%c3(:, :, :, :, j), dz, zd, ser(:, :, 1:3, j))
+      call series_rates(this%m, this%nr, this%g0(:, :, j), this%g1(:, :, :, j), &
+        this%g2(:, :, :, :, j), dz, zd, ser(:, :, 4:6, j))
+    end do
+  end subroutine part_series
+
+  !> The change of the elements' weights' potential by the turns (the nodal loads' follows
+  !> from the turned coordinates).
+  real(wp) function frames_potential(this, delta, dz) result(v)
+    class(frames_t), intent(in) :: this
+    real(wp), intent(in) :: delta(:), dz(:)
+    real(wp) :: sp(2, this%nr), yc(2), moment(2), rp(2, 2), rj(2, 2)
+    integer :: o, j, l, r, a
+    v = 0.0_wp
+    do o = 1, this%nr
+      j = this%order(o)
+      yc = this%y0(:, j)
+      moment = this%moment0(:, j)
+      do l = 1, this%m
+        yc = yc + dz(l) * this%c1(:, l, j)
+        moment = moment + dz(l) * this%w0(:, l, j)
+        do r = 1, this%m
+          yc = yc + dz(l) * dz(r) / 2 * this%c2(:, l, r, j)
+          moment = moment + dz(l) * dz(r) / 2 * this%w1(:, l, r, j)
+          do a = 1, this%m
+            yc = yc + dz(l) * dz(r) * dz(a) / 6 * this%c3(:, a, l, r, j)
+          end do
+        end do
+      end do
+      rj = rotation(sum(delta, mask=this%inside(:, j)))
+      rp = EYE
+      sp(:, j) = 0.0_wp
+      if (this%parent(j) > 0) then
+        rp = rotation(sum(delta, mask=this%inside(:, this%parent(j))))
+        sp(:, j) = sp(:, this%parent(j))
+      end if
+      sp(:, j) = sp(:, j) + matmul(rp - rj, yc)
+      v = v - dot_product(this%g, matmul(rj - EYE, moment)) - this%mass_el(j) * &
+        dot_product(this%g, sp(:, j))
+    end do
+  end function frames_potential
+
+  !> C, its Christoffel terms gam at the rates zd and the parts' translations s_j of W's
+  !> columns, for the parts' rotations rot and series ser (part_series). With a = tau zd,
+  !> b = G zd, the rates' derivatives A(:, i) = (d_i tau) zd and B(:, i) = (d_i G) zd (joint
+  !> angles' through R, modal coordinates' through the series):
+  !>     gam = C_dot zd - (zd^T d_i C zd / 2)_i,   zd^T d_i C zd / 2 = A_i . b + a . B_i + m a . A_i,
+  !> so that nothing of size m^3 is formed.
+  subroutine frame_terms(this, rot, zd, ser, c, gam, s)
+    type(frames_t), intent(in) :: this
+    real(wp), intent(in) :: rot(:, :, :), zd(:), ser(:, :, :, :)
+    real(wp), intent(out) :: c(:, :), gam(:), s(:, :, :)
+    ! Per part: s_dot (2, m), sz(:, i) = (d_i s) zd (2, m)
+    real(wp) :: s_dot(2, this%m, this%nr), sz(2, this%m, this%nr)
+    real(wp) :: tau(2, this%m), tau_dot(2, this%m), am(2, this%m), d(2, 2), ww(2), js(2)
+    real(wp) :: rp(2, 2), psi_dot, psi_dot_p, va(2), vb(2), vc(2), vd(2), mj
+    integer :: o, j, p, i, nr, m
+    nr = this%nr
+    m = this%m
+    c = 0.0_wp
+    gam = 0.0_wp
+    do o = 1, nr
+      j = this%order(o)
+      p = this%parent(j)
+      mj = this%mass(j)
+      psi_dot = sum(zd(1:nr), mask=this%inside(:, j))
+      rp = EYE
+      psi_dot_p = 0.0_wp
+      if (p > 0) then
+        rp = rot(:, :, p)
+        psi_dot_p = sum(zd(1:nr), mask=this%inside(:, p))
+      end if
+      d = rp - rot(:, :, j)
+      associate (w => ser(:, :, 1, j), w_dot => ser(:, :, 2, j), wz => ser(:, :, 3, j), &
+        g => ser(:, :, 4, j), g_dot => ser(:, :, 5, j), gz => ser(:, :, 6, j))
+        ww = times_vector(w, zd)
+        ! d (R_p - R_j) / dt = psi_dot_p J R_p - psi_dot J R_j
+        s(:, :, j) = times(d, w)
+        s_dot(:, :, j) = times(d, w_dot) + perp_cols(times(psi_dot_p * rp - psi_dot * &
+          rot(:, :, j), w))
+        sz(:, nr + 1:, j) = times(d, wz(:, nr + 1:))
+        do i = 1, nr
+          sz(:, i, j) = 0.0_wp
+          if (p > 0) then
+            if (this%inside(i, p)) sz(:, i, j) = perp(matmul(rp, ww))
+          end if
+          if (this%inside(i, j)) sz(:, i, j) = sz(:, i, j) - perp(matmul(rot(:, :, &
+            j), ww))
+        end do
+        if (p > 0) then
+          s(:, :, j) = s(:, :, j) + s(:, :, p)
+          s_dot(:, :, j) = s_dot(:, :, j) + s_dot(:, :, p)
+          sz(:, :, j) = sz(:, :, j) + sz(:, :, p)
+        end if
+        ! tau = R^T s; d_i R^T = -R^T J where delta_i turns the part
+        tau = times(transpose(rot(:, :, j)), s(:, :, j))
+        tau_dot = times(transpose(rot(:, :, j)), s_dot(:, :, j) - psi_dot * &
+          perp_cols(s(:, :, j)))
+        am = times(transpose(rot(:, :, j)), sz(:, :, j))
+        js = matmul(transpose(rot(:, :, j)), perp(times_vector(s(:, :, j), zd)))
+        do i = 1, nr
+          if (this%inside(i, j)) am(:, i) = am(:, i) - js
+        end do
+        va = times_vector(tau, zd)
+        vb = times_vector(g, zd)
+        vc = times_vector(tau_dot, zd)
+        vd = times_vector(g_dot, zd)
+        do i = 1, m
+          c(:, i) = c(:, i) + tau(1, :) * (g(1, i) + mj * tau(1, i)) + tau(2, :) * (g(2, i) + &
+            mj * tau(2, i)) + g(1, :) * tau(1, i) + g(2, :) * tau(2, i)
+          gam(i) = gam(i) + tau_dot(1, i) * (vb(1) + mj * va(1)) + tau_dot(2, i) * (vb(2) + &
+            mj * va(2)) + g(1, i) * vc(1) + g(2, i) * vc(2) + tau(1, i) * (vd(1) + mj * vc(1)) &
+            + tau(2, i) * (vd(2) + mj * vc(2)) + g_dot(1, i) * va(1) + g_dot(2, i) * va(2) - &
+            am(1, i) * (vb(1) + mj * va(1)) - am(2, i) * (vb(2) + mj * va(2)) - &
+            va(1) * gz(1, i) - va(2) * gz(2, i)
+        end do
+      end associate
+    end do
+  end subroutine frame_terms
+
+  !> A (2, m) series v0 + v1 dz + v2 [dz, dz] / 2 of W's columns at dz (vr(:, :, 1)), its
+  !> rate along zd (vr(:, :, 2)) and (d_l v) zd (vr(:, l, 3)), along the modal directions
+  !> l > nr only (the series is at the joints' angles p0: along them, v does not change).
+  pure subroutine series_rates(m, nr, v0, v1, v2, dz, zd, vr)
+    integer, intent(in) :: m, nr
+    real(wp), intent(in) :: v0(2, m), v1(2, m, m), v2(2, m, m, m), dz(m), zd(m)
+    real(wp), intent(out) :: vr(2, m, 3)
+    real(wp) :: dv(2, m)
+    integer :: l, r
+    vr(:, :, 1) = v0
+    vr(:, :, 2:3) = 0.0_wp
+    do l = nr + 1, m
+      dv = v1(:, :, l)
+      do r = nr + 1, m
+        dv = dv + dz(r) * v2(:, :, l, r)
+      end do
+      vr(:, :, 1) = vr(:, :, 1) + 0.5_wp * dz(l) * (v1(:, :, l) + dv)
+      vr(:, :, 2) = vr(:, :, 2) + zd(l) * dv
+      vr(:, l, 3) = times_vector(dv, zd)
+    end do
+  end subroutine series_rates
+
+  !> r v for a 2 x 2 r and a (2, n) v.
+  pure function times(r, v) result(rv)
+    real(wp), intent(in) :: r(2, 2), v(:, :)
+    real(wp) :: rv(2, size(v, 2))
+    rv(1, :) = r(1, 1) * v(1, :) + r(1, 2) * v(2, :)
+    rv(2, :) = r(2, 1) * v(1, :) + r(2, 2) * v(2, :)
+  end function times
+
+  !> v z for a (2, n) v.
+  pure function times_vector(v, z) result(vz)
+    real(wp), intent(in) :: v(:, :), z(:)
+    real(wp) :: vz(2)
+    vz(1) = dot_product(v(1, :), z)
+    vz(2) = dot_product(v(2, :), z)
+  end function times_vector
+
+  !> J v, column by column.
+  pure function perp_cols(v) result(jv)
+    real(wp), intent(in) :: v(:, :)
+    real(wp) :: jv(2, size(v, 2))
+    jv(1, :) = -v(2, :)
+    jv(2, :) = v(1, :)
+  end function perp_cols
+
+  pure function perp(v) result(jv)
+    real(wp), intent(in) :: v(2)
+    real(wp) :: jv(2)
+    jv = [-v(2), v(1)]
+  end function perp
+end module reduction_frames
