@@ -143,6 +143,7 @@ contains
       this%red%static_correction = r%static_correction
       this%red%expanded = r%evaluation == 'expanded'
       this%red%expansions%tol = r%expansion_tol
+      this%red%expansions%use_frames = r%exact_turns
       if (this%red%expanded) call check_expanded(this, err)
       if (.not. err%ok()) return
       ! &linear times linearises at the basis each sample was computed in.

@@ -318,6 +318,8 @@ contains
       if (err%ok()) call h5%write_string_attr(g, 'evaluation', r%evaluation, err)
       if (err%ok() .and. red%expanded) call h5%write_int_attr(g, 'n_expansions', &
         red%expansions%n_expansions, err)
+      if (err%ok() .and. red%expanded) call h5%write_int_attr(g, 'n_expansions_exact_turns', &
+        red%expansions%n_exact_turns, err)
       if (err%ok() .and. red%expanded) call h5%write_real_attr(g, 'manifold_error_max', &
         red%expansions%manifold_error, err)
       if (err%ok()) call h5%write_string_attr(g, 'update', r%update, err)

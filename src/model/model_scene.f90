@@ -217,6 +217,8 @@ module model_scene
     !> 'full' (the full model evaluated at every call) or 'expanded' (reduction_expansion)
     character(len=:), allocatable :: evaluation
     real(wp) :: expansion_tol = 1.0e-3_wp
+    !> Joints that turn parts rigidly kept exact in the expansions (reduction_frames)
+    logical :: exact_turns = .true.
   end type reduction_rec_t
 
   type :: scene_t

@@ -102,6 +102,7 @@ module reduction_expansion
     integer :: current = 0
     integer :: last_use(MAX_KEPT) = 0, clock = 0
     integer :: n_expansions = 0
+    integer :: n_exact_turns = 0                     !< of them, with the turns exact
     !> The joint angles of the last state looked up (find): the error norm's configuration.
     real(wp), allocatable :: p_last(:)
     !> Largest nodal translation [m] between the exact kinematics and the expansion in use,
@@ -256,6 +257,7 @@ contains
     this%clock = this%clock + 1
     this%last_use(slot) = this%clock
     this%n_expansions = this%n_expansions + 1
+    if (this%item(slot)%frames%on) this%n_exact_turns = this%n_exact_turns + 1
   end subroutine set_expand
 
   !> How many expansions of n coordinates and m = n_rh + k terms to keep.
