@@ -89,6 +89,14 @@ contains
     x12 = reshape([this%x1, this%x2], [n, m + m * m])
     allocate(xl(n))
     do l = 1, m
+      if (this%frames%on .and. l <= nr) then
+        ! The turns exact: the series are used at the joints' angles z0 (dz_l = 0).
+        this%b(:, :, l) = 0.0_wp
+        this%g1(:, l, :, :) = 0.0_wp
+        this%gw2(:, l) = 0.0_wp
+        this%f2(:, l) = 0.0_wp
+        cycle
+      end if
       hl = MASS_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
       xl = this%x0 + hl * this%x1(:, l)
       call element_masses(dyn, xl, mass_l)

@@ -86,12 +86,10 @@ contains
     real(wp), intent(in) :: delta(:), dz(:), zd(:)
     real(wp), intent(out) :: c(:, :), f(:)
     real(wp) :: ser(2, this%m, 6, this%nr), s(2, this%m, this%nr), rot(2, 2, this%nr)
-    real(wp) :: c_ref(this%m, this%m), unturned(2, 2, this%nr), gam(this%m), gr(2), ge(2)
-    real(wp) :: lw(2)
+    real(wp) :: gam(this%m), gr(2), ge(2), lw(2)
     integer :: j, a, l
     call part_series(this, delta, dz, zd, ser, rot)
-    unturned = spread(EYE, 3, this%nr)
-    call frame_terms(this, unturned, zd, ser, c_ref, f, s)
+    f = unturned_christoffel(this, zd, ser)
     call frame_terms(this, rot, zd, ser, c, gam, s)
     f = f - gam
     do j = 1, this%nr
@@ -251,6 +249,51 @@ contains
       end associate
     end do
   end subroutine frame_terms
+
+  !> frame_terms' gam at delta = 0: there every R is the identity, s and tau vanish, and of
+  !> gam only tau_dot . b + G . (tau_dot zd) - A . b remain, with tau_dot = s_dot and A the
+  !> joint angles' rows of (d_i s) zd.
+  function unturned_christoffel(this, zd, ser) result(gam)
+    type(frames_t), intent(in) :: this
+    real(wp), intent(in) :: zd(:), ser(:, :, :, :)
+    real(wp) :: gam(this%m)
+    real(wp) :: s_dot(2, this%m, this%nr), sz(2, this%nr, this%nr), ww(2), vb(2), vc(2)
+    real(wp) :: psi_dot, psi_dot_p
+    integer :: o, j, p, i, nr
+    nr = this%nr
+    gam = 0.0_wp
+    do o = 1, nr
+      j = this%order(o)
+      p = this%parent(j)
+      psi_dot = sum(zd(1:nr), mask=this%inside(:, j))
+      psi_dot_p = 0.0_wp
+      if (p > 0) psi_dot_p = sum(zd(1:nr), mask=this%inside(:, p))
+      associate (w => ser(:, :, 1, j), g => ser(:, :, 4, j))
+        ww = times_vector(w, zd)
+        s_dot(:, :, j) = (psi_dot_p - psi_dot) * perp_cols(w)
+        do i = 1, nr
+          sz(:, i, j) = 0.0_wp
+          if (p > 0) then
+            if (this%inside(i, p)) sz(:, i, j) = perp(ww)
+          end if
+          if (this%inside(i, j)) sz(:, i, j) = sz(:, i, j) - perp(ww)
+        end do
+        if (p > 0) then
+          s_dot(:, :, j) = s_dot(:, :, j) + s_dot(:, :, p)
+          sz(:, :, j) = sz(:, :, j) + sz(:, :, p)
+        end if
+        vb = times_vector(g, zd)
+        vc = times_vector(s_dot(:, :, j), zd)
+        do i = 1, this%m
+          gam(i) = gam(i) + s_dot(1, i, j) * vb(1) + s_dot(2, i, j) * vb(2) + g(1, i) * vc(1) + &
+            g(2, i) * vc(2)
+        end do
+        do i = 1, nr
+          gam(i) = gam(i) - sz(1, i, j) * vb(1) - sz(2, i, j) * vb(2)
+        end do
+      end associate
+    end do
+  end function unturned_christoffel
 
   !> A (2, m) series v0 + v1 dz + v2 [dz, dz] / 2 of W's columns at dz (vr(:, :, 1)), its
   !> rate along zd (vr(:, :, 2)) and (d_l v) zd (vr(:, l, 3)), along the modal directions

@@ -212,9 +212,10 @@ contains
     end do
   end function sort_index
 
-  !> Whether every element with inertia in a part has a mass that turns with it (M at the
-  !> configuration turned by CHECK_ANGLE is A M A^T) and weights that are its mass times a
-  !> uniform translation; the parts' first moments at x0 (moment0) on the way.
+  !> Whether every element with inertia in a part has weights that are its mass times a
+  !> uniform translation and a mass that turns with it (M at the configuration turned by
+  !> CHECK_ANGLE is A M A^T; checked on one element of each kind); the parts' first moments
+  !> at x0 (moment0) on the way.
   logical function masses_turn(this, model, mass, x0) result(ok)
     type(frames_t), intent(inout) :: this
     type(model_t), intent(in) :: model
@@ -224,9 +225,10 @@ contains
     real(wp) :: a(model%max_dofs, model%max_dofs), xe(model%max_dofs), xr(model%max_dofs)
     real(wp) :: t(model%max_dofs), fe(model%max_dofs), he(model%max_dofs), pot, unit(2, 2)
     real(wp) :: rot(2, 2), worst(2), scale(2)
-    integer :: iel, j, d0, nd, k, kk, first, c
-    integer :: kinds(2)
+    integer :: iel, j, d0, nd, k, kk, first, c, n_checked, i
+    integer :: kinds(2), checked(model%n_elements)
     kinds = [COORD_X, COORD_Y]
+    n_checked = 0
     unit = EYE
     rot = rotation(CHECK_ANGLE)
     if (allocated(this%moment0)) deallocate(this%moment0)
@@ -251,6 +253,10 @@ contains
           scale(1) = max(scale(1), maxval(abs(t(1:nd))))
           this%moment0(c, j) = this%moment0(c, j) - pot
         end do
+        ! The turn of the mass is a property of the element's kind: one of each is checked.
+        if (any([(same_type_as(el, model%elements(checked(i))%e), i = 1, n_checked)])) cycle
+        n_checked = n_checked + 1
+        checked(n_checked) = iel
         ! The element turned about the origin: positions R x, angles + CHECK_ANGLE.
         a(1:nd, 1:nd) = 0.0_wp
         xr(1:nd) = xe(1:nd)
