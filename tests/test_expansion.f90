@@ -3,7 +3,9 @@
 !> at the expansion point the accelerations agree to round-off; away from it the nodal
 !> coordinates converge at order 4 (a third-order series) and the accelerations and kinetic
 !> energy at order 2 (coefficients to first order), for steps that mix the prescribed and modal
-!> coordinates.
+!> coordinates. With the joints' turns kept exact (reduction_frames) the expansion agrees with
+!> the exact model to round-off however far the joints turn, on the two-link with consistent
+!> and lumped masses and on a tree of three turns (two siblings inside a parent).
 program test_expansion
   use core_kinds, only: wp
   use core_error, only: error_t
@@ -35,6 +37,9 @@ program test_expansion
   call check_second_many()
   call check_turns()
   call check_frames()
+  call setup('consistent', run, whole=tree_scene())
+  call suite%check(ex%frames%on, 'a tree of three turns kept exact')
+  call check_far_joints('a tree of three turns')
   ! 1 GiB of series: all 64 at 389 coordinates (305 kB each), 13 at 10^5 (78 MB), 4 at least.
   call suite%check(kept_slots(389, 6) == 64 .and. kept_slots(10**5, 6) == 13 .and. &
     kept_slots(10**8, 6) == 4, 'kept expansions within the memory budget')
@@ -66,15 +71,17 @@ program test_expansion
 contains
 
   !> The reduced run (full evaluation) of scene(mass) and the expansion at (T0, eta0).
-  subroutine setup(mass, r, base)
+  subroutine setup(mass, r, base, whole)
     character(len=*), intent(in) :: mass
     type(run_t), intent(out) :: r
-    character(len=*), intent(in), optional :: base
+    !> base: the base node's group instead of the fixed one; whole: the whole scene instead
+    character(len=*), intent(in), optional :: base, whole
     character(len=*), parameter :: FIXED_BASE = &
       "&node label = 'base', x = 0, y = 0, fixed = .true. /"
     character(len=:), allocatable :: text
     integer :: u, at
     text = scene(mass)
+    if (present(whole)) text = whole
     if (present(base)) then
       at = index(text, FIXED_BASE)
       text = text(1:at - 1) // base // text(at + len(FIXED_BASE):)
@@ -122,6 +129,36 @@ contains
       "&reduction n_modes = 3 /" // nl
   end function scene
 
+  !> A tree of turns: link 1 turned about the base, links 2 and 3 about the elbow (siblings,
+  !> each inside link 1's part), under gravity with a tip mass.
+  function tree_scene() result(text)
+    character(len=:), allocatable :: text
+    character(len=*), parameter :: nl = new_line('a')
+    text = "&scene gravity = 0, -9.81 /" // nl // &
+      "&node label = 'base', x = 0, y = 0, fixed = .true. /" // nl // &
+      "&node label = 'elbow', x = 0.545, y = 0 /" // nl // &
+      "&node label = 'tip', x = 1.22, y = 0 /" // nl // &
+      "&node label = 'tip2', x = 0.545, y = 0.4 /" // nl // &
+      "&link label = 'l1', from = 'base', to = 'elbow', n_elements = 2, E = 7.3e10, " // &
+      "A = 9e-4, I = 1.69e-8, rho = 2700 /" // nl // &
+      "&link label = 'l2', from = 'elbow', to = 'tip', n_elements = 2, E = 7.3e10, " // &
+      "A = 4e-4, I = 3.33e-9, rho = 2700 /" // nl // &
+      "&link label = 'l3', from = 'elbow', to = 'tip2', n_elements = 2, E = 7.3e10, " // &
+      "A = 4e-4, I = 3.33e-9, rho = 2700 /" // nl // &
+      "&hinge label = 'j1', node = 'base', link = 'l1', mode = 'prescribed', motion = 'p1' /" &
+      // nl // &
+      "&hinge label = 'j2', node = 'elbow', link = 'l2', mode = 'prescribed', motion = 'p2' /" &
+      // nl // &
+      "&hinge label = 'j3', node = 'elbow', link = 'l3', mode = 'prescribed', motion = 'p3' /" &
+      // nl // &
+      "&motion label = 'p1', law = 'cubic', end = 1.5707963, duration = 0.4 /" // nl // &
+      "&motion label = 'p2', law = 'cubic', end = 1.5707963, duration = 0.4 /" // nl // &
+      "&motion label = 'p3', law = 'cubic', end = -1.0, duration = 0.4 /" // nl // &
+      "&mass node = 'tip', m = 3 /" // nl // &
+      "&dynamic t_end = 0.01, output_dt = 5e-3, integrator = 'bdf' /" // nl // &
+      "&reduction n_modes = 3 /" // nl
+  end function tree_scene
+
   !> Exact reduced accelerations (the full model evaluated) at (t, eta, eta_dot).
   function exact_accel(t, eta) result(a)
     real(wp), intent(in) :: t, eta(:)
@@ -134,7 +171,7 @@ contains
   function expanded_accel(t, eta) result(a)
     real(wp), intent(in) :: t, eta(:)
     real(wp) :: a(size(eta))
-    real(wp) :: p(2), pd(2), pdd(2)
+    real(wp), dimension(run%red%dyn%model%n_rh) :: p, pd, pdd
     call run%red%dyn%prescribed(t, p, pd, pdd)
     call ex%accel(run%red%dyn, t, p, pd, pdd, eta, eta_dot, a, err)
     call suite%check(err%ok(), 'expanded evaluation')
@@ -240,7 +277,7 @@ contains
   !> The same at the joints' angles at time t and eta.
   real(wp) function coordinate_error_at(t, eta) result(e)
     real(wp), intent(in) :: t, eta(:)
-    real(wp) :: p(2), pd(2), pdd(2)
+    real(wp), dimension(run%red%dyn%model%n_rh) :: p, pd, pdd
     call run%red%dyn%prescribed(t, p, pd, pdd)
     e = coordinate_error_z([p, eta])
   end function coordinate_error_at
@@ -248,9 +285,10 @@ contains
   real(wp) function coordinate_error_z(z) result(e)
     real(wp), intent(in) :: z(:)
     real(wp) :: q(run%red%dyn%model%n_q), x(run%red%dyn%model%n_x)
-    integer :: i
-    q(1:2) = z(1:2)
-    q(3:) = run%red%basis%q_ref + matmul(run%red%basis%v, z(3:))
+    integer :: i, nr
+    nr = run%red%dyn%model%n_rh
+    q(1:nr) = z(1:nr)
+    q(nr + 1:) = run%red%basis%q_ref + matmul(run%red%basis%v, z(nr + 1:))
     x = ex%coordinates(z)
     call run%red%dyn%kin%solve(run%red%dyn%model, q, err)
     call suite%check(err%ok(), 'exact kinematics')
@@ -293,13 +331,16 @@ contains
   function energy_error_at(t, eta) result(e)
     real(wp), intent(in) :: t, eta(:)
     real(wp) :: e(2)
-    real(wp) :: p(2), pd(2), pdd(2), q(run%red%dyn%model%n_q), exact(2), z(5)
+    real(wp), dimension(run%red%dyn%model%n_rh) :: p, pd, pdd
+    real(wp) :: q(run%red%dyn%model%n_q), exact(2), z(run%red%dyn%model%n_rh + size(eta))
+    integer :: nr
+    nr = run%red%dyn%model%n_rh
     call run%red%dyn%prescribed(t, p, pd, pdd)
-    q(1:2) = p
-    q(3:) = run%red%basis%q_ref + matmul(run%red%basis%v, eta)
+    q(1:nr) = p
+    q(nr + 1:) = run%red%basis%q_ref + matmul(run%red%basis%v, eta)
     call run%red%dyn%kin%solve(run%red%dyn%model, q, err)
     call suite%check(err%ok(), 'exact kinematics')
-    exact = run%red%dyn%energy(t, q(3:), matmul(run%red%basis%v, eta_dot))
+    exact = run%red%dyn%energy(t, q(nr + 1:), matmul(run%red%basis%v, eta_dot))
     z = [p, eta]
     e = abs(ex%energy(z, [pd, eta_dot], run%red%dyn%load_factor * &
       run%red%dyn%loads_at(t), ex%coordinates(z)) - exact)

@@ -129,10 +129,9 @@ contains
     integer :: j
     do j = 1, this%nr
       rot(:, :, j) = rotation(sum(delta, mask=this%inside(:, j)))
-      call series_rates(this%m, this%nr, this%c1(:, :, j), this%c2(:, :, :, j), &
-        this%c3(:, :, :, :, j), dz, zd, ser(:, :, 1:3, j))
-      call series_rates(this%m, this%nr, this%g0(:, :, j), this%g1(:, :, :, j), &
-        this%g2(:, :, :, :, j), dz, zd, ser(:, :, 4:6, j))
+      ! Whole arrays and the part's index: no copies of sections per call.
+      call series_rates(this%m, this%nr, j, 0, this%c1, this%c2, this%c3, dz, zd, ser)
+      call series_rates(this%m, this%nr, j, 3, this%g0, this%g1, this%g2, dz, zd, ser)
     end do
   end subroutine part_series
 
@@ -185,7 +184,7 @@ contains
     ! Per part: s_dot (2, m), sz(:, i) = (d_i s) zd (2, m)
     real(wp) :: s_dot(2, this%m, this%nr), sz(2, this%m, this%nr)
     real(wp) :: tau(2, this%m), tau_dot(2, this%m), am(2, this%m), d(2, 2), ww(2), js(2)
-    real(wp) :: rp(2, 2), psi_dot, psi_dot_p, va(2), vb(2), vc(2), vd(2), mj
+    real(wp) :: rp(2, 2), rt(2, 2), psi_dot, psi_dot_p, va(2), vb(2), vc(2), vd(2), mj
     integer :: o, j, p, i, nr, m
     nr = this%nr
     m = this%m
@@ -225,11 +224,11 @@ contains
           sz(:, :, j) = sz(:, :, j) + sz(:, :, p)
         end if
         ! tau = R^T s; d_i R^T = -R^T J where delta_i turns the part
-        tau = times(transpose(rot(:, :, j)), s(:, :, j))
-        tau_dot = times(transpose(rot(:, :, j)), s_dot(:, :, j) - psi_dot * &
-          perp_cols(s(:, :, j)))
-        am = times(transpose(rot(:, :, j)), sz(:, :, j))
-        js = matmul(transpose(rot(:, :, j)), perp(times_vector(s(:, :, j), zd)))
+        rt = transpose(rot(:, :, j))
+        tau = times(rt, s(:, :, j))
+        tau_dot = times(rt, s_dot(:, :, j) - psi_dot * perp_cols(s(:, :, j)))
+        am = times(rt, sz(:, :, j))
+        js = matmul(rt, perp(times_vector(s(:, :, j), zd)))
         do i = 1, nr
           if (this%inside(i, j)) am(:, i) = am(:, i) - js
         end do
@@ -295,25 +294,26 @@ contains
     end do
   end function unturned_christoffel
 
-  !> A (2, m) series v0 + v1 dz + v2 [dz, dz] / 2 of W's columns at dz (vr(:, :, 1)), its
-  !> rate along zd (vr(:, :, 2)) and (d_l v) zd (vr(:, l, 3)), along the modal directions
-  !> l > nr only (the series is at the joints' angles p0: along them, v does not change).
-  pure subroutine series_rates(m, nr, v0, v1, v2, dz, zd, vr)
-    integer, intent(in) :: m, nr
-    real(wp), intent(in) :: v0(2, m), v1(2, m, m), v2(2, m, m, m), dz(m), zd(m)
-    real(wp), intent(out) :: vr(2, m, 3)
+  !> Part j's (2, m) series v0 + v1 dz + v2 [dz, dz] / 2 of W's columns at dz (vr(:, :, at + 1,
+  !> j)), its rate along zd (at + 2) and (d_l v) zd (vr(:, l, at + 3, j)), along the modal
+  !> directions l > nr only (the series is at the joints' angles p0: along them, v does not
+  !> change).
+  pure subroutine series_rates(m, nr, j, at, v0, v1, v2, dz, zd, vr)
+    integer, intent(in) :: m, nr, j, at
+    real(wp), intent(in) :: v0(2, m, nr), v1(2, m, m, nr), v2(2, m, m, m, nr), dz(m), zd(m)
+    real(wp), intent(inout) :: vr(2, m, 6, nr)
     real(wp) :: dv(2, m)
     integer :: l, r
-    vr(:, :, 1) = v0
-    vr(:, :, 2:3) = 0.0_wp
+    vr(:, :, at + 1, j) = v0(:, :, j)
+    vr(:, :, at + 2:at + 3, j) = 0.0_wp
     do l = nr + 1, m
-      dv = v1(:, :, l)
+      dv = v1(:, :, l, j)
       do r = nr + 1, m
-        dv = dv + dz(r) * v2(:, :, l, r)
+        dv = dv + dz(r) * v2(:, :, l, r, j)
       end do
-      vr(:, :, 1) = vr(:, :, 1) + 0.5_wp * dz(l) * (v1(:, :, l) + dv)
-      vr(:, :, 2) = vr(:, :, 2) + zd(l) * dv
-      vr(:, l, 3) = times_vector(dv, zd)
+      vr(:, :, at + 1, j) = vr(:, :, at + 1, j) + 0.5_wp * dz(l) * (v1(:, :, l, j) + dv)
+      vr(:, :, at + 2, j) = vr(:, :, at + 2, j) + zd(l) * dv
+      vr(:, l, at + 3, j) = times_vector(dv, zd)
     end do
   end subroutine series_rates
 
