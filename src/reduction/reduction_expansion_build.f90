@@ -50,7 +50,9 @@ contains
     first = 1
     if (this%turned) first = nr + 1
     if (.not. allocated(this%turns)) allocate(this%turns(0))
-    this%turn_order = turn_order(this%turns)
+    ! Only turns found have their nodes (find_turns stops at the first coordinate that is not).
+    this%turn_order = [integer ::]
+    if (this%turned) this%turn_order = turn_order(this%turns)
     call second_terms(dyn, this%x1, this%x2, this%turns, first)
     block
       real(wp) :: qr(dyn%model%n_q)

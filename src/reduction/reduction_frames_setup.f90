@@ -110,7 +110,7 @@ contains
     logical, allocatable :: member(:, :)
     integer, allocatable :: pairs(:, :)
     integer :: sizes(size(turns)), depth(size(turns))
-    integer :: nr, j, i, k, iel, d0, nd, part, np
+    integer :: nr, j, i, k, iel, d0, nd, part, np, first
     nr = size(turns)
     allocate(member(model%n_x, nr), pairs(2, model%n_x))
     ok = .false.
@@ -177,9 +177,8 @@ contains
     end do
     this%el_part = [(0, iel = 1, model%n_elements)]
     do iel = 1, model%n_elements
-      if (mass%offset(iel) == 0) cycle
-      d0 = mass%dof_first(iel) - 1
-      nd = mass%dof_first(iel + 1) - 1 - d0
+      call block_of(mass, iel, first, d0, nd)
+      if (first == 0) cycle
       part = 0
       do k = 1, nd
         j = this%coord_part(mass%dofs(d0 + k))
@@ -239,9 +238,7 @@ contains
     do iel = 1, model%n_elements
       j = this%el_part(iel)
       if (j == 0) cycle
-      first = mass%offset(iel)
-      d0 = mass%dof_first(iel) - 1
-      nd = mass%dof_first(iel + 1) - 1 - d0
+      call block_of(mass, iel, first, d0, nd)
       me(1:nd, 1:nd) = reshape(mass%val(first:first + nd * nd - 1), [nd, nd])
       xe(1:nd) = x0(mass%dofs(d0 + 1:d0 + nd))
       associate (el => model%elements(iel)%e, dofs => mass%dofs(d0 + 1:d0 + nd))
@@ -299,9 +296,7 @@ contains
     do iel = 1, model%n_elements
       j = this%el_part(iel)
       if (j == 0) cycle
-      first = mass%offset(iel)
-      d0 = mass%dof_first(iel) - 1
-      nd = mass%dof_first(iel + 1) - 1 - d0
+      call block_of(mass, iel, first, d0, nd)
       ! Column k of the block times the unit translation along x or y.
       do k = 1, nd
         c = model%coord_kind(mass%dofs(d0 + k))
@@ -313,6 +308,17 @@ contains
       end do
     end do
   end subroutine element_momenta
+
+  !> Element iel's mass block in mass: its first value, and its nd coordinates from
+  !> mass%dofs(d0 + 1).
+  pure subroutine block_of(mass, iel, first, d0, nd)
+    type(element_mass_t), intent(in) :: mass
+    integer, intent(in) :: iel
+    integer, intent(out) :: first, d0, nd
+    first = mass%offset(iel)
+    d0 = mass%dof_first(iel) - 1
+    nd = mass%dof_first(iel + 1) - 1 - d0
+  end subroutine block_of
 
   subroutine allocate_series(this)
     type(frames_t), intent(inout) :: this
