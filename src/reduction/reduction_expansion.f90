@@ -91,7 +91,6 @@ module reduction_expansion
     procedure :: coordinates => exp_coordinates
     procedure :: energy => exp_energy
     procedure :: error_norm => exp_error_norm
-    procedure :: exact_turns => exp_exact_turns
   end type expansion_t
 
   !> The expansions kept during a run, the one in use and the counts for the output.
@@ -335,12 +334,6 @@ contains
     if (this%frames%on) dz(1:this%nr) = 0.0_wp
     dz(this%nr + 1:this%m) = eta - this%z0(this%nr + 1:this%m)
   end subroutine step_from_centre
-
-  !> Whether this expansion keeps the joints' angles exact (reduction_frames).
-  pure logical function exp_exact_turns(this)
-    class(expansion_t), intent(in) :: this
-    exp_exact_turns = this%valid .and. this%frames%on
-  end function exp_exact_turns
 
   !> Modal accelerations at (t, eta, eta_dot) from the expansion: O(m^4), no model pass.
   !> p, pd, pdd: the prescribed coordinates and their rates at t (dynamics_t%prescribed).

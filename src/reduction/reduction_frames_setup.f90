@@ -40,7 +40,7 @@ contains
     do i = 1, n
       j = this%coord_part(i)
       if (j == 0 .or. all(model%coord_kind(i) /= [COORD_X, COORD_Y])) cycle
-      a = model%coord_kind(i)
+      a = model%coord_kind(i)     ! COORD_X = 1 and COORD_Y = 2 number the axes
       rl(i, a + 2 * (j - 1)) = model%lumped(i)
       if (a == COORD_X) this%mass(j) = this%mass(j) + model%lumped(i)
       loads(i, 1 + 2 * (j - 1)) = load0(i)
