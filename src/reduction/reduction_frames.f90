@@ -300,21 +300,28 @@ contains
   !> change).
   pure subroutine series_rates(m, nr, j, at, v0, v1, v2, dz, zd, vr)
     integer, intent(in) :: m, nr, j, at
-    real(wp), intent(in) :: v0(2, m, nr), v1(2, m, m, nr), v2(2, m, m, m, nr), dz(m), zd(m)
-    real(wp), intent(inout) :: vr(2, m, 6, nr)
-    real(wp) :: dv(2, m)
-    integer :: l, r
-    vr(:, :, at + 1, j) = v0(:, :, j)
-    vr(:, :, at + 2:at + 3, j) = 0.0_wp
+    ! The (2, m) columns flat as 2 m numbers (sequence association): contiguous loops.
+    real(wp), intent(in) :: v0(2 * m, nr), v1(2 * m, m, nr), v2(2 * m, m, m, nr), dz(m), zd(m)
+    real(wp), intent(inout) :: vr(2 * m, 6, nr)
+    real(wp) :: dv(2 * m), v(2 * m), v_dot(2 * m)
+    integer :: l, r, a
+    v = v0(:, j)
+    v_dot = 0.0_wp
+    vr(:, at + 3, j) = 0.0_wp
     do l = nr + 1, m
-      dv = v1(:, :, l, j)
+      dv = v1(:, l, j)
       do r = nr + 1, m
-        dv = dv + dz(r) * v2(:, :, l, r, j)
+        dv = dv + dz(r) * v2(:, l, r, j)
       end do
-      vr(:, :, at + 1, j) = vr(:, :, at + 1, j) + 0.5_wp * dz(l) * (v1(:, :, l, j) + dv)
-      vr(:, :, at + 2, j) = vr(:, :, at + 2, j) + zd(l) * dv
-      vr(:, l, at + 3, j) = times_vector(dv, zd)
+      v = v + 0.5_wp * dz(l) * (v1(:, l, j) + dv)
+      v_dot = v_dot + zd(l) * dv
+      do a = 1, m
+        vr(2 * l - 1, at + 3, j) = vr(2 * l - 1, at + 3, j) + dv(2 * a - 1) * zd(a)
+        vr(2 * l, at + 3, j) = vr(2 * l, at + 3, j) + dv(2 * a) * zd(a)
+      end do
     end do
+    vr(:, at + 1, j) = v
+    vr(:, at + 2, j) = v_dot
   end subroutine series_rates
 
   !> r v for a 2 x 2 r and a (2, n) v.
