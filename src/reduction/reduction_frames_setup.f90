@@ -3,7 +3,8 @@
 !> them, and the projections of the parts' momenta, weights and loads on the series.
 submodule (reduction_frames) reduction_frames_setup
   use model_system, only: COORD_X, COORD_Y
-  use reduction_turns, only: CHECK_ANGLE
+  use core_sort, only: sort_by_key
+  use reduction_turns, only: CHECK_ANGLE, position_pairs
   implicit none
 
   !> Relative tolerance of the checks that the elements' masses turn with their parts and
@@ -112,7 +113,7 @@ contains
     integer :: sizes(size(turns)), depth(size(turns))
     integer :: nr, j, i, k, iel, d0, nd, part, np, first
     nr = size(turns)
-    allocate(member(model%n_x, nr), pairs(2, model%n_x))
+    allocate(member(model%n_x, nr))
     ok = .false.
     member = .false.
     do j = 1, nr
@@ -154,17 +155,13 @@ contains
       if (any(member(i, :) .neqv. this%inside(:, part))) return
     end do
     this%order = [(i, i = 1, nr)]
-    this%order = this%order(sort_index(depth))
+    call sort_by_key(this%order, depth)
     ! x and y of every node, for J f and the lumped masses' check.
+    pairs = position_pairs(model)
+    np = size(pairs, 2)
     this%pair_of = [(0, i = 1, model%n_x)]
-    np = 0
-    do i = 1, size(model%node_coord, 2)
-      if (model%node_coord(1, i) == 0 .or. model%node_coord(2, i) == 0) cycle
-      np = np + 1
-      pairs(:, np) = model%node_coord(1:2, i)
-      this%pair_of(pairs(1, np)) = pairs(2, np)
-      this%pair_of(pairs(2, np)) = pairs(1, np)
-    end do
+    this%pair_of(pairs(1, :)) = pairs(2, :)
+    this%pair_of(pairs(2, :)) = pairs(1, :)
     do i = 1, np
       associate (ix => pairs(1, i), iy => pairs(2, i))
         if (this%coord_part(ix) /= this%coord_part(iy)) return
@@ -198,18 +195,6 @@ contains
     end do
     ok = .true.
   end subroutine structure
-
-  !> Indices that sort v ascending (a few turns: selection).
-  pure function sort_index(v) result(idx)
-    integer, intent(in) :: v(:)
-    integer :: idx(size(v))
-    integer :: w(size(v)), i
-    w = v
-    do i = 1, size(v)
-      idx(i) = minloc(w, 1)
-      w(idx(i)) = huge(1)
-    end do
-  end function sort_index
 
   !> Whether every element with inertia in a part has weights that are its mass times a
   !> uniform translation and a mass that turns with it (M at the configuration turned by

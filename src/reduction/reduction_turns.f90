@@ -16,6 +16,7 @@
 !> absolute direction).
 module reduction_turns
   use core_kinds, only: wp
+  use core_sort, only: sort_by_key
   use model_system, only: model_t, COORD_PHI
   implicit none
   private
@@ -77,12 +78,9 @@ contains
   pure function turn_order(turns) result(order)
     type(turn_t), intent(in) :: turns(:)
     integer :: order(size(turns))
-    integer :: sizes(size(turns)), j
-    sizes = [(size(turns(j)%moving, 2), j = 1, size(turns))]
-    do j = 1, size(turns)
-      order(j) = minloc(sizes, 1)
-      sizes(order(j)) = huge(1)
-    end do
+    integer :: j
+    order = [(j, j = 1, size(turns))]
+    call sort_by_key(order, [(size(turns(j)%moving, 2), j = 1, size(turns))])
   end function turn_order
 
   !> The configurations v(:, c) of joint angles p0 turned to p0 + delta (positions) or fields
