@@ -304,25 +304,22 @@ contains
     d(2) = 0.5_wp * d(2)
   end function exp_spread
 
-  !> The reduced mass a + sum_l b(:, :, l) dz_l + sum_lr c(:, :, l, r) dz_l dz_r (m x m).
+  !> The reduced mass a + sum_l b(:, :, l) dz_l + sum_lr c(:, :, l, r) dz_l dz_r (m x m), over
+  !> the free directions l, r of dz.
   function mass_at(this, dz) result(mz)
     type(expansion_t), intent(in) :: this
     real(wp), intent(in) :: dz(:)
     real(wp) :: mz(this%m, this%m)
+    integer :: lo, l, r
+    lo = first_free(this)
     mz = this%a
-    call gemv_add(this%m**2, this%m, this%b, dz, mz)
-    call gemv_add(this%m**2, this%m**2, this%c, outer(dz, dz), mz)
-  end function mass_at
-
-  !> u v^T as a vector, element (a, b) at a + (b - 1) size(u).
-  pure function outer(u, v) result(w)
-    real(wp), intent(in) :: u(:), v(:)
-    real(wp) :: w(size(u) * size(v))
-    integer :: b
-    do b = 1, size(v)
-      w((b - 1) * size(u) + 1:b * size(u)) = u * v(b)
+    do r = lo, this%m
+      mz = mz + dz(r) * this%b(:, :, r)
+      do l = lo, this%m
+        mz = mz + (dz(l) * dz(r)) * this%c(:, :, l, r)
+      end do
     end do
-  end function outer
+  end function mass_at
 
   !> dz = (p, eta) - z0, without the temporary of an array constructor (called per
   !> evaluation).
@@ -335,6 +332,14 @@ contains
     dz(this%nr + 1:this%m) = eta - this%z0(this%nr + 1:this%m)
   end subroutine step_from_centre
 
+  !> The first direction of dz that may be non-zero: with the turns exact the joints stay at
+  !> z0's angles in the series (step_from_centre), and only the modal directions move.
+  pure integer function first_free(this) result(lo)
+    type(expansion_t), intent(in) :: this
+    lo = 1
+    if (this%frames%on) lo = this%nr + 1
+  end function first_free
+
   !> Modal accelerations at (t, eta, eta_dot) from the expansion: O(m^4), no model pass.
   !> p, pd, pdd: the prescribed coordinates and their rates at t (dynamics_t%prescribed).
   subroutine exp_accel(this, dyn, t, p, pd, pdd, eta, eta_dot, acc, err)
@@ -346,14 +351,15 @@ contains
     real(wp) :: dz(this%m), zd(this%m), mz(this%m, this%m), f(this%m), v(this%m)
     real(wp) :: w(this%m, this%m), quad(this%m, this%m), rhs(this%k), mee(this%k, this%k)
     real(wp) :: cm(this%m, this%m), fc(this%m)
-    integer :: l, info, nr
+    integer :: l, info, nr, lo
     nr = this%nr
     call step_from_centre(this, p, eta, dz)
     zd(1:nr) = pd
     zd(nr + 1:) = eta_dot
     mz = mass_at(this, dz)
     f = this%f1
-    call gemv_add(this%m, this%m, this%f2, dz, f)
+    lo = first_free(this)
+    call gemv_add(this%m, this%m - lo + 1, this%f2(1, lo), dz(lo:), f)
     if (this%frames%on) then
       call this%frames%correction(p - this%z0(1:nr), dz, zd, cm, fc)
       mz = mz + cm
@@ -393,42 +399,58 @@ contains
     type(expansion_t), intent(in) :: this
     real(wp), intent(in) :: f(:), p(:), dz(:)
     real(wp) :: g(this%m)
-    real(wp) :: ft(size(f))
-    integer :: l, i
-    ft = f
+    real(wp), allocatable :: ft(:)
+    integer :: l, i, lo
+    lo = first_free(this)
+    allocate(ft, source=f)
     ! W = L W0 with the turns exact: W^T f = W0^T (L^T f).
     if (this%frames%on) call apply_turns_transposed(this%turns, this%turn_order, p - &
       this%z0(1:this%nr), ft)
     do i = 1, this%m
       g(i) = dot_product(ft, this%x1(:, i))
-      do l = 1, this%m
+      do l = lo, this%m
         g(i) = g(i) + dz(l) * dot_product(ft, this%x2(:, i, l))
       end do
     end do
   end function projected_load
 
-  !> Nodal coordinates on the expansion at z = (p, eta): O(n m^3) / 6 with X3's symmetry.
+  !> Nodal coordinates on the expansion at z = (p, eta): O(n m^3) / 6 with X3's symmetry, over
+  !> the free directions only (the modal ones with the turns exact).
   function exp_coordinates(this, z) result(x)
     class(expansion_t), intent(in) :: this
     real(wp), intent(in) :: z(:)
     real(wp) :: x(size(this%x0))
-    real(wp) :: dz(this%m), w3(size(this%x3, 2)), xs(size(this%x0), 1)
-    integer :: a, b, l
+    real(wp) :: dz(this%m), w2(this%m)
+    real(wp), allocatable :: xs(:, :)
+    real(wp), allocatable :: w3(:)
+    integer :: a, b, l, lo, c0
     call step_from_centre(this, z(1:this%nr), z(this%nr + 1:), dz)
-    ! X3[dz, dz, dz] / 6 over l <= a <= b: each distinct triple with its multiplicity
-    do b = 1, this%m
-      do a = 1, b
-        do l = 1, a
+    lo = first_free(this)
+    x = this%x0
+    if (lo > this%m) then
+      c0 = size(this%x3, 2) + 1
+    else
+      ! X3's columns with l >= lo follow each other from tri(lo, lo, lo) (third_terms' order).
+      c0 = this%tri(lo, lo, lo)
+    end if
+    allocate(w3(c0:size(this%x3, 2)))
+    ! X3[dz, dz, dz] / 6 over lo <= l <= a <= b: each distinct triple with its multiplicity
+    do b = lo, this%m
+      do a = lo, b
+        do l = lo, a
           w3(this%tri(l, a, b)) = dz(l) * dz(a) * dz(b) * triple_weight(l, a, b)
         end do
       end do
     end do
-    x = this%x0
-    call gemv_add(size(x), this%m, this%x1, dz, x)
-    call gemv_add(size(x), this%m**2, this%x2, 0.5_wp * outer(dz, dz), x)
-    call gemv_add(size(x), size(w3), this%x3, w3, x)
+    call gemv_add(size(x), this%m - lo + 1, this%x1(1, lo), dz(lo:), x)
+    ! X2[dz, dz] / 2: the columns (lo:m, b) of each b are contiguous.
+    do b = lo, this%m
+      w2(lo:) = (0.5_wp * dz(b)) * dz(lo:)
+      call gemv_add(size(x), this%m - lo + 1, this%x2(1, lo, b), w2(lo:), x)
+    end do
+    call gemv_add(size(x), size(w3), this%x3(1, c0), w3, x)
     if (this%frames%on) then
-      xs(:, 1) = x
+      xs = reshape(x, [size(x), 1])
       call apply_turns(this%turns, this%turn_order, z(1:this%nr) - this%z0(1:this%nr), xs, &
         .true.)
       x = xs(:, 1)
@@ -473,9 +495,10 @@ contains
     real(wp), intent(in) :: dq(:), eta_old(:), eta_new(:), rtol, atol, p(:)
     real(wp), intent(out) :: norm
     ! dx, x_old, x_new: the step and the nodal vectors that scale it.
-    real(wp) :: xs(size(this%x0), 3)
+    real(wp), allocatable :: xs(:, :)
     integer :: n
     n = size(this%x0)
+    allocate(xs(n, 3))
     xs(:, 1) = 0.0_wp
     xs(:, 2) = this%xr
     xs(:, 3) = this%xr

@@ -186,29 +186,39 @@ contains
     real(wp), intent(out) :: a(:)
     type(error_t), intent(out) :: err
     real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
-    real(wp) :: dq(this%dyn%model%n_dy), q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
-    real(wp) :: t_centre
     call this%dyn%prescribed(t, p, pd, pdd)
     if (.not. this%expansions%find(p, eta)) then
-      call this%full_state(eta, eta_dot, q_dy, v_dy)
-      call indicators(this, t, eta, eta_dot, q_dy, v_dy, this%expansion_residual, &
-        this%expansion_estimate, dq, err)
-      if (.not. err%ok()) return
-      ! The indicators leave the exact kinematics of this state.
-      call this%expansions%note_stale(this%dyn%model, this%dyn%kin%x, p, eta)
-      t_centre = this%expansions%centre_time(this%dyn, t, p)
-      call this%expansions%expand(this%dyn, this%basis, t_centre, eta, err)
-      ! Centred ahead, it may still miss this state by its modal part: then centre it here.
-      if (err%ok() .and. t_centre /= t) then
-        if (this%expansions%item(this%expansions%current)%needs_update(p, eta, &
-          this%expansions%tol)) call this%expansions%expand(this%dyn, this%basis, t, eta, err)
-      end if
+      call new_expansion(this, t, p, eta, eta_dot, err)
       if (.not. err%ok()) return
     end if
     call this%expansions%item(this%expansions%current)%accel(this%dyn, t, p, pd, pdd, eta, &
       eta_dot, a, err)
     if (err%ok()) call check_finite(a, t, err)
   end subroutine expanded_accel
+
+  !> A new expansion for the state (t, p, eta, eta_dot), which has left the kept ones, with the
+  !> error indicators measured there, exactly (apart from expanded_accel: the full model's
+  !> arrays are made only here).
+  subroutine new_expansion(this, t, p, eta, eta_dot, err)
+    class(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
+    type(error_t), intent(out) :: err
+    real(wp) :: dq(this%dyn%model%n_dy), q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
+    real(wp) :: t_centre
+    call this%full_state(eta, eta_dot, q_dy, v_dy)
+    call indicators(this, t, eta, eta_dot, q_dy, v_dy, this%expansion_residual, &
+      this%expansion_estimate, dq, err)
+    if (.not. err%ok()) return
+    ! The indicators leave the exact kinematics of this state.
+    call this%expansions%note_stale(this%dyn%model, this%dyn%kin%x, p, eta)
+    t_centre = this%expansions%centre_time(this%dyn, t, p)
+    call this%expansions%expand(this%dyn, this%basis, t_centre, eta, err)
+    ! Centred ahead, it may still miss this state by its modal part: then centre it here.
+    if (err%ok() .and. t_centre /= t) then
+      if (this%expansions%item(this%expansions%current)%needs_update(p, eta, &
+        this%expansions%tol)) call this%expansions%expand(this%dyn, this%basis, t, eta, err)
+    end if
+  end subroutine new_expansion
 
   !> V^T of the full model's linearised Jacobian: -(V^T Mbar V)^-1 V^T [K0, D0] V, with the
   !> constant K0 of the dynamic modes applied element by element and that of elastic elements
