@@ -310,14 +310,17 @@ contains
     type(expansion_t), intent(in) :: this
     real(wp), intent(in) :: dz(:)
     real(wp) :: mz(this%m, this%m)
-    integer :: lo, l, r
+    real(wp) :: w(this%m)
+    integer :: lo, r, k
     lo = first_free(this)
+    k = this%m - lo + 1
     mz = this%a
+    if (k == 0) return
+    call gemv_add(this%m**2, k, this%b(1, 1, lo), dz(lo:), mz)
+    ! c(:, :, lo:m, r) is contiguous for each r.
     do r = lo, this%m
-      mz = mz + dz(r) * this%b(:, :, r)
-      do l = lo, this%m
-        mz = mz + (dz(l) * dz(r)) * this%c(:, :, l, r)
-      end do
+      w(lo:) = dz(r) * dz(lo:)
+      call gemv_add(this%m**2, k, this%c(1, 1, lo, r), w(lo:), mz)
     end do
   end function mass_at
 
