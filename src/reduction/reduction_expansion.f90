@@ -24,7 +24,9 @@
 !>
 !> Where the prescribed coordinates move, a new expansion is centred ahead of the state, on
 !> their known path (set_centre_time): the state then crosses its whole range instead of
-!> starting at its centre, and about half as many expansions serve a joint's travel.
+!> starting at its centre, and about half as many expansions serve a joint's travel. With the
+!> joints' angles exact (reduction_frames) the joints cost no range, and the centre is put
+!> ahead along the modal rates instead (set_centre_modal).
 module reduction_expansion
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_MODEL
@@ -110,6 +112,7 @@ module reduction_expansion
   contains
     procedure :: find => set_find
     procedure :: centre_time => set_centre_time
+    procedure :: centre_modal => set_centre_modal
     procedure :: note_stale => set_note_stale
     procedure :: expand => set_expand
     procedure :: forget => set_forget
@@ -143,6 +146,29 @@ module reduction_expansion
       type(turn_t), intent(in) :: turns(:)
       integer, intent(in) :: first
     end subroutine third_terms
+    !> Make a kept expansion that serves (p, eta) current (reduction_expansion_set).
+    module logical function set_find(this, p, eta) result(found)
+      class(expansion_set_t), intent(inout) :: this
+      real(wp), intent(in) :: p(:), eta(:)
+    end function set_find
+    !> Where on the joints' path to centre a new expansion (reduction_expansion_set).
+    module real(wp) function set_centre_time(this, dyn, t, p) result(tc)
+      class(expansion_set_t), intent(in) :: this
+      type(dynamics_t), intent(in) :: dyn
+      real(wp), intent(in) :: t, p(:)
+    end function set_centre_time
+    !> Where along the modal rates to centre one with the turns exact (reduction_expansion_set).
+    module function set_centre_modal(this, eta, eta_dot) result(eta_c)
+      class(expansion_set_t), intent(in) :: this
+      real(wp), intent(in) :: eta(:), eta_dot(:)
+      real(wp) :: eta_c(size(eta))
+    end function set_centre_modal
+    !> The expansion's distance from the exact x where it is left (reduction_expansion_set).
+    module subroutine set_note_stale(this, model, x, p, eta)
+      class(expansion_set_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: x(:), p(:), eta(:)
+    end subroutine set_note_stale
   end interface
 
 contains
@@ -156,87 +182,6 @@ contains
     if (size(model%moment_lambda) > 0) why = 'moments on spatial nodes'
     if (size(model%actuator_element) > 0) why = 'actuators'
   end function expansion_unsupported
-
-  !> Make an expansion that serves (p, eta) current, if one is kept; false if none is.
-  logical function set_find(this, p, eta) result(found)
-    class(expansion_set_t), intent(inout) :: this
-    real(wp), intent(in) :: p(:), eta(:)
-    integer :: i
-    found = .false.
-    this%p_last = p
-    if (.not. allocated(this%item)) return
-    if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta, &
-      this%tol)
-    if (found) return
-    do i = 1, size(this%item)
-      if (i == this%current) cycle
-      if (this%item(i)%needs_update(p, eta, this%tol)) cycle
-      this%current = i
-      found = .true.
-      exit
-    end do
-    if (found) then
-      this%clock = this%clock + 1
-      this%last_use(this%current) = this%clock
-    end if
-  end function set_find
-
-  !> Where to centre a new expansion for the state (t, p): the latest time ahead at which the
-  !> prescribed coordinates alone use AHEAD_FRACTION of the tolerance, measured with the
-  !> current expansion's spreads (those of its neighbour differ little); t itself when there is
-  !> no current expansion or the prescribed coordinates stay put. Doubling then bisection keeps
-  !> the criterion met at the time returned, whatever the motion laws do in between.
-  real(wp) function set_centre_time(this, dyn, t, p) result(tc)
-    class(expansion_set_t), intent(in) :: this
-    type(dynamics_t), intent(in) :: dyn
-    real(wp), intent(in) :: t, p(:)
-    real(wp) :: lo, hi, tau
-    integer :: i
-    tc = t
-    if (this%current == 0 .or. size(p) == 0) return
-    ! With exact turns the joints' travel costs no range.
-    if (this%item(this%current)%frames%on) return
-    lo = 0.0_wp
-    tau = 1.0e-9_wp * max(1.0_wp, abs(t))
-    do i = 1, 80
-      if (beyond(tau)) exit
-      lo = tau
-      tau = 2 * tau
-    end do
-    if (i > 80) return
-    hi = tau
-    do i = 1, 50
-      tau = 0.5_wp * (lo + hi)
-      if (beyond(tau)) then
-        hi = tau
-      else
-        lo = tau
-      end if
-    end do
-    tc = t + lo
-  contains
-    logical function beyond(dt)
-      real(wp), intent(in) :: dt
-      real(wp) :: pa(size(p)), pd(size(p)), pdd(size(p)), d(2)
-      real(wp) :: dz(this%item(this%current)%m)
-      call dyn%prescribed(t + dt, pa, pd, pdd)
-      dz = 0.0_wp
-      dz(1:size(p)) = pa - p
-      d = this%item(this%current)%spread(dz)
-      beyond = d(2)**2 > AHEAD_FRACTION * this%tol * d(1)**2
-    end function beyond
-  end function set_centre_time
-
-  !> Record how far the expansion in use is from the exact nodal coordinates x at (p, eta),
-  !> where it is left for another.
-  subroutine set_note_stale(this, model, x, p, eta)
-    class(expansion_set_t), intent(inout) :: this
-    type(model_t), intent(in) :: model
-    real(wp), intent(in) :: x(:), p(:), eta(:)
-    if (this%current == 0) return
-    this%manifold_error = max(this%manifold_error, model%largest_translation(x - &
-      this%item(this%current)%coordinates([p, eta])))
-  end subroutine set_note_stale
 
   !> A new expansion about (t, eta), in an empty slot or the one used longest ago.
   subroutine set_expand(this, dyn, basis, t, eta, err)

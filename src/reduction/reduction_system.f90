@@ -212,9 +212,10 @@ contains
     ! The indicators leave the exact kinematics of this state.
     call this%expansions%note_stale(this%dyn%model, this%dyn%kin%x, p, eta)
     t_centre = this%expansions%centre_time(this%dyn, t, p)
-    call this%expansions%expand(this%dyn, this%basis, t_centre, eta, err)
+    call this%expansions%expand(this%dyn, this%basis, t_centre, &
+      this%expansions%centre_modal(eta, eta_dot), err)
     ! Centred ahead, it may still miss this state by its modal part: then centre it here.
-    if (err%ok() .and. t_centre /= t) then
+    if (err%ok()) then
       if (this%expansions%item(this%expansions%current)%needs_update(p, eta, &
         this%expansions%tol)) call this%expansions%expand(this%dyn, this%basis, t, eta, err)
     end if

@@ -1,0 +1,95 @@
+!> Finding, placing and leaving the kept expansions of a run (reduction_expansion).
+submodule (reduction_expansion) reduction_expansion_set
+  implicit none
+
+contains
+
+  !> Make an expansion that serves (p, eta) current, if one is kept; false if none is.
+  module procedure set_find
+    integer :: i
+    found = .false.
+    this%p_last = p
+    if (.not. allocated(this%item)) return
+    if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta, &
+      this%tol)
+    if (found) return
+    do i = 1, size(this%item)
+      if (i == this%current) cycle
+      if (this%item(i)%needs_update(p, eta, this%tol)) cycle
+      this%current = i
+      found = .true.
+      exit
+    end do
+    if (found) then
+      this%clock = this%clock + 1
+      this%last_use(this%current) = this%clock
+    end if
+  end procedure set_find
+
+  !> Where to centre a new expansion for the state (t, p): the latest time ahead at which the
+  !> prescribed coordinates alone use AHEAD_FRACTION of the tolerance, measured with the
+  !> current expansion's spreads (those of its neighbour differ little); t itself when there is
+  !> no current expansion or the prescribed coordinates stay put. Doubling then bisection keeps
+  !> the criterion met at the time returned, whatever the motion laws do in between.
+  module procedure set_centre_time
+    real(wp) :: lo, hi, tau
+    integer :: i
+    tc = t
+    if (this%current == 0 .or. size(p) == 0) return
+    ! With exact turns the joints' travel costs no range.
+    if (this%item(this%current)%frames%on) return
+    lo = 0.0_wp
+    tau = 1.0e-9_wp * max(1.0_wp, abs(t))
+    do i = 1, 80
+      if (beyond(tau)) exit
+      lo = tau
+      tau = 2 * tau
+    end do
+    if (i > 80) return
+    hi = tau
+    do i = 1, 50
+      tau = 0.5_wp * (lo + hi)
+      if (beyond(tau)) then
+        hi = tau
+      else
+        lo = tau
+      end if
+    end do
+    tc = t + lo
+  contains
+    logical function beyond(dt)
+      real(wp), intent(in) :: dt
+      real(wp) :: pa(size(p)), pd(size(p)), pdd(size(p)), d(2)
+      real(wp) :: dz(this%item(this%current)%m)
+      call dyn%prescribed(t + dt, pa, pd, pdd)
+      dz = 0.0_wp
+      dz(1:size(p)) = pa - p
+      d = this%item(this%current)%spread(dz)
+      beyond = d(2)**2 > AHEAD_FRACTION * this%tol * d(1)**2
+    end function beyond
+  end procedure set_centre_time
+
+  !> Where to centre a new expansion with the turns exact for the state (eta, eta_dot): ahead
+  !> along eta_dot, where the step back to eta uses AHEAD_FRACTION of the tolerance, measured
+  !> with the current expansion's spreads (d1 grows as the step, d2 as its square); eta itself
+  !> without a current expansion with exact turns or without modal motion.
+  module procedure set_centre_modal
+    real(wp) :: d(2)
+    eta_c = eta
+    if (this%current == 0) return
+    if (.not. this%item(this%current)%frames%on) return
+    associate (ex => this%item(this%current))
+      d = ex%spread([spread(0.0_wp, 1, ex%nr), eta_dot])
+    end associate
+    if (d(2) <= 0 .or. d(1) <= 0) return
+    eta_c = eta + (sqrt(AHEAD_FRACTION * this%tol) * d(1) / d(2)) * eta_dot
+  end procedure set_centre_modal
+
+  !> Record how far the expansion in use is from the exact nodal coordinates x at (p, eta),
+  !> where it is left for another.
+  module procedure set_note_stale
+    if (this%current == 0) return
+    this%manifold_error = max(this%manifold_error, model%largest_translation(x - &
+      this%item(this%current)%coordinates([p, eta])))
+  end procedure set_note_stale
+end submodule reduction_expansion_set
