@@ -12,6 +12,7 @@ program test_expansion
   use analysis_run, only: run_t
   use reduction_expansion, only: expansion_t, expansion_set_t, AHEAD_FRACTION, kept_slots
   use testing, only: suite_t
+  use reduction_turns, only: turn_t
   implicit none
   type(suite_t) :: suite
   type(run_t) :: run
@@ -44,6 +45,7 @@ program test_expansion
   call setup('consistent', run, whole=tree_scene())
   call suite%check(ex%frames%on, 'a tree of three turns kept exact')
   call check_far_joints('a tree of three turns')
+  call check_turn_by_parts('a tree of three turns')
   ! 1 GiB of series: all 64 at 389 coordinates (305 kB each), 13 at 10^5 (78 MB), 4 at least.
   call suite%check(kept_slots(389, 6) == 64 .and. kept_slots(10**5, 6) == 13 .and. &
     kept_slots(10**8, 6) == 4, 'kept expansions within the memory budget')
@@ -353,6 +355,28 @@ contains
     call suite%order(coarse(2), fine(2), potential_order, 'potential energy')
   end subroutine check_energies
 
+  !> The parts' turn (frames%turn: one rotation per node) equals the turns' composition
+  !> (apply_turns) on the series' columns and on positions, to round-off (1e-13 relative).
+  subroutine check_turn_by_parts(what)
+    character(len=*), intent(in) :: what
+    real(wp), allocatable :: a(:, :), b(:, :)
+    real(wp) :: delta(size(ex%turns))
+    integer :: i
+    delta = [(0.3_wp * i - 0.7_wp, i = 1, size(delta))]
+    a = ex%x1
+    b = a
+    call ex%frames%turn(delta, a, .false.)
+    call apply_turns(ex%turns, ex%turn_order, delta, b, .false.)
+    call suite%check(maxval(abs(a - b)) <= 1.0e-13_wp * maxval(abs(b)), &
+      'fields turned by parts as by the turns: ' // what)
+    a = reshape(ex%x0, [size(ex%x0), 1])
+    b = a
+    call ex%frames%turn(delta, a, .true.)
+    call apply_turns(ex%turns, ex%turn_order, delta, b, .true.)
+    call suite%check(maxval(abs(a - b)) <= 1.0e-13_wp * maxval(abs(b)), &
+      'positions turned by parts as by the turns: ' // what)
+  end subroutine check_turn_by_parts
+
   !> With the turns exact (reduction_frames) the expansion serves any joint angles: at the
   !> expansion's modal coordinates the accelerations, energies and coordinates agree with the
   !> exact ones to round-off however far the joints have turned, the modal step keeps its
@@ -365,6 +389,7 @@ contains
     call suite%check(ex%frames%on, 'the turns kept exact (consistent masses)')
     call check_at_point()
     call check_far_joints('consistent masses')
+    call check_turn_by_parts('two-link')
     call suite%order(far_accel_error(0.5_wp), far_accel_error(0.25_wp), 2, &
       'accelerations 0.35 rad of the joints away, modal step (coefficients to first order)')
     call set%expand(run%red%dyn, run%red%basis, T0, eta0, err)
@@ -426,4 +451,40 @@ contains
     a = exact_accel(T0 + 0.06_wp, eta0 + s * d_eta)
     e = maxval(abs(expanded_accel(T0 + 0.06_wp, eta0 + s * d_eta) - a)) / maxval(abs(a))
   end function far_accel_error
+
+  !> The reference for frames%turn: the turns applied one after the other (children first, in
+  !> turn_order's order) to v(:, c), configurations at joint angles p0 turned to p0 + delta
+  !> (positions) or fields of one (.not. positions: the angles keep their values), in place.
+  pure subroutine apply_turns(turns, order, delta, v, positions)
+    type(turn_t), intent(in) :: turns(:)
+    integer, intent(in) :: order(:)
+    real(wp), intent(in) :: delta(:)
+    real(wp), intent(inout) :: v(:, :)
+    logical, intent(in) :: positions
+    real(wp) :: cx, cy, co, si, rx, ry
+    integer :: o, j, i, ix, iy, c
+    do o = 1, size(order)
+      j = order(o)
+      if (delta(j) == 0) cycle
+      co = cos(delta(j))
+      si = sin(delta(j))
+      do c = 1, size(v, 2)
+        cx = v(turns(j)%centre(1), c)
+        cy = v(turns(j)%centre(2), c)
+        do i = 1, size(turns(j)%moving, 2)
+          ix = turns(j)%moving(1, i)
+          iy = turns(j)%moving(2, i)
+          rx = v(ix, c) - cx
+          ry = v(iy, c) - cy
+          v(ix, c) = cx + co * rx - si * ry
+          v(iy, c) = cy + si * rx + co * ry
+        end do
+        if (positions) then
+          do i = 1, size(turns(j)%angles)
+            v(turns(j)%angles(i), c) = v(turns(j)%angles(i), c) + delta(j)
+          end do
+        end if
+      end do
+    end do
+  end subroutine apply_turns
 end program test_expansion

@@ -34,8 +34,7 @@ module reduction_expansion
   use model_system, only: model_t
   use dynamics_system, only: dynamics_t
   use reduction_basis, only: basis_t
-  use reduction_turns, only: turn_t, find_turns, turn_derivative, apply_turns, &
-    apply_turns_transposed
+  use reduction_turns, only: turn_t, find_turns, turn_derivative, apply_turns_transposed
   use reduction_frames, only: frames_t
   implicit none
   private
@@ -399,8 +398,7 @@ contains
     call gemv_add(size(x), size(w3), this%x3(1, c0), w3, x)
     if (this%frames%on) then
       xs = reshape(x, [size(x), 1])
-      call apply_turns(this%turns, this%turn_order, z(1:this%nr) - this%z0(1:this%nr), xs, &
-        .true.)
+      call this%frames%turn(z(1:this%nr) - this%z0(1:this%nr), xs, .true.)
       x = xs(:, 1)
     end if
   end function exp_coordinates
@@ -458,8 +456,7 @@ contains
       call gemv_add(n, this%k, this%x1(1, this%nr + 1), eta_new, xs(:, 3))
     end if
     ! With the turns exact, W = L W0: all three are fields (DF_dy q).
-    if (this%frames%on) call apply_turns(this%turns, this%turn_order, p - &
-      this%z0(1:this%nr), xs, .false.)
+    if (this%frames%on) call this%frames%turn(p - this%z0(1:this%nr), xs, .false.)
     norm = model%error_norm(xs(:, 1), max(abs(xs(:, 2)), abs(xs(:, 3))), rtol, atol)
   end subroutine exp_error_norm
 end module reduction_expansion

@@ -44,12 +44,15 @@ module reduction_frames
     !> Nodal loads f and J f of each part on W to first order, and their sum.
     real(wp), allocatable :: l0(:, :, :), l1(:, :, :, :), lsum(:, :)
     real(wp), allocatable :: r0(:, :)             !< element momenta at x0 (n, 2 nr)
+    !> The turned nodes (x, y, part) and angle coordinates (coordinate, part).
+    integer, allocatable :: turned_pairs(:, :), turned_angles(:, :)
   contains
     procedure :: setup => frames_setup
     procedure :: mass_change => frames_mass_change
     procedure :: correction => frames_correction
     procedure :: kinetic => frames_kinetic
     procedure :: potential => frames_potential
+    procedure :: turn => frames_turn
   end type frames_t
 
   interface
@@ -170,6 +173,49 @@ contains
         dot_product(this%g, sp(:, j))
     end do
   end function frames_potential
+
+  !> v <- L(delta) v for each column of v, fields or (positions) configurations, whose angle
+  !> coordinates also turn by their parts' angles: on part j, L v = R_j v + s_j with
+  !> s_j = s_parent + (R_parent - R_j) v_centre from the unturned values, one pass per column
+  !> (the turns composed, O(n) with one rotation per node; the test's reference applies them
+  !> one by one).
+  pure subroutine frames_turn(this, delta, v, positions)
+    class(frames_t), intent(in) :: this
+    real(wp), intent(in) :: delta(:)
+    real(wp), intent(inout) :: v(:, :)
+    logical, intent(in) :: positions
+    real(wp) :: rot(2, 2, this%nr), s(2, this%nr), psi(this%nr), rp(2, 2), vx, vy
+    integer :: o, j, p, c, t
+    do j = 1, this%nr
+      psi(j) = sum(delta, mask=this%inside(:, j))
+      rot(:, :, j) = rotation(psi(j))
+    end do
+    do c = 1, size(v, 2)
+      do o = 1, this%nr
+        j = this%order(o)
+        p = this%parent(j)
+        rp = EYE
+        if (p > 0) rp = rot(:, :, p)
+        s(:, j) = matmul(rp - rot(:, :, j), v(this%centre(:, j), c))
+        if (p > 0) s(:, j) = s(:, j) + s(:, p)
+      end do
+      do t = 1, size(this%turned_pairs, 2)
+        associate (ix => this%turned_pairs(1, t), iy => this%turned_pairs(2, t), &
+          r => rot(:, :, this%turned_pairs(3, t)), sj => s(:, this%turned_pairs(3, t)))
+          vx = v(ix, c)
+          vy = v(iy, c)
+          v(ix, c) = r(1, 1) * vx + r(1, 2) * vy + sj(1)
+          v(iy, c) = r(2, 1) * vx + r(2, 2) * vy + sj(2)
+        end associate
+      end do
+      if (.not. positions) cycle
+      do t = 1, size(this%turned_angles, 2)
+        associate (i => this%turned_angles(1, t))
+          v(i, c) = v(i, c) + psi(this%turned_angles(2, t))
+        end associate
+      end do
+    end do
+  end subroutine frames_turn
 
   !> C, its Christoffel terms gam at the rates zd and the parts' translations s_j of W's
   !> columns, for the parts' rotations rot and series ser (part_series). With a = tau zd,

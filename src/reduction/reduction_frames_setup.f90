@@ -172,6 +172,14 @@ contains
       if (this%coord_part(i) > 0 .and. this%pair_of(i) == 0 .and. &
         any(model%coord_kind(i) == [COORD_X, COORD_Y])) return
     end do
+    ! What frames_turn visits: the turned nodes' x and y and the turned angles, with parts.
+    this%turned_pairs = reshape([(pairs(:, i), this%coord_part(pairs(1, i)), i = 1, np)], &
+      [3, np])
+    this%turned_pairs = this%turned_pairs(:, pack([(i, i = 1, np)], this%turned_pairs(3, :) > &
+      0))
+    this%turned_angles = reshape([(i, this%coord_part(i), i = 1, model%n_x)], [2, model%n_x])
+    this%turned_angles = this%turned_angles(:, pack([(i, i = 1, model%n_x)], &
+      this%turned_angles(2, :) > 0 .and. this%pair_of(this%turned_angles(1, :)) == 0))
     this%el_part = [(0, iel = 1, model%n_elements)]
     do iel = 1, model%n_elements
       call block_of(mass, iel, first, d0, nd)

@@ -20,7 +20,7 @@ module reduction_turns
   use model_system, only: model_t, COORD_PHI
   implicit none
   private
-  public :: turn_t, find_turns, turn_derivative, turn_order, apply_turns, apply_turns_transposed
+  public :: turn_t, find_turns, turn_derivative, turn_order, apply_turns_transposed
   public :: rotation, position_pairs, CHECK_ANGLE
 
   !> Relative tolerance of the tests on X1's entries (they come from solves: round-off about
@@ -83,45 +83,9 @@ contains
     call sort_by_key(order, [(size(turns(j)%moving, 2), j = 1, size(turns))])
   end function turn_order
 
-  !> The configurations v(:, c) of joint angles p0 turned to p0 + delta (positions) or fields
-  !> of one, derivatives of x along z (.not. positions: the angles keep their values), in
-  !> place.
-  pure subroutine apply_turns(turns, order, delta, v, positions)
-    type(turn_t), intent(in) :: turns(:)
-    integer, intent(in) :: order(:)
-    real(wp), intent(in) :: delta(:)
-    real(wp), intent(inout) :: v(:, :)
-    logical, intent(in) :: positions
-    real(wp) :: cx, cy, co, si, rx, ry
-    integer :: o, j, i, ix, iy, c
-    ! Called per error norm: no array temporaries.
-    do o = 1, size(order)
-      j = order(o)
-      if (delta(j) == 0) cycle
-      co = cos(delta(j))
-      si = sin(delta(j))
-      do c = 1, size(v, 2)
-        cx = v(turns(j)%centre(1), c)
-        cy = v(turns(j)%centre(2), c)
-        do i = 1, size(turns(j)%moving, 2)
-          ix = turns(j)%moving(1, i)
-          iy = turns(j)%moving(2, i)
-          rx = v(ix, c) - cx
-          ry = v(iy, c) - cy
-          v(ix, c) = cx + co * rx - si * ry
-          v(iy, c) = cy + si * rx + co * ry
-        end do
-        if (positions) then
-          do i = 1, size(turns(j)%angles)
-            v(turns(j)%angles(i), c) = v(turns(j)%angles(i), c) + delta(j)
-          end do
-        end if
-      end do
-    end do
-  end subroutine apply_turns
-
-  !> f <- L^T f for the linear map L of apply_turns on fields (the generalised forces of nodal
-  !> loads f at the turned configuration, on the fields of the unturned one).
+  !> f <- L^T f for the turns' linear map L on fields (reduction_frames' turn): the
+  !> generalised forces of nodal loads f at the turned configuration, on the fields of the
+  !> unturned one.
   pure subroutine apply_turns_transposed(turns, order, delta, f)
     type(turn_t), intent(in) :: turns(:)
     integer, intent(in) :: order(:)
