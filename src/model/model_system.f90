@@ -348,20 +348,20 @@ contains
   pure real(wp) function model_error_norm(this, dx, motion, rtol, atol) result(norm)
     class(model_t), intent(in) :: this
     real(wp), intent(in) :: dx(:), motion(:), rtol, atol
-    real(wp) :: largest(2)
-    integer :: i
-    ! Loops, not masked intrinsics: this runs at every step of the integrators.
+    real(wp) :: largest(2), step(2)
+    integer :: i, kind
+    ! One loop, not masked intrinsics: this runs at every step of the integrators. Within a
+    ! kind the scale is common, so the largest ratio is the largest step over it.
     largest = -huge(1.0_wp)
+    step = 0.0_wp
     do i = 1, size(dx)
-      associate (kind => merge(1, 2, is_rotation(this%coord_kind(i))))
-        largest(kind) = max(largest(kind), motion(i))
-      end associate
+      kind = merge(1, 2, is_rotation(this%coord_kind(i)))
+      largest(kind) = max(largest(kind), motion(i))
+      step(kind) = max(step(kind), abs(dx(i)))
     end do
     norm = 0.0_wp
-    do i = 1, size(dx)
-      associate (kind => merge(1, 2, is_rotation(this%coord_kind(i))))
-        norm = max(norm, abs(dx(i)) / (atol + rtol * largest(kind)))
-      end associate
+    do kind = 1, 2
+      if (step(kind) > 0) norm = max(norm, step(kind) / (atol + rtol * largest(kind)))
     end do
   end function model_error_norm
 
