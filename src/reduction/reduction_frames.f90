@@ -184,8 +184,8 @@ contains
     real(wp), intent(in) :: delta(:)
     real(wp), intent(inout) :: v(:, :)
     logical, intent(in) :: positions
-    real(wp) :: rot(2, 2, this%nr), s(2, this%nr), psi(this%nr), rp(2, 2), vx, vy
-    integer :: o, j, p, c, t
+    real(wp) :: rot(2, 2, this%nr), s(2, this%nr), psi(this%nr), rp(2, 2), vc(2), vx, vy
+    integer :: o, j, p, c, t, ix, iy
     do j = 1, this%nr
       psi(j) = sum(delta, mask=this%inside(:, j))
       rot(:, :, j) = rotation(psi(j))
@@ -196,17 +196,18 @@ contains
         p = this%parent(j)
         rp = EYE
         if (p > 0) rp = rot(:, :, p)
-        s(:, j) = matmul(rp - rot(:, :, j), v(this%centre(:, j), c))
+        vc = [v(this%centre(1, j), c), v(this%centre(2, j), c)]
+        s(:, j) = matmul(rp - rot(:, :, j), vc)
         if (p > 0) s(:, j) = s(:, j) + s(:, p)
       end do
       do t = 1, size(this%turned_pairs, 2)
-        associate (ix => this%turned_pairs(1, t), iy => this%turned_pairs(2, t), &
-          r => rot(:, :, this%turned_pairs(3, t)), sj => s(:, this%turned_pairs(3, t)))
-          vx = v(ix, c)
-          vy = v(iy, c)
-          v(ix, c) = r(1, 1) * vx + r(1, 2) * vy + sj(1)
-          v(iy, c) = r(2, 1) * vx + r(2, 2) * vy + sj(2)
-        end associate
+        ix = this%turned_pairs(1, t)
+        iy = this%turned_pairs(2, t)
+        j = this%turned_pairs(3, t)
+        vx = v(ix, c)
+        vy = v(iy, c)
+        v(ix, c) = rot(1, 1, j) * vx + rot(1, 2, j) * vy + s(1, j)
+        v(iy, c) = rot(2, 1, j) * vx + rot(2, 2, j) * vy + s(2, j)
       end do
       if (.not. positions) cycle
       do t = 1, size(this%turned_angles, 2)
@@ -346,24 +347,29 @@ contains
   !> change).
   pure subroutine series_rates(m, nr, j, at, v0, v1, v2, dz, zd, vr)
     integer, intent(in) :: m, nr, j, at
-    ! The (2, m) columns flat as 2 m numbers (sequence association): contiguous loops.
-    real(wp), intent(in) :: v0(2 * m, nr), v1(2 * m, m, nr), v2(2 * m, m, m, nr), dz(m), zd(m)
+    ! The (2, m) columns flat (sequence association): the modal directions' columns are one
+    ! contiguous run of 2 m (m - nr) numbers, and the dz contraction runs over all at once.
+    real(wp), intent(in) :: v0(2 * m, nr), v1(2 * m * m, nr), v2(2 * m * m, m, nr), dz(m), &
+      zd(m)
     real(wp), intent(inout) :: vr(2 * m, 6, nr)
-    real(wp) :: dv(2 * m), v(2 * m), v_dot(2 * m)
-    integer :: l, r, a
+    real(wp) :: dv(2 * m * m), v(2 * m), v_dot(2 * m)
+    integer :: l, r, a, lo, hi, c
+    lo = 2 * m * nr + 1
+    hi = 2 * m * m
+    dv(lo:hi) = v1(lo:hi, j)
+    do r = nr + 1, m
+      dv(lo:hi) = dv(lo:hi) + dz(r) * v2(lo:hi, r, j)
+    end do
     v = v0(:, j)
     v_dot = 0.0_wp
     vr(:, at + 3, j) = 0.0_wp
     do l = nr + 1, m
-      dv = v1(:, l, j)
-      do r = nr + 1, m
-        dv = dv + dz(r) * v2(:, l, r, j)
-      end do
-      v = v + 0.5_wp * dz(l) * (v1(:, l, j) + dv)
-      v_dot = v_dot + zd(l) * dv
+      c = 2 * m * (l - 1)
+      v = v + (0.5_wp * dz(l)) * (v1(c + 1:c + 2 * m, j) + dv(c + 1:c + 2 * m))
+      v_dot = v_dot + zd(l) * dv(c + 1:c + 2 * m)
       do a = 1, m
-        vr(2 * l - 1, at + 3, j) = vr(2 * l - 1, at + 3, j) + dv(2 * a - 1) * zd(a)
-        vr(2 * l, at + 3, j) = vr(2 * l, at + 3, j) + dv(2 * a) * zd(a)
+        vr(2 * l - 1, at + 3, j) = vr(2 * l - 1, at + 3, j) + dv(c + 2 * a - 1) * zd(a)
+        vr(2 * l, at + 3, j) = vr(2 * l, at + 3, j) + dv(c + 2 * a) * zd(a)
       end do
     end do
     vr(:, at + 1, j) = v
