@@ -15,7 +15,7 @@ contains
   module procedure exp_build
     real(wp), allocatable :: tz(:, :), mx1(:, :), mx2(:, :), mx3(:, :), dmx(:, :), gh(:, :)
     real(wp), allocatable :: xl(:), fw0(:), fwl(:), x12(:, :), conv_l(:, :), zero(:)
-    real(wp), allocatable :: x2mx2(:, :)
+    real(wp), allocatable :: x2mx2(:, :), x1mx2(:, :)
     real(wp) :: p(dyn%model%n_rh), pd(dyn%model%n_rh), pdd(dyn%model%n_rh), hl, size_x, vg
     type(element_mass_t) :: mass_l
     integer :: n, nr, k, m, l, i, first
@@ -82,7 +82,9 @@ contains
     this%a = matmul(transpose(this%x1), mx1)
     this%f1 = matmul(this%load0 + fw0, this%x1)
     this%gw1 = matmul(fw0, this%x1)
-    this%g0 = reshape(matmul(transpose(this%x1), mx2 + gh), [m, m, m])
+    ! X1^T M X2 serves g0 here and b below.
+    x1mx2 = matmul(transpose(this%x1), mx2)
+    this%g0 = reshape(x1mx2 + matmul(transpose(this%x1), gh), [m, m, m])
     if (allocated(this%b)) deallocate(this%b, this%g1, this%f2, this%gw2)
     allocate(this%b(m, m, m), this%g1(m, m, m, m), this%f2(m, m), this%gw2(m, m))
     ! First-order changes along each column of X1: of W (X2), of the element masses and
@@ -102,11 +104,11 @@ contains
       hl = MASS_STEP * size_x / max(tiny(1.0_wp), maxval(abs(this%x1(:, l))))
       xl = this%x0 + hl * this%x1(:, l)
       call element_masses(dyn, xl, mass_l)
-      call this%frames%mass_change(dyn%model, mass_l, l, hl, this%x1, this%x2)
+      call this%frames%mass_change(dyn%model, mass_l, l, hl, this%x1, x12(:, m + 1:))
       ! X1^T dM [X1, X2] along X1_l = (dM X1)^T [X1, X2]: dM is symmetric
       dmx = matmul(transpose(mass_l%difference_times(dyn%mass, dyn%model, this%x1)), x12) / hl
       fwl = (element_weights(dyn, xl, vg) - fw0) / hl
-      this%b(:, :, l) = matmul(transpose(this%x1), mx2(:, (l - 1) * m + 1:l * m))
+      this%b(:, :, l) = x1mx2(:, (l - 1) * m + 1:l * m)
       this%b(:, :, l) = this%b(:, :, l) + transpose(this%b(:, :, l)) + dmx(:, 1:m)
       conv_l = dmx(:, m + 1:) + mx3(:, (l - 1) * m * m + 1:l * m * m)
       do i = 1, m

@@ -69,13 +69,14 @@ module reduction_frames
       type(turn_t), intent(in) :: turns(:)
     end subroutine frames_setup
     !> The first-order change of the element masses along X1_l (element masses mass_l at
-    !> x0 + h X1_l): into G's and the weights' terms along l (reduction_frames_setup).
+    !> x0 + h X1_l): into G's and the weights' terms along l (reduction_frames_setup). x2:
+    !> X2 flat, (n, m^2).
     module subroutine frames_mass_change(this, model, mass_l, l, h, x1, x2)
       class(frames_t), intent(inout) :: this
       type(model_t), intent(in) :: model
       type(element_mass_t), intent(in) :: mass_l
       integer, intent(in) :: l
-      real(wp), intent(in) :: h, x1(:, :), x2(:, :, :)
+      real(wp), intent(in) :: h, x1(:, :), x2(:, :)
     end subroutine frames_mass_change
   end interface
 
@@ -150,13 +151,14 @@ contains
       j = this%order(o)
       yc = this%y0(:, j)
       moment = this%moment0(:, j)
-      do l = 1, this%m
+      ! dz is the modal step only (dz(1:nr) = 0).
+      do l = this%nr + 1, this%m
         yc = yc + dz(l) * this%c1(:, l, j)
         moment = moment + dz(l) * this%w0(:, l, j)
-        do r = 1, this%m
+        do r = this%nr + 1, this%m
           yc = yc + dz(l) * dz(r) / 2 * this%c2(:, l, r, j)
           moment = moment + dz(l) * dz(r) / 2 * this%w1(:, l, r, j)
-          do a = 1, this%m
+          do a = this%nr + 1, this%m
             yc = yc + dz(l) * dz(r) * dz(a) / 6 * this%c3(:, a, l, r, j)
           end do
         end do

@@ -15,7 +15,7 @@ contains
 
   module procedure frames_setup
     real(wp), allocatable :: rl(:, :), loads(:, :), rall(:, :), pr1(:, :), pr2(:, :)
-    real(wp), allocatable :: pr3(:, :), pw1(:, :), pw2(:, :), pl1(:, :), pl2(:, :)
+    real(wp), allocatable :: pr3(:, :), pw1(:, :), pw2(:, :), pl1(:, :), pl2(:, :), x2f(:, :)
     integer :: j, a, l, r, i, nr, m, n
     logical :: ok
     nr = size(turns)
@@ -63,9 +63,10 @@ contains
     pr1 = matmul(transpose(rall), x1)
     pw1 = matmul(transpose(this%r0), x1)
     pl1 = matmul(transpose(loads), x1)
-    pr2 = matmul(transpose(rall), reshape(x2, [n, m * m]))
-    pw2 = matmul(transpose(this%r0), reshape(x2, [n, m * m]))
-    pl2 = matmul(transpose(loads), reshape(x2, [n, m * m]))
+    x2f = reshape(x2, [n, m * m])
+    pr2 = matmul(transpose(rall), x2f)
+    pw2 = matmul(transpose(this%r0), x2f)
+    pl2 = matmul(transpose(loads), x2f)
     pr3 = matmul(transpose(rall), x3)
     do j = 1, nr
       associate (cj => this%centre(:, j), cols => [2 * j - 1, 2 * j])
@@ -334,8 +335,7 @@ contains
     call element_momenta(this, model, mass_l, dr)
     dr = (dr - this%r0) / h
     d1 = matmul(transpose(dr), x1)
-    d2 = reshape(matmul(transpose(dr), reshape(x2, [size(x1, 1), this%m**2])), &
-      [2 * this%nr, this%m, this%m])
+    d2 = reshape(matmul(transpose(dr), x2), [2 * this%nr, this%m, this%m])
     do j = 1, this%nr
       associate (cols => [2 * j - 1, 2 * j])
         this%g1(:, :, l, j) = this%g1(:, :, l, j) + d1(cols, :)
