@@ -4,7 +4,12 @@ module core_linalg
   implicit none
   private
   public :: single_thread_blas, steady_heap, lu_factor, lu_solve, lu_solve_vector, chol_factor, chol_solve, sym_gen_eig, &
-    gen_eig_values, solve_dense, gemv_add
+    gen_eig_values, solve_dense, gemv_add, SMALL_DENSE
+
+  !> Up to this order the Cholesky factorisation and its solves run here, not in LAPACK, whose
+  !> call overhead is most of their cost at these sizes (a reduced model's mass at every
+  !> evaluation: k = 4, 2.3 k instructions per solve through dpotrs).
+  integer, parameter :: SMALL_DENSE = 8
 
   interface
     subroutine dgetrf(m, n, a, lda, ipiv, info)
@@ -125,18 +130,49 @@ contains
   end subroutine lu_solve_vector
 
   !> Cholesky factorisation in place (lower). info = k > 0: leading minor k not positive.
+  !> a = L L^T, L in the lower triangle (the strict upper one untouched); info = j > 0 where
+  !> the leading minor of order j is not positive definite (LAPACK's dpotrf convention).
   subroutine chol_factor(a, info)
     real(wp), intent(inout) :: a(:, :)
     integer, intent(out) :: info
-    call dpotrf('L', size(a, 1), a, max(size(a, 1), 1), info)
+    real(wp) :: d
+    integer :: n, i, j
+    n = size(a, 1)
+    if (n > SMALL_DENSE) then
+      call dpotrf('L', n, a, max(n, 1), info)
+      return
+    end if
+    info = 0
+    do j = 1, n
+      d = a(j, j) - dot_product(a(j, 1:j - 1), a(j, 1:j - 1))
+      ! Not positive, or NaN.
+      if (.not. d > 0) then
+        info = j
+        return
+      end if
+      a(j, j) = sqrt(d)
+      do i = j + 1, n
+        a(i, j) = (a(i, j) - dot_product(a(i, 1:j - 1), a(j, 1:j - 1))) / a(j, j)
+      end do
+    end do
   end subroutine chol_factor
 
+  !> b <- (L L^T)^-1 b with L from chol_factor.
   subroutine chol_solve(a, b)
     real(wp), intent(in) :: a(:, :)
     real(wp), intent(inout) :: b(:)
-    integer :: n, info
+    integer :: n, info, i
     n = size(a, 1)
-    call dpotrs('L', n, 1, a, n, b, n, info)
+    if (n > SMALL_DENSE) then
+      call dpotrs('L', n, 1, a, n, b, n, info)
+      return
+    end if
+    do i = 1, n
+      b(i) = (b(i) - dot_product(a(i, 1:i - 1), b(1:i - 1))) / a(i, i)
+    end do
+    do i = n, 1, -1
+      b(i) = (b(i) - dot_product(a(i + 1:n, i), b(i + 1:n))) / a(i, i)
+    end do
   end subroutine chol_solve
 
   !> Solve a general dense system a x = b (b overwritten by x); info /= 0 if singular.
@@ -210,7 +246,16 @@ contains
     integer, intent(in) :: rows, cols
     real(wp), intent(in) :: a(rows, cols), x(cols)
     real(wp), intent(inout) :: y(rows)
+    integer :: j
     if (rows == 0 .or. cols == 0) return
+    ! Products with a handful of rows (the expanded evaluation's, m <= 8) are mostly BLAS's
+    ! call overhead: column by column here, y in registers (from m^2 = 36 rows BLAS is faster).
+    if (rows <= SMALL_DENSE .and. cols <= SMALL_DENSE**2) then
+      do j = 1, cols
+        y = y + x(j) * a(:, j)
+      end do
+      return
+    end if
     call dgemv('N', rows, cols, 1.0_wp, a, rows, x, 1, 1.0_wp, y, 1)
   end subroutine gemv_add
 end module core_linalg
