@@ -402,17 +402,21 @@ contains
 
   !> With the turns exact a new expansion is centred ahead along the modal rates, where the
   !> step back to the state uses AHEAD_FRACTION of the tolerance (by the current expansion's
-  !> spreads: d1 grows as the step, d2 as its square, so this holds to round-off).
+  !> spreads: d1 grows as the step, d2 as its square, so this holds to round-off), but no
+  !> further than tau_max ahead.
   subroutine check_centre_modal(set)
     type(expansion_set_t), intent(in) :: set
     real(wp) :: eta_c(3), dz(5), d(2)
-    eta_c = set%centre_modal(eta0, eta_dot)
+    eta_c = set%centre_modal(eta0, eta_dot, huge(1.0_wp))
     dz(1:2) = 0.0_wp
     dz(3:) = eta0 - eta_c
     d = set%item(set%current)%spread(dz)
     call suite%check(all(eta_c /= eta0) .and. abs(d(2)**2 / (d(1)**2 * AHEAD_FRACTION * &
       set%tol) - 1) < 1.0e-10_wp, 'a new expansion is centred ahead along the modal rates')
-    eta_c = set%centre_modal(eta0, 0 * eta_dot)
+    eta_c = set%centre_modal(eta0, eta_dot, 1.0e-4_wp)
+    call suite%check(all(abs(eta_c - (eta0 + 1.0e-4_wp * eta_dot)) <= 1.0e-15_wp), &
+      'no further ahead than tau_max')
+    eta_c = set%centre_modal(eta0, 0 * eta_dot, huge(1.0_wp))
     call suite%check(all(eta_c == eta0), 'without modal rates it is centred at the state')
   end subroutine check_centre_modal
 

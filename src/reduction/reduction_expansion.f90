@@ -157,9 +157,9 @@ module reduction_expansion
       real(wp), intent(in) :: t, p(:)
     end function set_centre_time
     !> Where along the modal rates to centre one with the turns exact (reduction_expansion_set).
-    module function set_centre_modal(this, eta, eta_dot) result(eta_c)
+    module function set_centre_modal(this, eta, eta_dot, tau_max) result(eta_c)
       class(expansion_set_t), intent(in) :: this
-      real(wp), intent(in) :: eta(:), eta_dot(:)
+      real(wp), intent(in) :: eta(:), eta_dot(:), tau_max
       real(wp) :: eta_c(size(eta))
     end function set_centre_modal
     !> The expansion's distance from the exact x where it is left (reduction_expansion_set).

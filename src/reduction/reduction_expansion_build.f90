@@ -19,6 +19,8 @@ contains
     real(wp) :: p(dyn%model%n_rh), pd(dyn%model%n_rh), pdd(dyn%model%n_rh), hl, size_x, vg
     type(element_mass_t) :: mass_l
     integer :: n, nr, k, m, l, i, first
+    ! Not usable until complete (a failed build may be retried elsewhere in this slot).
+    this%valid = .false.
     nr = dyn%model%n_rh
     k = size(eta)
     m = nr + k

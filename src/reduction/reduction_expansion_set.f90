@@ -71,10 +71,11 @@ contains
 
   !> Where to centre a new expansion with the turns exact for the state (eta, eta_dot): ahead
   !> along eta_dot, where the step back to eta uses AHEAD_FRACTION of the tolerance, measured
-  !> with the current expansion's spreads (d1 grows as the step, d2 as its square); eta itself
-  !> without a current expansion with exact turns or without modal motion.
+  !> with the current expansion's spreads (d1 grows as the step, d2 as its square), but no
+  !> more than tau_max [s] ahead (where nearly linear kinematics would put it out of reach);
+  !> eta itself without a current expansion with exact turns or without modal motion.
   module procedure set_centre_modal
-    real(wp) :: d(2)
+    real(wp) :: d(2), tau
     eta_c = eta
     if (this%current == 0) return
     if (.not. this%item(this%current)%frames%on) return
@@ -82,7 +83,8 @@ contains
       d = ex%spread([spread(0.0_wp, 1, ex%nr), eta_dot])
     end associate
     if (d(2) <= 0 .or. d(1) <= 0) return
-    eta_c = eta + (sqrt(AHEAD_FRACTION * this%tol) * d(1) / d(2)) * eta_dot
+    tau = min(tau_max, sqrt(AHEAD_FRACTION * this%tol) * d(1) / d(2))
+    eta_c = eta + tau * eta_dot
   end procedure set_centre_modal
 
   !> Record how far the expansion in use is from the exact nodal coordinates x at (p, eta),

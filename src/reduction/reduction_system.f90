@@ -204,7 +204,7 @@ contains
     real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
     type(error_t), intent(out) :: err
     real(wp) :: dq(this%dyn%model%n_dy), q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
-    real(wp) :: t_centre
+    real(wp) :: t_centre, eta_c(size(eta)), tau_max
     call this%full_state(eta, eta_dot, q_dy, v_dy)
     call indicators(this, t, eta, eta_dot, q_dy, v_dy, this%expansion_residual, &
       this%expansion_estimate, dq, err)
@@ -212,13 +212,25 @@ contains
     ! The indicators leave the exact kinematics of this state.
     call this%expansions%note_stale(this%dyn%model, this%dyn%kin%x, p, eta)
     t_centre = this%expansions%centre_time(this%dyn, t, p)
-    call this%expansions%expand(this%dyn, this%basis, t_centre, &
-      this%expansions%centre_modal(eta, eta_dot), err)
-    ! Centred ahead, it may still miss this state by its modal part: then centre it here.
-    if (err%ok()) then
-      if (this%expansions%item(this%expansions%current)%needs_update(p, eta, &
-        this%expansions%tol)) call this%expansions%expand(this%dyn, this%basis, t, eta, err)
+    ! Along the modal rates no further than a quarter period of the lowest mode, where the
+    ! motion may turn back.
+    tau_max = 0.0_wp
+    if (allocated(this%basis%frequency_hz)) then
+      if (size(this%basis%frequency_hz) > 0) then
+        if (this%basis%frequency_hz(1) > 0) tau_max = 0.25_wp / this%basis%frequency_hz(1)
+      end if
     end if
+    eta_c = this%expansions%centre_modal(eta, eta_dot, tau_max)
+    call this%expansions%expand(this%dyn, this%basis, t_centre, eta_c, err)
+    ! Centred ahead, it may fail there (the kinematics) or still miss this state: then centre
+    ! it here.
+    if (err%ok()) then
+      if (.not. this%expansions%item(this%expansions%current)%needs_update(p, eta, &
+        this%expansions%tol)) return
+    else if (t_centre == t .and. all(eta_c == eta)) then
+      return
+    end if
+    call this%expansions%expand(this%dyn, this%basis, t, eta, err)
   end subroutine new_expansion
 
   !> V^T of the full model's linearised Jacobian: -(V^T Mbar V)^-1 V^T [K0, D0] V, with the
