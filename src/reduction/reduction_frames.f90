@@ -44,8 +44,9 @@ module reduction_frames
     !> Nodal loads f and J f of each part on W to first order, and their sum.
     real(wp), allocatable :: l0(:, :, :), l1(:, :, :, :), lsum(:, :)
     real(wp), allocatable :: r0(:, :)             !< element momenta at x0 (n, 2 nr)
-    !> The turned nodes (x, y, part) and angle coordinates (coordinate, part).
-    integer, allocatable :: turned_pairs(:, :), turned_angles(:, :)
+    !> The turned nodes (x, y) part by part, part j's from part_run(j) to part_run(j + 1) - 1,
+    !> and the turned angle coordinates (coordinate, part).
+    integer, allocatable :: turned_pairs(:, :), part_run(:), turned_angles(:, :)
   contains
     procedure :: setup => frames_setup
     procedure :: mass_change => frames_mass_change
@@ -186,37 +187,48 @@ contains
     real(wp), intent(in) :: delta(:)
     real(wp), intent(inout) :: v(:, :)
     logical, intent(in) :: positions
-    real(wp) :: rot(2, 2, this%nr), s(2, this%nr), psi(this%nr), rp(2, 2), vc(2), vx, vy
+    real(wp) :: rot(2, 2, this%nr), s(2, size(v, 2), this%nr), psi(this%nr), rp(2, 2), vc(2)
+    real(wp) :: vx, vy, r11, r12, r21, r22, s1, s2
     integer :: o, j, p, c, t, ix, iy
     do j = 1, this%nr
       psi(j) = sum(delta, mask=this%inside(:, j))
       rot(:, :, j) = rotation(psi(j))
     end do
-    do c = 1, size(v, 2)
-      do o = 1, this%nr
-        j = this%order(o)
-        p = this%parent(j)
-        rp = EYE
-        if (p > 0) rp = rot(:, :, p)
+    do o = 1, this%nr
+      j = this%order(o)
+      p = this%parent(j)
+      rp = EYE
+      if (p > 0) rp = rot(:, :, p)
+      do c = 1, size(v, 2)
         vc = [v(this%centre(1, j), c), v(this%centre(2, j), c)]
-        s(:, j) = matmul(rp - rot(:, :, j), vc)
-        if (p > 0) s(:, j) = s(:, j) + s(:, p)
+        s(:, c, j) = matmul(rp - rot(:, :, j), vc)
+        if (p > 0) s(:, c, j) = s(:, c, j) + s(:, c, p)
       end do
-      do t = 1, size(this%turned_pairs, 2)
-        ix = this%turned_pairs(1, t)
-        iy = this%turned_pairs(2, t)
-        j = this%turned_pairs(3, t)
-        vx = v(ix, c)
-        vy = v(iy, c)
-        v(ix, c) = rot(1, 1, j) * vx + rot(1, 2, j) * vy + s(1, j)
-        v(iy, c) = rot(2, 1, j) * vx + rot(2, 2, j) * vy + s(2, j)
+    end do
+    ! Part by part: its rotation and translation stay in registers over its nodes.
+    do c = 1, size(v, 2)
+      do j = 1, this%nr
+        r11 = rot(1, 1, j)
+        r12 = rot(1, 2, j)
+        r21 = rot(2, 1, j)
+        r22 = rot(2, 2, j)
+        s1 = s(1, c, j)
+        s2 = s(2, c, j)
+        do t = this%part_run(j), this%part_run(j + 1) - 1
+          ix = this%turned_pairs(1, t)
+          iy = this%turned_pairs(2, t)
+          vx = v(ix, c)
+          vy = v(iy, c)
+          v(ix, c) = r11 * vx + r12 * vy + s1
+          v(iy, c) = r21 * vx + r22 * vy + s2
+        end do
       end do
-      if (.not. positions) cycle
-      do t = 1, size(this%turned_angles, 2)
-        associate (i => this%turned_angles(1, t))
-          v(i, c) = v(i, c) + psi(this%turned_angles(2, t))
-        end associate
-      end do
+    end do
+    if (.not. positions) return
+    do t = 1, size(this%turned_angles, 2)
+      associate (i => this%turned_angles(1, t))
+        v(i, :) = v(i, :) + psi(this%turned_angles(2, t))
+      end associate
     end do
   end subroutine frames_turn
 

@@ -173,11 +173,28 @@ contains
       if (this%coord_part(i) > 0 .and. this%pair_of(i) == 0 .and. &
         any(model%coord_kind(i) == [COORD_X, COORD_Y])) return
     end do
-    ! What frames_turn visits: the turned nodes' x and y and the turned angles, with parts.
-    this%turned_pairs = reshape([(pairs(:, i), this%coord_part(pairs(1, i)), i = 1, np)], &
-      [3, np])
-    this%turned_pairs = this%turned_pairs(:, pack([(i, i = 1, np)], this%turned_pairs(3, :) > &
-      0))
+    ! What frames_turn visits: the turned nodes' x and y, part by part (a counting sort: the
+    ! nodes of part j are columns part_run(j) to part_run(j + 1) - 1), and the turned angles.
+    if (allocated(this%part_run)) deallocate(this%part_run)
+    if (allocated(this%turned_pairs)) deallocate(this%turned_pairs)
+    allocate(this%part_run(nr + 1))
+    this%part_run = 0
+    do i = 1, np
+      j = this%coord_part(pairs(1, i))
+      if (j > 0) this%part_run(j + 1) = this%part_run(j + 1) + 1
+    end do
+    this%part_run(1) = 1
+    do j = 1, nr
+      this%part_run(j + 1) = this%part_run(j + 1) + this%part_run(j)
+    end do
+    allocate(this%turned_pairs(2, this%part_run(nr + 1) - 1))
+    sizes = this%part_run(1:nr)
+    do i = 1, np
+      j = this%coord_part(pairs(1, i))
+      if (j == 0) cycle
+      this%turned_pairs(:, sizes(j)) = pairs(:, i)
+      sizes(j) = sizes(j) + 1
+    end do
     this%turned_angles = reshape([(i, this%coord_part(i), i = 1, model%n_x)], [2, model%n_x])
     this%turned_angles = this%turned_angles(:, pack([(i, i = 1, model%n_x)], &
       this%turned_angles(2, :) > 0 .and. this%pair_of(this%turned_angles(1, :)) == 0))
