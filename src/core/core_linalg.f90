@@ -129,8 +129,7 @@ contains
     call dgetrs('N', size(b), 1, a, size(b), ipiv, b, size(b), info)
   end subroutine lu_solve_vector
 
-  !> Cholesky factorisation in place (lower). info = k > 0: leading minor k not positive.
-  !> a = L L^T, L in the lower triangle (the strict upper one untouched); info = j > 0 where
+  !> Cholesky factorisation in place: a = L L^T, L in the lower triangle (the strict upper one untouched); info = j > 0 where
   !> the leading minor of order j is not positive definite (LAPACK's dpotrf convention).
   subroutine chol_factor(a, info)
     real(wp), intent(inout) :: a(:, :)

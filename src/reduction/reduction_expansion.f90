@@ -306,7 +306,7 @@ contains
     mz = mass_at(this, dz)
     f = this%f1
     lo = first_free(this)
-    call gemv_add(this%m, this%m - lo + 1, this%f2(1, lo), dz(lo:), f)
+    if (lo <= this%m) call gemv_add(this%m, this%m - lo + 1, this%f2(1, lo), dz(lo:), f)
     if (this%frames%on) then
       call this%frames%correction(p - this%z0(1:nr), dz, zd, cm, fc)
       mz = mz + cm
@@ -368,34 +368,31 @@ contains
     real(wp), intent(in) :: z(:)
     real(wp) :: x(size(this%x0))
     real(wp) :: dz(this%m), w2(this%m)
-    real(wp), allocatable :: xs(:, :)
-    real(wp), allocatable :: w3(:)
+    real(wp), allocatable :: xs(:, :), w3(:)
     integer :: a, b, l, lo, c0
     call step_from_centre(this, z(1:this%nr), z(this%nr + 1:), dz)
     lo = first_free(this)
     x = this%x0
-    if (lo > this%m) then
-      c0 = size(this%x3, 2) + 1
-    else
+    if (lo <= this%m) then
       ! X3's columns with l >= lo follow each other from tri(lo, lo, lo) (third_terms' order).
       c0 = this%tri(lo, lo, lo)
-    end if
-    allocate(w3(c0:size(this%x3, 2)))
-    ! X3[dz, dz, dz] / 6 over lo <= l <= a <= b: each distinct triple with its multiplicity
-    do b = lo, this%m
-      do a = lo, b
-        do l = lo, a
-          w3(this%tri(l, a, b)) = dz(l) * dz(a) * dz(b) * triple_weight(l, a, b)
+      allocate(w3(c0:size(this%x3, 2)))
+      ! X3[dz, dz, dz] / 6 over lo <= l <= a <= b: each distinct triple with its multiplicity
+      do b = lo, this%m
+        do a = lo, b
+          do l = lo, a
+            w3(this%tri(l, a, b)) = dz(l) * dz(a) * dz(b) * triple_weight(l, a, b)
+          end do
         end do
       end do
-    end do
-    call gemv_add(size(x), this%m - lo + 1, this%x1(1, lo), dz(lo:), x)
-    ! X2[dz, dz] / 2: the columns (lo:m, b) of each b are contiguous.
-    do b = lo, this%m
-      w2(lo:) = (0.5_wp * dz(b)) * dz(lo:)
-      call gemv_add(size(x), this%m - lo + 1, this%x2(1, lo, b), w2(lo:), x)
-    end do
-    call gemv_add(size(x), size(w3), this%x3(1, c0), w3, x)
+      call gemv_add(size(x), this%m - lo + 1, this%x1(1, lo), dz(lo:), x)
+      ! X2[dz, dz] / 2: the columns (lo:m, b) of each b are contiguous.
+      do b = lo, this%m
+        w2(lo:) = (0.5_wp * dz(b)) * dz(lo:)
+        call gemv_add(size(x), this%m - lo + 1, this%x2(1, lo, b), w2(lo:), x)
+      end do
+      call gemv_add(size(x), size(w3), this%x3(1, c0), w3, x)
+    end if
     if (this%frames%on) then
       xs = reshape(x, [size(x), 1])
       call this%frames%turn(z(1:this%nr) - this%z0(1:this%nr), xs, .true.)

@@ -111,7 +111,7 @@ contains
     ! Of the model's size: allocated (this file's arrays are on the stack).
     logical, allocatable :: member(:, :)
     integer, allocatable :: pairs(:, :)
-    integer :: sizes(size(turns)), depth(size(turns))
+    integer :: sizes(size(turns)), depth(size(turns)), next(size(turns))
     integer :: nr, j, i, k, iel, d0, nd, part, np, first
     nr = size(turns)
     allocate(member(model%n_x, nr))
@@ -188,12 +188,12 @@ contains
       this%part_run(j + 1) = this%part_run(j + 1) + this%part_run(j)
     end do
     allocate(this%turned_pairs(2, this%part_run(nr + 1) - 1))
-    sizes = this%part_run(1:nr)
+    next = this%part_run(1:nr)
     do i = 1, np
       j = this%coord_part(pairs(1, i))
       if (j == 0) cycle
-      this%turned_pairs(:, sizes(j)) = pairs(:, i)
-      sizes(j) = sizes(j) + 1
+      this%turned_pairs(:, next(j)) = pairs(:, i)
+      next(j) = next(j) + 1
     end do
     this%turned_angles = reshape([(i, this%coord_part(i), i = 1, model%n_x)], [2, model%n_x])
     this%turned_angles = this%turned_angles(:, pack([(i, i = 1, model%n_x)], &
