@@ -375,7 +375,41 @@ contains
     call apply_turns(ex%turns, ex%turn_order, delta, b, .true.)
     call suite%check(maxval(abs(a - b)) <= 1.0e-13_wp * maxval(abs(b)), &
       'positions turned by parts as by the turns: ' // what)
+    call check_norm_by_parts(delta, what)
   end subroutine check_turn_by_parts
+
+  !> The error norm's one pass over the turned fields (frames_norm_terms) against the norm of
+  !> the fields turned by the turns one by one; round-off apart they are the same maxima. A
+  !> maximum sees one node: a step along each mode, and far turns, put it on several.
+  subroutine check_norm_by_parts(delta, what)
+    real(wp), intent(in) :: delta(:)
+    character(len=*), intent(in) :: what
+    real(wp), parameter :: RTOL = 1.0e-6_wp, ATOL = 1.0e-8_wp
+    real(wp) :: dq(ex%k), eta_old(ex%k), eta_new(ex%k), norm, ref, worst
+    real(wp), allocatable :: f(:, :)
+    integer :: i, l, c
+    allocate(f(size(ex%x0), 3))
+    worst = 0.0_wp
+    do c = 1, 2
+      do l = 1, ex%k
+        dq = 0.0_wp
+        dq(l) = 1.0e-5_wp
+        eta_old = [(0.01_wp * (2 - i), i = 1, ex%k)]
+        eta_new = eta_old + dq
+        f(:, 1) = matmul(ex%x1(:, ex%nr + 1:), dq)
+        f(:, 2) = ex%xr + matmul(ex%x1(:, ex%nr + 1:), eta_old)
+        f(:, 3) = ex%xr + matmul(ex%x1(:, ex%nr + 1:), eta_new)
+        call apply_turns(ex%turns, ex%turn_order, c * delta, f, .false.)
+        ref = run%red%dyn%model%error_norm(f(:, 1), max(abs(f(:, 2)), abs(f(:, 3))), RTOL, &
+          ATOL)
+        call ex%error_norm(run%red%dyn%model, dq, eta_old, eta_new, RTOL, ATOL, &
+          ex%z0(1:ex%nr) + c * delta, norm)
+        worst = max(worst, abs(norm - ref) / ref)
+      end do
+    end do
+    call suite%check(worst <= 1.0e-12_wp, &
+      'error norm in one pass as of the fields turned by the turns: ' // what)
+  end subroutine check_norm_by_parts
 
   !> With the turns exact (reduction_frames) the expansion serves any joint angles: at the
   !> expansion's modal coordinates the accelerations, energies and coordinates agree with the

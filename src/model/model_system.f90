@@ -17,7 +17,7 @@ module model_system
   use model_control, only: controller_t
   implicit none
   private
-  public :: model_t, mode_ref_t, COORD_X, COORD_Y, COORD_PHI, COORD_Z, COORD_EULER
+  public :: model_t, mode_ref_t, COORD_X, COORD_Y, COORD_PHI, COORD_Z, COORD_EULER, error_norm_of
 
   integer, parameter :: COORD_X = 1, COORD_Y = 2, COORD_PHI = 3
   !> Spatial models: the z translation, and the four Euler parameters of a node's rotation.
@@ -114,6 +114,7 @@ module model_system
     procedure :: translation => model_translation
     procedure :: largest_translation => model_largest_translation
     procedure :: error_norm => model_error_norm
+    procedure :: error_kind => model_error_kind
     procedure :: finalize => model_finalize
     procedure :: count_message => model_count_message
     procedure :: mode_name => model_mode_name
@@ -355,15 +356,35 @@ contains
     largest = -huge(1.0_wp)
     step = 0.0_wp
     do i = 1, size(dx)
-      kind = merge(1, 2, is_rotation(this%coord_kind(i)))
+      kind = norm_kind(this%coord_kind(i))
       largest(kind) = max(largest(kind), motion(i))
       step(kind) = max(step(kind), abs(dx(i)))
     end do
+    norm = error_norm_of(step, largest, rtol, atol)
+  end function model_error_norm
+
+  !> The error norm's kind of coordinate i: 1 for a rotation, 2 for a translation.
+  pure integer function model_error_kind(this, i) result(kind)
+    class(model_t), intent(in) :: this
+    integer, intent(in) :: i
+    kind = norm_kind(this%coord_kind(i))
+  end function model_error_kind
+
+  pure integer function norm_kind(coord_kind) result(kind)
+    integer, intent(in) :: coord_kind
+    kind = merge(1, 2, is_rotation(coord_kind))
+  end function norm_kind
+
+  !> model_t%error_norm from its terms per kind (model_t%error_kind): the largest step and the
+  !> largest motion, for callers that form them without the nodal vectors.
+  pure real(wp) function error_norm_of(step, largest, rtol, atol) result(norm)
+    real(wp), intent(in) :: step(2), largest(2), rtol, atol
+    integer :: kind
     norm = 0.0_wp
     do kind = 1, 2
       if (step(kind) > 0) norm = max(norm, step(kind) / (atol + rtol * largest(kind)))
     end do
-  end function model_error_norm
+  end function error_norm_of
 
   !> Length of the translation of node i in a nodal displacement dx (x, y and, in space, z).
   pure real(wp) function model_translation(this, i, dx) result(d)

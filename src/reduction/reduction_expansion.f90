@@ -31,7 +31,7 @@ module reduction_expansion
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_MODEL
   use core_linalg, only: chol_factor, chol_solve, gemv_add
-  use model_system, only: model_t
+  use model_system, only: model_t, error_norm_of
   use dynamics_system, only: dynamics_t
   use reduction_basis, only: basis_t
   use reduction_turns, only: turn_t, find_turns, turn_derivative, apply_turns_transposed
@@ -439,8 +439,18 @@ contains
     real(wp), intent(out) :: norm
     ! dx, x_old, x_new: the step and the nodal vectors that scale it.
     real(wp), allocatable :: xs(:, :)
+    real(wp) :: cf(this%k, 3), step(2), largest(2)
     integer :: n
     n = size(this%x0)
+    if (this%frames%on .and. this%k > 0) then
+      cf(:, 1) = dq
+      cf(:, 2) = eta_old
+      cf(:, 3) = eta_new
+      call this%frames%norm_terms(this%x1(:, this%nr + 1:), this%xr, cf, p - &
+        this%z0(1:this%nr), step, largest)
+      norm = error_norm_of(step, largest, rtol, atol)
+      return
+    end if
     allocate(xs(n, 3))
     xs(:, 1) = 0.0_wp
     xs(:, 2) = this%xr

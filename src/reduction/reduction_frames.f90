@@ -19,6 +19,7 @@ module reduction_frames
   use model_system, only: model_t
   use dynamics_augmented, only: element_mass_t
   use reduction_turns, only: turn_t, rotation
+  use core_linalg, only: gemv_add
   implicit none
   private
   public :: frames_t
@@ -47,6 +48,9 @@ module reduction_frames
     !> The turned nodes (x, y) part by part, part j's from part_run(j) to part_run(j + 1) - 1,
     !> and the turned angle coordinates (coordinate, part).
     integer, allocatable :: turned_pairs(:, :), part_run(:), turned_angles(:, :)
+    !> The coordinates that no turn moves as fields (frames_norm_terms), and every
+    !> coordinate's kind in the error norm (model_t%error_kind).
+    integer, allocatable :: still(:), error_kind(:)
   contains
     procedure :: setup => frames_setup
     procedure :: mass_change => frames_mass_change
@@ -54,6 +58,7 @@ module reduction_frames
     procedure :: kinetic => frames_kinetic
     procedure :: potential => frames_potential
     procedure :: turn => frames_turn
+    procedure :: norm_terms => frames_norm_terms
   end type frames_t
 
   interface
@@ -231,6 +236,81 @@ contains
       end associate
     end do
   end subroutine frames_turn
+
+  !> The error norm's terms (model_t%error_norm) of three turned fields without forming them:
+  !> the step L X1 cf(:, 1) and the motions L (xr + X1 cf(:, c)), c = 2, 3, with L the turns
+  !> by delta on fields (frames_turn) and x1 X1's modal columns. step(kind): the step's largest
+  !> component, largest(kind): the motions' (kind: model_t%error_kind). One pass over X1's rows
+  !> instead of three products, three turns and the norm's own pass (at every step).
+  subroutine frames_norm_terms(this, x1, xr, cf, delta, step, largest)
+    class(frames_t), intent(in) :: this
+    real(wp), intent(in), contiguous :: x1(:, :)
+    real(wp), intent(in) :: xr(:), cf(:, :), delta(:)
+    real(wp), intent(out) :: step(2), largest(2)
+    real(wp) :: rot(2, 2, this%nr), s(2, 3, this%nr), rp(2, 2), vx(3), vy(3)
+    real(wp) :: r11, r12, r21, r22, st, lg
+    real(wp), allocatable :: y(:, :)
+    integer :: o, j, p, t, ix, iy
+    ! The unturned fields [0, xr, xr] + X1 cf (on the heap, as models may be large); BLAS's
+    ! dgemm costs more than three dgemv at these sizes.
+    allocate(y(size(xr), 3))
+    y(:, 1) = 0.0_wp
+    y(:, 2) = xr
+    y(:, 3) = xr
+    do t = 1, 3
+      call gemv_add(size(x1, 1), size(x1, 2), x1, cf(:, t), y(:, t))
+    end do
+    do j = 1, this%nr
+      rot(:, :, j) = rotation(sum(delta, mask=this%inside(:, j)))
+    end do
+    do o = 1, this%nr
+      j = this%order(o)
+      p = this%parent(j)
+      rp = EYE
+      if (p > 0) rp = rot(:, :, p)
+      vx = y(this%centre(1, j), :)
+      vy = y(this%centre(2, j), :)
+      s(1, :, j) = (rp(1, 1) - rot(1, 1, j)) * vx + (rp(1, 2) - rot(1, 2, j)) * vy
+      s(2, :, j) = (rp(2, 1) - rot(2, 1, j)) * vx + (rp(2, 2) - rot(2, 2, j)) * vy
+      if (p > 0) s(:, :, j) = s(:, :, j) + s(:, :, p)
+    end do
+    step = 0.0_wp
+    largest = -huge(1.0_wp)
+    ! The turned pairs are nodes' x and y: translations, one kind.
+    st = 0.0_wp
+    lg = -huge(1.0_wp)
+    do j = 1, this%nr
+      r11 = rot(1, 1, j)
+      r12 = rot(1, 2, j)
+      r21 = rot(2, 1, j)
+      r22 = rot(2, 2, j)
+      do t = this%part_run(j), this%part_run(j + 1) - 1
+        ix = this%turned_pairs(1, t)
+        iy = this%turned_pairs(2, t)
+        st = max(st, abs(r11 * y(ix, 1) + r12 * y(iy, 1) + s(1, 1, j)), &
+          abs(r21 * y(ix, 1) + r22 * y(iy, 1) + s(2, 1, j)))
+        lg = max(lg, abs(r11 * y(ix, 2) + r12 * y(iy, 2) + s(1, 2, j)), &
+          abs(r21 * y(ix, 2) + r22 * y(iy, 2) + s(2, 2, j)), &
+          abs(r11 * y(ix, 3) + r12 * y(iy, 3) + s(1, 3, j)), &
+          abs(r21 * y(ix, 3) + r22 * y(iy, 3) + s(2, 3, j)))
+      end do
+    end do
+    if (size(this%turned_pairs, 2) > 0) call note(this%error_kind(this%turned_pairs(1, 1)), &
+      st, lg, lg, step, largest)
+    do t = 1, size(this%still)
+      ix = this%still(t)
+      call note(this%error_kind(ix), y(ix, 1), y(ix, 2), y(ix, 3), step, largest)
+    end do
+  contains
+    !> A coordinate of the error norm's kind with the step d and the motions a, b.
+    pure subroutine note(kind, d, a, b, step, largest)
+      integer, intent(in) :: kind
+      real(wp), intent(in) :: d, a, b
+      real(wp), intent(inout) :: step(2), largest(2)
+      step(kind) = max(step(kind), abs(d))
+      largest(kind) = max(largest(kind), abs(a), abs(b))
+    end subroutine note
+  end subroutine frames_norm_terms
 
   !> C, its Christoffel terms gam at the rates zd and the parts' translations s_j of W's
   !> columns, for the parts' rotations rot and series ser (part_series). With a = tau zd,

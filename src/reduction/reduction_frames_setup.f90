@@ -198,6 +198,8 @@ contains
     this%turned_angles = reshape([(i, this%coord_part(i), i = 1, model%n_x)], [2, model%n_x])
     this%turned_angles = this%turned_angles(:, pack([(i, i = 1, model%n_x)], &
       this%turned_angles(2, :) > 0 .and. this%pair_of(this%turned_angles(1, :)) == 0))
+    this%still = pack([(i, i = 1, model%n_x)], this%coord_part == 0 .or. this%pair_of == 0)
+    this%error_kind = [(model%error_kind(i), i = 1, model%n_x)]
     this%el_part = [(0, iel = 1, model%n_elements)]
     do iel = 1, model%n_elements
       call block_of(mass, iel, first, d0, nd)
