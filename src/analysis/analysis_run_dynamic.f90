@@ -190,7 +190,26 @@ contains
     if (this%verbose .and. err%ok() .and. update%mode /= 'none') write(*, '(a,i0,a,i0,a)') &
       'reduction: ', this%updates%n_updates, ' basis updates in ', size(this%updates%time), &
       ' checks'
+    if (this%verbose .and. err%ok()) call report_quality(this%red)
   end subroutine run_reduced
+
+  !> The reduction's own error measures after the run, so that the trade of accuracy for
+  !> speed shows without opening the result (the same as /reduction's attributes).
+  subroutine report_quality(red)
+    type(reduced_t), intent(in) :: red
+    character(len=:), allocatable :: line
+    ! The residual's units mix force and mass: shown only where no estimate in m exists.
+    if (red%has_estimate) then
+      line = 'reduction: error estimate up to ' // approx_str(maxval(red%estimate)) // ' m'
+    else
+      line = 'reduction: residual up to ' // approx_str(maxval(red%residual)) // &
+        ' (no error estimate without a definite stiffness)'
+    end if
+    if (red%expanded) line = line // '; ' // int_str(red%expansions%n_expansions) // &
+      ' expansions (' // int_str(red%expansions%n_exact_turns) // ' with exact turns), ' // &
+      'up to ' // approx_str(red%expansions%manifold_error) // ' m from the exact coordinates'
+    write(*, '(a)') line
+  end subroutine report_quality
 
   !> What evaluation = 'expanded' cannot take, as input errors before the basis is made.
   subroutine check_expanded(this, err)

@@ -44,7 +44,7 @@ def test_difference_proportional_to_the_tolerance(tmp_path):
     errors = {}
     for tol in (1e-3, 1e-4):
         proc, out = run_scene(tmp_path, two_link(
-            f", evaluation = 'expanded', expansion_tol = {tol}"), f"e{tol}")
+            f", evaluation = 'expanded', expansion_tol = {tol}"), f"e{tol}", quiet=False)
         assert proc.returncode == 0, proc.stderr
         errors[tol] = np.max(np.linalg.norm(tip(out)[1] - x_full, axis=-1))
         with h5py.File(out) as f:
@@ -53,6 +53,8 @@ def test_difference_proportional_to_the_tolerance(tmp_path):
             # The series stops at the third order: what it leaves is about (d2 / d1)^3 of the
             # nodal motion, at most tol^1.5 of the arm's length where an expansion is replaced.
             assert 0 < red["manifold_error_max"] < 10 * (L1 + L2) * tol**1.5
+            # The summary line counts the expansions as the result does.
+            assert f"; {red['n_expansions']} expansions (" in proc.stdout
             assert np.all(np.isfinite(f["energy/kinetic"][:]))
     # The coefficients err by about tol relative, the elastic response with them (observed:
     # 0.014 and 0.024 of tol * elastic at 3 el/link).

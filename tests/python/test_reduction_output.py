@@ -39,6 +39,11 @@ def test_reduced_run_layout(tmp_path):
         assert attrs["eigensolver"] == "lapack" and attrs["static_correction"] == "yes"
         assert attrs["update"] == "interval" and attrs["n_updates"] == 3
         assert attrs["error_estimate_max"] == pytest.approx(red["error_estimate"][:].max())
+        # The summary line repeats it, so that the trade shows without opening the file.
+        line = next(s for s in proc.stdout.splitlines()
+                    if s.startswith("reduction: error estimate up to "))
+        shown = float(line.split("up to ")[1].split()[0])
+        assert shown == pytest.approx(attrs["error_estimate_max"], rel=0.01)
         # The basis is M0-normalised in the modal sense: the same as the modal shapes.
         shapes = f["modal/shapes"][:2]
         assert np.allclose(np.abs(red["basis"][:]), np.abs(shapes), atol=1e-12)
