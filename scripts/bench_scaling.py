@@ -132,12 +132,12 @@ def solve_time(attrs) -> float:
     return float(attrs.get("cpu_time_s", attrs["wall_time_s"]))
 
 
-def run_exudyn(n, h, t_end):
+def run_exudyn(n, h, t_end, tolerances=(1e-6, 1e-5, 1e-4)):
     """Exudyn's run; from 32 elements per link its Newton iteration stalls at a relative
     tolerance of 1e-6 (round-off of the stiff axial and shear modes), so a failed run is
-    repeated at 1e-5, then 1e-4 (needed at 64). Returns its result with the tolerance that
-    worked."""
-    for tol in (1e-6, 1e-5, 1e-4):
+    repeated at the next of `tolerances` (1e-5, then 1e-4: needed at 64). Returns its result
+    with the tolerance that worked."""
+    for tol in tolerances:
         try:
             return {**exudyn_two_link.run(n, h, t_end, newton_rtol=tol), "newton_rtol": tol}
         except Exception as e:      # Exudyn raises its own SolverError
@@ -145,13 +145,26 @@ def run_exudyn(n, h, t_end):
     raise failure
 
 
+def exudyn_pair(n, t1):
+    """Exudyn's runs to t1 and 2 t1 at one Newton tolerance: the longer run is likelier to
+    stall, and a pair whose runs took different tolerances would subtract unlike steps (a
+    step at 1e-5 costs fewer iterations than one at 1e-6)."""
+    r2 = run_exudyn(n, DT, 2 * t1)
+    r1 = run_exudyn(n, DT, t1, (r2["newton_rtol"], 1e-5, 1e-4))
+    if r1["newton_rtol"] != r2["newton_rtol"]:
+        r2 = run_exudyn(n, DT, 2 * t1, (r1["newton_rtol"],))
+    return r1, r2
+
+
 def per_step_exudyn(n, t1, repeat=1):
-    """Exudyn's time per step, measured like flexmor's (per_step_flexmor)."""
-    diffs = []
+    """Exudyn's time per step, measured like flexmor's (per_step_flexmor), and the largest
+    Newton tolerance its pairs needed."""
+    diffs, tol = [], 0.0
     for _ in range(repeat):
-        r1, r2 = run_exudyn(n, DT, t1), run_exudyn(n, DT, 2 * t1)
+        r1, r2 = exudyn_pair(n, t1)
         diffs.append((r2["cpu_s"] - r1["cpu_s"]) / (r2["n_steps"] - r1["n_steps"]))
-    return float(np.median(diffs))
+        tol = max(tol, r2["newton_rtol"])
+    return float(np.median(diffs)), tol
 
 
 def fit_exponent(ns, times):
@@ -196,7 +209,8 @@ def scaling(args, binary, work, argv):
         row["exudyn_ms"] = float("nan")
         if use_exudyn and n <= args.exudyn_max:
             try:
-                row["exudyn_ms"] = 1e3 * per_step_exudyn(n, args.t_end, args.repeat)
+                t, row["exudyn_newton_rtol"] = per_step_exudyn(n, args.t_end, args.repeat)
+                row["exudyn_ms"] = 1e3 * t
             except Exception as e:     # Exudyn raises its own SolverError
                 row["exudyn_error"] = last_line(str(e))
         row["full_over_exudyn"] = row["full_ms"] / row["exudyn_ms"] if math.isfinite(
@@ -210,7 +224,7 @@ def scaling(args, binary, work, argv):
     expo = {key: fit_exponent(ns, [r.get(f"{key}_ms", math.nan) for r in rows])
             for key in ("full", "k2", "k4", "k4x", "exudyn")}
     columns = ["elements_per_link", "n_dy", "full_ms", "k2_ms", "k4_ms", "k4x_ms", "exudyn_ms",
-               "full_over_exudyn", "full_rss_mib", "k2_rss_mib", "k4_rss_mib", "k4x_rss_mib",
+               "exudyn_newton_rtol", "full_over_exudyn", "full_rss_mib", "k2_rss_mib", "k4_rss_mib", "k4x_rss_mib",
                "full_error", "k2_error", "k4_error", "k4x_error", "exudyn_error"]
     write_csv(rows, columns, args.out_dir / "scaling.csv")
     lines = ["# Time per step against model size (two-link benchmark)", "", *header(args, argv),
@@ -219,21 +233,24 @@ def scaling(args, binary, work, argv):
              f"{args.repeat} pairs. Exudyn: planar geometrically "
              "exact beams, its generalized-alpha at the same step, sparse solver "
              "(python/flexmor/exudyn_two_link.py); its Newton relative tolerance is 1e-6, "
-             "loosened to 1e-5 or 1e-4 where it stalls (from 32 elements per link).", "",
+             "loosened to 1e-5 or 1e-4 where it stalls (from 32 elements per link), the same "
+             "for both runs of a pair (column Newton rtol: the loosest a pair needed; a looser "
+             "tolerance takes fewer iterations per step).", "",
              "k = 4 expanded: `&reduction evaluation = 'expanded'` (docs/theory.md section 9); "
              "its time per step includes the expansions made in the window, which is "
              f"{EXPANDED_WINDOW} times longer (runs to {EXPANDED_WINDOW * args.t_end:g} and "
              f"{2 * EXPANDED_WINDOW * args.t_end:g} s): its steps cost about 1 % of the full "
              "model's.", "",
              "| elements per link | n_dy | full [ms] | k = 2 [ms] | k = 4 [ms] | "
-             "k = 4 expanded [ms] | Exudyn [ms] | full / Exudyn | peak RSS full [MiB] |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "k = 4 expanded [ms] | Exudyn [ms] | Newton rtol | full / Exudyn | peak RSS full [MiB] |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in rows:
         ratio = r["full_over_exudyn"]
+        tol = f"{r['exudyn_newton_rtol']:g}" if "exudyn_newton_rtol" in r else "–"
         lines.append(f"| {r['elements_per_link']} | {r.get('n_dy', '–')} | {ms(r['full_ms'] / 1e3)} | "
                      f"{ms(r.get('k2_ms', math.nan) / 1e3)} | {ms(r.get('k4_ms', math.nan) / 1e3)} | "
                      f"{ms(r.get('k4x_ms', math.nan) / 1e3)} | "
-                     f"{ms(r['exudyn_ms'] / 1e3)} | "
+                     f"{ms(r['exudyn_ms'] / 1e3)} | {tol} | "
                      f"{'–' if not math.isfinite(ratio) else f'{ratio:.2f}'} | "
                      f"{r.get('full_rss_mib', math.nan):.0f} |")
     lines += ["", "Fitted exponent p of time per step ~ n^p over 8 <= n <= 128: " + ", ".join(
