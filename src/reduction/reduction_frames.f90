@@ -192,24 +192,10 @@ contains
     real(wp), intent(in) :: delta(:)
     real(wp), intent(inout) :: v(:, :)
     logical, intent(in) :: positions
-    real(wp) :: rot(2, 2, this%nr), s(2, size(v, 2), this%nr), psi(this%nr), rp(2, 2), vc(2)
+    real(wp) :: rot(2, 2, this%nr), s(2, size(v, 2), this%nr), psi(this%nr)
     real(wp) :: vx, vy, r11, r12, r21, r22, s1, s2
-    integer :: o, j, p, c, t, ix, iy
-    do j = 1, this%nr
-      psi(j) = sum(delta, mask=this%inside(:, j))
-      rot(:, :, j) = rotation(psi(j))
-    end do
-    do o = 1, this%nr
-      j = this%order(o)
-      p = this%parent(j)
-      rp = EYE
-      if (p > 0) rp = rot(:, :, p)
-      do c = 1, size(v, 2)
-        vc = [v(this%centre(1, j), c), v(this%centre(2, j), c)]
-        s(:, c, j) = matmul(rp - rot(:, :, j), vc)
-        if (p > 0) s(:, c, j) = s(:, c, j) + s(:, c, p)
-      end do
-    end do
+    integer :: j, c, t, ix, iy
+    call part_shifts(this, delta, v, rot, s, psi)
     ! Part by part: its rotation and translation stay in registers over its nodes.
     do c = 1, size(v, 2)
       do j = 1, this%nr
@@ -237,6 +223,32 @@ contains
     end do
   end subroutine frames_turn
 
+  !> Each part's angle psi(j) and rotation rot(:, :, j), and for every column c of the unturned
+  !> fields v the translation the turns give it, s(:, c, j) = s(:, c, parent) + (R_parent -
+  !> R_j) v_centre (frames_turn's L v = R_j v + s_j on part j).
+  pure subroutine part_shifts(this, delta, v, rot, s, psi)
+    type(frames_t), intent(in) :: this
+    real(wp), intent(in) :: delta(:), v(:, :)
+    real(wp), intent(out) :: rot(:, :, :), s(:, :, :), psi(:)
+    real(wp) :: rp(2, 2), vc(2)
+    integer :: o, j, p, c
+    do j = 1, this%nr
+      psi(j) = sum(delta, mask=this%inside(:, j))
+      rot(:, :, j) = rotation(psi(j))
+    end do
+    do o = 1, this%nr
+      j = this%order(o)
+      p = this%parent(j)
+      rp = EYE
+      if (p > 0) rp = rot(:, :, p)
+      do c = 1, size(v, 2)
+        vc = [v(this%centre(1, j), c), v(this%centre(2, j), c)]
+        s(:, c, j) = matmul(rp - rot(:, :, j), vc)
+        if (p > 0) s(:, c, j) = s(:, c, j) + s(:, c, p)
+      end do
+    end do
+  end subroutine part_shifts
+
   !> The error norm's terms (model_t%error_norm) of three turned fields without forming them:
   !> the step L X1 cf(:, 1) and the motions L (xr + X1 cf(:, c)), c = 2, 3, with L the turns
   !> by delta on fields (frames_turn) and x1 X1's modal columns. step(kind): the step's largest
@@ -247,10 +259,10 @@ contains
     real(wp), intent(in), contiguous :: x1(:, :)
     real(wp), intent(in) :: xr(:), cf(:, :), delta(:)
     real(wp), intent(out) :: step(2), largest(2)
-    real(wp) :: rot(2, 2, this%nr), s(2, 3, this%nr), rp(2, 2), vx(3), vy(3)
+    real(wp) :: rot(2, 2, this%nr), s(2, 3, this%nr), psi(this%nr)
     real(wp) :: r11, r12, r21, r22, st, lg
     real(wp), allocatable :: y(:, :)
-    integer :: o, j, p, t, ix, iy
+    integer :: j, t, ix, iy
     ! The unturned fields [0, xr, xr] + X1 cf (on the heap, as models may be large); BLAS's
     ! dgemm costs more than three dgemv at these sizes.
     allocate(y(size(xr), 3))
@@ -260,20 +272,7 @@ contains
     do t = 1, 3
       call gemv_add(size(x1, 1), size(x1, 2), x1, cf(:, t), y(:, t))
     end do
-    do j = 1, this%nr
-      rot(:, :, j) = rotation(sum(delta, mask=this%inside(:, j)))
-    end do
-    do o = 1, this%nr
-      j = this%order(o)
-      p = this%parent(j)
-      rp = EYE
-      if (p > 0) rp = rot(:, :, p)
-      vx = y(this%centre(1, j), :)
-      vy = y(this%centre(2, j), :)
-      s(1, :, j) = (rp(1, 1) - rot(1, 1, j)) * vx + (rp(1, 2) - rot(1, 2, j)) * vy
-      s(2, :, j) = (rp(2, 1) - rot(2, 1, j)) * vx + (rp(2, 2) - rot(2, 2, j)) * vy
-      if (p > 0) s(:, :, j) = s(:, :, j) + s(:, :, p)
-    end do
+    call part_shifts(this, delta, y, rot, s, psi)
     step = 0.0_wp
     largest = -huge(1.0_wp)
     ! The turned pairs are nodes' x and y: translations, one kind.
