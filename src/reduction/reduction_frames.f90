@@ -252,8 +252,9 @@ contains
   !> The error norm's terms (model_t%error_norm) of three turned fields without forming them:
   !> the step L X1 cf(:, 1) and the motions L (xr + X1 cf(:, c)), c = 2, 3, with L the turns
   !> by delta on fields (frames_turn) and x1 X1's modal columns. step(kind): the step's largest
-  !> component, largest(kind): the motions' (kind: model_t%error_kind). One pass over X1's rows
-  !> instead of three products, three turns and the norm's own pass (at every step).
+  !> component, largest(kind): the motions' (kind: model_t%error_kind). The three products,
+  !> then one pass over the turned nodes that turns each node's values in registers and keeps
+  !> the maxima, instead of three turned fields and the norm's own pass (at every step).
   subroutine frames_norm_terms(this, x1, xr, cf, delta, step, largest)
     class(frames_t), intent(in) :: this
     real(wp), intent(in), contiguous :: x1(:, :)
