@@ -15,7 +15,9 @@ Part 1, scaling: time per step for n = 2, 4, ..., 128 elements per link of
 The time per step is the difference of two runs, to t1 and 2 t1 (--t-end; 5 t1 and 10 t1 for
 the expanded evaluation, whose steps are cheap), divided by the difference of their step
 counts: set-up, the reduced basis and output writing cancel. Each of --repeat pairs runs back
-to back, and the median of the pairs' values is reported. flexmor's
+to back, and the median of the pairs' values is reported; the full model's pairs alternate
+with Exudyn's, and full / Exudyn is the median of those rounds' ratios, so that the machine's
+drift falls on both alike. flexmor's
 time is the processor time of its analyses (root attribute ``cpu_time_s``), Exudyn's the
 process time of SolveDynamic: both are what other jobs on the machine do not inflate. Peak memory is the maximum resident set of the longer flexmor run
 (/usr/bin/time). The exponent p of time ~ n^p is fitted by least squares in log-log over
@@ -109,6 +111,16 @@ def run_flexmor(binary: Path, work: Path, name: str, text: str, timeout: float =
     return run_attributes(out), rss, out
 
 
+def flexmor_pair(binary, work, name, n, dynamic, k, t1, expanded=False):
+    """One pair of runs to t1 and 2 t1 back to back: (time per step, peak RSS of the longer
+    run, dynamic coordinates)."""
+    a1 = run_flexmor(binary, work, f"{name}_1", scene(n, dynamic, k, t1, expanded=expanded))[0]
+    a2, rss, _ = run_flexmor(binary, work, f"{name}_2", scene(n, dynamic, k, 2 * t1,
+                                                             expanded=expanded))
+    step = (solve_time(a2) - solve_time(a1)) / (a2["n_steps"] - a1["n_steps"])
+    return step, rss, int(a2["n_dynamic_coordinates"])
+
+
 def per_step_flexmor(binary, work, name, n, dynamic, k, t1, repeat=1, expanded=False):
     """Time per step from `repeat` pairs of runs to t1 and to 2 t1, each pair run back to back:
     the median of the pairs' differences. Pairs follow the machine's slow drift together (a
@@ -116,14 +128,29 @@ def per_step_flexmor(binary, work, name, n, dynamic, k, t1, repeat=1, expanded=F
     evaluation's step measured 1.0 us in one run and 2.5 us in the next)."""
     diffs, rss, n_dy = [], 0.0, 0
     for _ in range(repeat):
-        a1 = run_flexmor(binary, work, f"{name}_1", scene(n, dynamic, k, t1,
-                                                          expanded=expanded))[0]
-        a2, rss2, _ = run_flexmor(binary, work, f"{name}_2", scene(n, dynamic, k, 2 * t1,
-                                                                   expanded=expanded))
-        diffs.append((solve_time(a2) - solve_time(a1)) / (a2["n_steps"] - a1["n_steps"]))
+        step, rss2, n_dy = flexmor_pair(binary, work, name, n, dynamic, k, t1, expanded)
+        diffs.append(step)
         rss = max(rss, rss2)
-        n_dy = int(a2["n_dynamic_coordinates"])
     return float(np.median(diffs)), rss, n_dy
+
+
+def full_beside_exudyn(binary, work, n, dynamic, t1, repeat):
+    """The full model's and Exudyn's time per step in `repeat` rounds, each a flexmor pair and
+    an Exudyn pair back to back, so that the machine's drift (25 % and more over minutes
+    here) falls on both alike: medians of each code's pairs, the median of the rounds' ratios,
+    the peak RSS, the dynamic coordinates and the loosest Newton tolerance Exudyn needed."""
+    ours, theirs, ratios, rss, tol, n_dy = [], [], [], 0.0, 0.0, 0
+    for _ in range(repeat):
+        step, rss2, n_dy = flexmor_pair(binary, work, f"s{n}_full", n, dynamic, 0, t1)
+        r1, r2 = exudyn_pair(n, t1)
+        other = (r2["cpu_s"] - r1["cpu_s"]) / (r2["n_steps"] - r1["n_steps"])
+        ours.append(step)
+        theirs.append(other)
+        ratios.append(step / other)
+        rss = max(rss, rss2)
+        tol = max(tol, r2["newton_rtol"])
+    return (float(np.median(ours)), float(np.median(theirs)), float(np.median(ratios)), rss,
+            n_dy, tol)
 
 
 def solve_time(attrs) -> float:
@@ -156,17 +183,6 @@ def exudyn_pair(n, t1):
     return r1, r2
 
 
-def per_step_exudyn(n, t1, repeat=1):
-    """Exudyn's time per step, measured like flexmor's (per_step_flexmor), and the largest
-    Newton tolerance its pairs needed."""
-    diffs, tol = [], 0.0
-    for _ in range(repeat):
-        r1, r2 = exudyn_pair(n, t1)
-        diffs.append((r2["cpu_s"] - r1["cpu_s"]) / (r2["n_steps"] - r1["n_steps"]))
-        tol = max(tol, r2["newton_rtol"])
-    return float(np.median(diffs)), tol
-
-
 def fit_exponent(ns, times):
     pts = [(math.log(n), math.log(t)) for n, t in zip(ns, times)
            if 8 <= n <= 128 and t and t > 0 and math.isfinite(t)]
@@ -194,7 +210,24 @@ def scaling(args, binary, work, argv):
     galpha = f"integrator = 'galpha', dt = {DT!r}"
     for n in args.meshes:
         row = {"elements_per_link": n}
+        row["exudyn_ms"] = float("nan")
+        beside = use_exudyn and n <= args.exudyn_max
+        if beside:
+            try:
+                (t, te, row["full_over_exudyn"], row["full_rss_mib"], row["n_dy"],
+                 row["exudyn_newton_rtol"]) = full_beside_exudyn(binary, work, n, galpha,
+                                                                 args.t_end, args.repeat)
+                row["full_ms"], row["exudyn_ms"] = 1e3 * t, 1e3 * te
+            except (RunFailed, subprocess.TimeoutExpired) as e:
+                row["full_ms"] = float("nan")
+                row["full_error"] = str(e)
+                failed = True
+            except Exception as e:     # Exudyn raises its own SolverError
+                row["exudyn_error"] = last_line(str(e))
+                beside = False
         for k, label in ((0, "full"), (2, "k2"), (4, "k4"), (4, "k4x")):
+            if label == "full" and "full_ms" in row:
+                continue
             try:
                 t1 = args.t_end * (EXPANDED_WINDOW if label == "k4x" else 1)
                 t, rss, n_dy = per_step_flexmor(binary, work, f"s{n}_{label}", n, galpha, k,
@@ -206,15 +239,8 @@ def scaling(args, binary, work, argv):
                 row[f"{label}_ms"] = float("nan")
                 row[f"{label}_error"] = str(e)
                 failed = True
-        row["exudyn_ms"] = float("nan")
-        if use_exudyn and n <= args.exudyn_max:
-            try:
-                t, row["exudyn_newton_rtol"] = per_step_exudyn(n, args.t_end, args.repeat)
-                row["exudyn_ms"] = 1e3 * t
-            except Exception as e:     # Exudyn raises its own SolverError
-                row["exudyn_error"] = last_line(str(e))
-        row["full_over_exudyn"] = row["full_ms"] / row["exudyn_ms"] if math.isfinite(
-            row["exudyn_ms"]) else float("nan")
+        if not beside:
+            row["full_over_exudyn"] = float("nan")
         rows.append(row)
         print(f"n = {n:4d}: full {row['full_ms']:.4f} ms, k=2 {row.get('k2_ms', math.nan):.4f}, "
               f"k=4 {row.get('k4_ms', math.nan):.4f}, k=4 expanded "
@@ -230,7 +256,9 @@ def scaling(args, binary, work, argv):
     lines = ["# Time per step against model size (two-link benchmark)", "", *header(args, argv),
              "", f"Generalized-alpha, fixed step {DT} s, rho_inf 0.8; processor time per step from runs "
              f"to {args.t_end} and {2 * args.t_end} s (set-up cancels), run in pairs back to back: the median of "
-             f"{args.repeat} pairs. Exudyn: planar geometrically "
+             f"{args.repeat} pairs. The full model's pairs alternate with Exudyn's, and full / Exudyn "
+             "is the median of those rounds' ratios (the machine's drift falls on both alike). "
+             "Exudyn: planar geometrically "
              "exact beams, its generalized-alpha at the same step, sparse solver "
              "(python/flexmor/exudyn_two_link.py); its Newton relative tolerance is 1e-6, "
              "loosened to 1e-5 or 1e-4 where it stalls (from 32 elements per link), the same "
