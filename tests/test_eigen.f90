@@ -342,25 +342,39 @@ contains
 
   !> All modes of a 120-mass fixed-free chain (lambda_max / lambda_1 about 1e5, M well
   !> conditioned): dsygvd alone is accurate here, so the polish must leave its Rayleigh
-  !> quotients alone (observed 8e-15 relative) and return M-orthonormal vectors (observed
-  !> 1e-15) with residuals at rounding (6e-16). Then K shifted below -1e4 ||K||_1 / ||M||_1, the last
+  !> quotients within their rounding (observed 8e-15 to 1.5e-13 relative on the lowest,
+  !> with the BLAS's kernel and threads: 6e-3 of the bound n eps (||K|| + |lambda| ||M||) /
+  !> mu_min(M)) and return M-orthonormal vectors (observed 1e-15) with residuals at rounding
+  !> (6e-16). Then K shifted below -1e4 ||K||_1 / ||M||_1, the last
   !> trial shift: no shift proves K - sigma M definite, so the polish is skipped and dsygvd's
   !> pairs come back unchanged.
   subroutine all_modes()
     integer, parameter :: N = 120
     real(wp), allocatable :: k(:, :), m(:, :), lam(:), v(:, :), lam_raw(:), v_raw(:, :), &
-      old(:), g(:, :), r(:, :)
+      old(:), g(:, :), r(:, :), eye(:, :), mu(:), v_m(:, :)
     type(error_t) :: err
-    real(wp) :: rel, ortho, resid, s
-    integer :: i, info
+    real(wp) :: rel, drift, ortho, resid, s
+    integer :: i, info, info_m
     call chain(N, .true., k, m)
     allocate(lam_raw(N), v_raw(N, N))
     call sym_gen_eig(k, m, lam_raw, v_raw, info)
+    ! M's smallest eigenvalue (M x = mu I x) for the rounding bound below.
+    allocate(eye(N, N), mu(N), v_m(N, N))
+    eye = 0.0_wp
+    do i = 1, N
+      eye(i, i) = 1.0_wp
+    end do
+    call sym_gen_eig(m, eye, mu, v_m, info_m)
     old = sum(v_raw * matmul(k, v_raw), 1) / sum(v_raw * matmul(m, v_raw), 1)
     call lowest_modes(k, m, N, 'lapack', lam, v, err)
-    call suite%check(err%ok() .and. info == 0, '(g) all modes: LAPACK runs')
+    call suite%check(err%ok() .and. info == 0 .and. info_m == 0, '(g) all modes: LAPACK runs')
     if (.not. err%ok()) return
     rel = maxval(abs(lam - old) / abs(old))
+    ! Rounding of a Rayleigh quotient of an M-normalised v: |v^T K v - fl(v^T K v)| <= n eps
+    ! |v|^T |K| |v|, so its eigenvalue moves by up to about n eps (||K|| + |lambda| ||M||) /
+    ! mu_min(M) (the 1-norms; M's eigenvalues mu lie within a few times of each other here).
+    drift = maxval(abs(lam - old) / (N * epsilon(1.0_wp) * (maxval(sum(abs(k), 1)) + &
+      abs(old) * maxval(sum(abs(m), 1))) / mu(1)))
     g = matmul(transpose(v), matmul(m, v))
     do i = 1, N
       g(i, i) = g(i, i) - 1
@@ -369,10 +383,12 @@ contains
     r = matmul(k, v) - matmul(m, v) * spread(lam, 1, N)
     resid = maxval(maxval(abs(r), 1) / ((maxval(sum(abs(k), 1)) + abs(lam) * &
       maxval(sum(abs(m), 1))) * maxval(abs(v), 1)))
-    write(*, '(a,i0,a,es9.2,a,es9.2,a,es9.2)') '    (g) all ', N, ' modes: max rel. diff ' // &
-      'lambda polished - unpolished ', rel, ', max |V^T M V - I| ', ortho, ', rel. residual ', &
-      resid
-    call suite%check(rel < 1.0e-13_wp, '(g) all modes: eigenvalues unchanged to 1e-13')
+    write(*, '(a,i0,a,es9.2,a,es9.2,a,es9.2,a,es9.2)') '    (g) all ', N, ' modes: max rel. ' // &
+      'diff ' // &
+      'lambda polished - unpolished ', rel, ' (', drift, ' of the rounding bound), max ' // &
+      '|V^T M V - I| ', ortho, ', rel. residual ', resid
+    call suite%check(drift < 0.1_wp, '(g) all modes: eigenvalues unchanged to a tenth of ' // &
+      'their rounding')
     call suite%check(ortho < 1.0e-13_wp, '(g) all modes: polished vectors M-orthonormal')
     call suite%check(resid < 1.0e-13_wp, '(g) all modes: backward error of K v = lambda M v')
 
