@@ -208,7 +208,15 @@ contains
     if (red%expanded) line = line // '; ' // int_str(red%expansions%n_expansions) // &
       ' expansions (' // int_str(red%expansions%n_exact_turns) // ' with exact turns), ' // &
       'up to ' // approx_str(red%expansions%manifold_error) // ' m from the exact coordinates'
+    if (red%expanded .and. red%expansions%n_unchecked > 0) line = line // ' (' // &
+      int_str(red%expansions%n_unchecked) // ' not compared: the exact kinematics failed there)'
     write(*, '(a)') line
+    if (.not. (red%expanded .and. red%has_estimate)) return
+    ! The expansions' own error then outweighs what the modes leave out.
+    if (red%expansions%manifold_error > maxval(red%estimate)) write(*, '(a)') 'reduction: ' // &
+      'the expansions are farther from the exact coordinates than the error estimate; a ' // &
+      'smaller expansion_tol (now ' // approx_str(red%expansions%tol) // ') makes more of ' // &
+      'them, closer'
   end subroutine report_quality
 
   !> What evaluation = 'expanded' cannot take, as input errors before the basis is made.

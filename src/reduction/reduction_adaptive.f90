@@ -94,6 +94,7 @@ contains
         opts%progress%n_updates = log%n_updates
       seg_start = seg_end
     end do
+    if (red%expanded) call red%check_expansions()
   end subroutine integrate_reduced
 
   !> Check times t0 + j interval inside the run, snapped onto an output time within round-off;
@@ -173,6 +174,8 @@ contains
     end if
     replace = spec%mode == 'interval' .or. minval(mac) < spec%mac_threshold
     if (replace) then
+      ! The old basis's expansions are compared with the exact coordinates before they go.
+      if (red%expanded) call red%check_expansions()
       red%last_eta_dot = matmul(transpose(tracked), &
         reshape(modal_mass_times(red%dyn, modes, reshape(v_dy, [n_dy, 1])), [n_dy]))
       red%last_eta = 0.0_wp

@@ -84,10 +84,15 @@ module reduction_expansion
     real(wp), allocatable :: es1(:), es2(:, :), gw1(:), gw2(:, :)
     logical :: loads_vary = .false.                  !< loads with motion laws: projected per call
     real(wp), allocatable :: load0(:)                !< the constant loads in f1, f2
+    !> The farthest state served (largest quadratic spread d2 [m]) at z = far_z, and the d2 up
+    !> to which the exact coordinates have been compared (expansion_set_t's manifold_error).
+    real(wp) :: far_d2 = 0.0_wp, checked_d2 = 0.0_wp
+    real(wp), allocatable :: far_z(:)
   contains
     procedure :: build => exp_build
     procedure :: needs_update => exp_needs_update
     procedure :: spread => exp_spread
+    procedure :: spread_at => exp_spread_at
     procedure :: accel => exp_accel
     procedure :: coordinates => exp_coordinates
     procedure :: energy => exp_energy
@@ -105,14 +110,18 @@ module reduction_expansion
     integer :: n_exact_turns = 0                     !< of them, with the turns exact
     !> The joint angles of the last state looked up (find): the error norm's configuration.
     real(wp), allocatable :: p_last(:)
-    !> Largest nodal translation [m] between the exact kinematics and the expansion in use,
-    !> measured where it is left for a new one (set_note_stale).
+    !> Largest nodal translation [m] between the exact kinematics and an expansion: where it
+    !> is left for a new one (set_note_stale) and at the farthest state it served otherwise
+    !> (set_unchecked, at the end of a run and before a new basis).
     real(wp) :: manifold_error = 0.0_wp
+    integer :: n_unchecked = 0   !< of them, where the exact kinematics failed (not compared)
   contains
     procedure :: find => set_find
     procedure :: centre_time => set_centre_time
     procedure :: centre_modal => set_centre_modal
     procedure :: note_stale => set_note_stale
+    procedure :: unchecked => set_unchecked
+    procedure :: note_checked => set_note_checked
     procedure :: expand => set_expand
     procedure :: forget => set_forget
   end type expansion_set_t
@@ -168,6 +177,20 @@ module reduction_expansion
       type(model_t), intent(in) :: model
       real(wp), intent(in) :: x(:), p(:), eta(:)
     end subroutine set_note_stale
+    !> A kept expansion that served a state farther than where it was compared with the exact
+    !> coordinates (0: none), and that state z = (p, eta) (reduction_expansion_set).
+    module integer function set_unchecked(this, z) result(i)
+      class(expansion_set_t), intent(in) :: this
+      real(wp), allocatable, intent(out) :: z(:)
+    end function set_unchecked
+    !> Expansion i compared with the exact coordinates x at its farthest state
+    !> (reduction_expansion_set).
+    module subroutine set_note_checked(this, i, model, x)
+      class(expansion_set_t), intent(inout) :: this
+      integer, intent(in) :: i
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: x(:)
+    end subroutine set_note_checked
   end interface
 
 contains
@@ -223,15 +246,23 @@ contains
   pure logical function exp_needs_update(this, p, eta, tol)
     class(expansion_t), intent(in) :: this
     real(wp), intent(in) :: p(:), eta(:), tol
-    real(wp) :: d(2), dz(this%m)
+    real(wp) :: d(2)
     if (.not. this%valid) then
       exp_needs_update = .true.
       return
     end if
-    call step_from_centre(this, p, eta, dz)
-    d = this%spread(dz)
+    d = this%spread_at(p, eta)
     exp_needs_update = d(2)**2 > tol * d(1)**2
   end function exp_needs_update
+
+  !> exp_spread of the step from the centre to the state (p, eta).
+  pure function exp_spread_at(this, p, eta) result(d)
+    class(expansion_t), intent(in) :: this
+    real(wp), intent(in) :: p(:), eta(:)
+    real(wp) :: d(2), dz(this%m)
+    call step_from_centre(this, p, eta, dz)
+    d = this%spread(dz)
+  end function exp_spread_at
 
   !> Bounds (d1, d2) of the nodal translations of the series' linear and quadratic terms for
   !> the step dz from z0.

@@ -21,6 +21,8 @@ contains
     integer :: n, nr, k, m, l, i, first
     ! Not usable until complete (a failed build may be retried elsewhere in this slot).
     this%valid = .false.
+    this%far_d2 = 0.0_wp
+    this%checked_d2 = 0.0_wp
     nr = dyn%model%n_rh
     k = size(eta)
     m = nr + k

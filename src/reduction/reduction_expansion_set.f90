@@ -12,7 +12,10 @@ contains
     if (.not. allocated(this%item)) return
     if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta, &
       this%tol)
-    if (found) return
+    if (found) then
+      call note_served()
+      return
+    end if
     do i = 1, size(this%item)
       if (i == this%current) cycle
       if (this%item(i)%needs_update(p, eta, this%tol)) cycle
@@ -23,7 +26,20 @@ contains
     if (found) then
       this%clock = this%clock + 1
       this%last_use(this%current) = this%clock
+      call note_served()
     end if
+  contains
+    !> Keep the farthest state the expansion in use serves (set_unchecked).
+    subroutine note_served()
+      real(wp) :: d(2)
+      associate (ex => this%item(this%current))
+        d = ex%spread_at(p, eta)
+        if (d(2) > ex%far_d2) then
+          ex%far_d2 = d(2)
+          ex%far_z = [p, eta]
+        end if
+      end associate
+    end subroutine note_served
   end procedure set_find
 
   !> Where to centre a new expansion for the state (t, p): the latest time ahead at which the
@@ -90,8 +106,35 @@ contains
   !> Record how far the expansion in use is from the exact nodal coordinates x at (p, eta),
   !> where it is left for another.
   module procedure set_note_stale
+    real(wp) :: d(2)
     if (this%current == 0) return
-    this%manifold_error = max(this%manifold_error, model%largest_translation(x - &
-      this%item(this%current)%coordinates([p, eta])))
+    associate (ex => this%item(this%current))
+      this%manifold_error = max(this%manifold_error, model%largest_translation(x - &
+        ex%coordinates([p, eta])))
+      ! The states it served up to the d2 of this one, which has left its range, count as
+      ! compared.
+      d = ex%spread_at(p, eta)
+      ex%checked_d2 = max(ex%checked_d2, d(2))
+    end associate
   end procedure set_note_stale
+
+  module procedure set_unchecked
+    do i = 1, size(this%last_use)
+      if (.not. allocated(this%item)) exit
+      if (i > size(this%item)) exit
+      if (.not. this%item(i)%valid) cycle
+      if (this%item(i)%far_d2 <= this%item(i)%checked_d2) cycle
+      z = this%item(i)%far_z
+      return
+    end do
+    i = 0
+  end procedure set_unchecked
+
+  module procedure set_note_checked
+    associate (ex => this%item(i))
+      this%manifold_error = max(this%manifold_error, model%largest_translation(x - &
+        ex%coordinates(ex%far_z)))
+      ex%checked_d2 = ex%far_d2
+    end associate
+  end procedure set_note_checked
 end submodule reduction_expansion_set

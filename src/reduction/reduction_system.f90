@@ -53,6 +53,7 @@ module reduction_system
     procedure :: full_state => red_full_state
     procedure :: error_norm => red_error_norm
     procedure :: allocate_history => red_allocate_history
+    procedure :: check_expansions => red_check_expansions
   end type reduced_t
 
 contains
@@ -211,6 +212,8 @@ contains
     if (.not. err%ok()) return
     ! The indicators leave the exact kinematics of this state.
     call this%expansions%note_stale(this%dyn%model, this%dyn%kin%x, p, eta)
+    ! Kept ones revisited since they were left, before a slot is reused.
+    call this%check_expansions()
     t_centre = this%expansions%centre_time(this%dyn, t, p)
     ! Along the modal rates no further than a quarter period of the lowest mode, where the
     ! motion may turn back.
@@ -232,6 +235,30 @@ contains
     end if
     call this%expansions%expand(this%dyn, this%basis, t, eta, err)
   end subroutine new_expansion
+
+  !> Compare each kept expansion that served a state beyond where it was last compared with
+  !> the exact coordinates there (one kinematic solve each), so that the largest distance
+  !> reported covers the expansions a run or a basis ends in, and one that never had to be
+  !> left. Where the kinematics fails the expansion counts as not compared (n_unchecked).
+  subroutine red_check_expansions(this)
+    class(reduced_t), intent(inout) :: this
+    real(wp), allocatable :: z(:)
+    type(error_t) :: err
+    integer :: i, nr
+    nr = this%dyn%model%n_rh
+    do
+      i = this%expansions%unchecked(z)
+      if (i == 0) return
+      call this%dyn%kin%solve(this%dyn%model, [z(1:nr), this%basis%q_ref + &
+        matmul(this%basis%v, z(nr + 1:))], err)
+      if (err%ok()) then
+        call this%expansions%note_checked(i, this%dyn%model, this%dyn%kin%x)
+      else
+        this%expansions%n_unchecked = this%expansions%n_unchecked + 1
+        this%expansions%item(i)%checked_d2 = this%expansions%item(i)%far_d2
+      end if
+    end do
+  end subroutine red_check_expansions
 
   !> V^T of the full model's linearised Jacobian: -(V^T Mbar V)^-1 V^T [K0, D0] V, with the
   !> constant K0 of the dynamic modes applied element by element and that of elastic elements

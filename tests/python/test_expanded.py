@@ -63,6 +63,25 @@ def test_difference_proportional_to_the_tolerance(tmp_path):
     assert errors[1e-4] < errors[1e-3] / 3, errors
 
 
+def test_an_expansion_never_left_is_compared(tmp_path):
+    """An expansion that serves the whole run is compared with the exact coordinates at the
+    farthest state it served (it used to report 0 m, never having been left), and the run
+    says when the expansions' error outweighs the reduction's estimate."""
+    tol = 3e-2
+    proc, out = run_scene(tmp_path, two_link(
+        f", evaluation = 'expanded', expansion_tol = {tol}", t_end=0.7), "one", quiet=False)
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        red = f["reduction"].attrs
+        assert red["n_expansions"] == 1
+        # As in test_difference_proportional_to_the_tolerance: at most tol^1.5 of the arm.
+        assert 0 < red["manifold_error_max"] < 10 * (L1 + L2) * tol**1.5
+        outweighs = red["manifold_error_max"] > red["error_estimate_max"]
+    assert ("the expansions are farther from the exact coordinates" in proc.stdout) == outweighs
+    # Here the one expansion, made at rest, measured the estimate at rest.
+    assert outweighs
+
+
 def test_energies_and_integrators_agree(tmp_path):
     """The energies from the expansion's coefficients and a run with BDF (its Jacobian by
     differences of the expanded accelerations) against the full evaluation."""
