@@ -200,9 +200,9 @@ contains
     character(len=:), allocatable :: line
     ! The residual's units mix force and mass: shown only where no estimate in m exists.
     if (red%has_estimate) then
-      line = 'reduction: error estimate up to ' // approx_str(maxval(red%estimate)) // ' m'
+      line = 'reduction: error estimate up to ' // approx_str(red%estimate_max()) // ' m'
     else
-      line = 'reduction: residual up to ' // approx_str(maxval(red%residual)) // &
+      line = 'reduction: residual up to ' // approx_str(red%residual_max()) // &
         ' (no error estimate without a definite stiffness)'
     end if
     if (red%expanded) line = line // '; ' // int_str(red%expansions%n_expansions) // &
@@ -213,7 +213,7 @@ contains
     write(*, '(a)') line
     if (.not. (red%expanded .and. red%has_estimate)) return
     ! The expansions' own error then outweighs what the modes leave out.
-    if (red%expansions%manifold_error > maxval(red%estimate)) write(*, '(a)') 'reduction: ' // &
+    if (red%expansions%manifold_error > red%estimate_max()) write(*, '(a)') 'reduction: ' // &
       'the expansions are farther from the exact coordinates than the error estimate; a ' // &
       'smaller expansion_tol (now ' // approx_str(red%expansions%tol) // ') makes more of ' // &
       'them, closer'

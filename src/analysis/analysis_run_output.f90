@@ -312,9 +312,9 @@ contains
       if (err%ok()) call h5%write_string_attr(g, 'eigensolver', trim(b%solver), err)
       if (err%ok()) call h5%write_string_attr(g, 'static_correction', &
         trim(merge('yes', 'no ', r%static_correction)), err)
-      if (err%ok()) call h5%write_real_attr(g, 'residual_max', maxval(red%residual), err)
+      if (err%ok()) call h5%write_real_attr(g, 'residual_max', red%residual_max(), err)
       if (err%ok() .and. red%has_estimate) call h5%write_real_attr(g, 'error_estimate_max', &
-        maxval(red%estimate), err)
+        red%estimate_max(), err)
       if (err%ok()) call h5%write_string_attr(g, 'evaluation', r%evaluation, err)
       if (err%ok() .and. red%expanded) call h5%write_int_attr(g, 'n_expansions', &
         red%expansions%n_expansions, err)

@@ -84,10 +84,10 @@ module reduction_expansion
     real(wp), allocatable :: es1(:), es2(:, :), gw1(:), gw2(:, :)
     logical :: loads_vary = .false.                  !< loads with motion laws: projected per call
     real(wp), allocatable :: load0(:)                !< the constant loads in f1, f2
-    !> The farthest state served (largest quadratic spread d2 [m]) at z = far_z, and the d2 up
-    !> to which the exact coordinates have been compared (expansion_set_t's manifold_error).
-    real(wp) :: far_d2 = 0.0_wp, checked_d2 = 0.0_wp
-    real(wp), allocatable :: far_z(:)
+    !> The farthest state served (largest quadratic spread d2 [m]): time, z = (p, eta) and
+    !> eta_dot; and the d2 up to which it has been compared with the exact model.
+    real(wp) :: far_d2 = 0.0_wp, checked_d2 = 0.0_wp, far_t = 0.0_wp
+    real(wp), allocatable :: far_z(:), far_rate(:)
   contains
     procedure :: build => exp_build
     procedure :: needs_update => exp_needs_update
@@ -120,6 +120,7 @@ module reduction_expansion
     procedure :: centre_time => set_centre_time
     procedure :: centre_modal => set_centre_modal
     procedure :: note_stale => set_note_stale
+    procedure :: note_served => set_note_served
     procedure :: unchecked => set_unchecked
     procedure :: note_checked => set_note_checked
     procedure :: expand => set_expand
@@ -177,11 +178,19 @@ module reduction_expansion
       type(model_t), intent(in) :: model
       real(wp), intent(in) :: x(:), p(:), eta(:)
     end subroutine set_note_stale
-    !> A kept expansion that served a state farther than where it was compared with the exact
-    !> coordinates (0: none), and that state z = (p, eta) (reduction_expansion_set).
-    module integer function set_unchecked(this, z) result(i)
+    !> Keep the state (t, p, eta, eta_dot) if it is the farthest the expansion in use has
+    !> served (reduction_expansion_set).
+    module subroutine set_note_served(this, t, p, eta, eta_dot)
+      class(expansion_set_t), intent(inout) :: this
+      real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
+    end subroutine set_note_served
+    !> A kept expansion other than skip that served a state farther than where it was
+    !> compared with the exact model (0: none), and that state (reduction_expansion_set).
+    module integer function set_unchecked(this, skip, t, z, z_rate) result(i)
       class(expansion_set_t), intent(in) :: this
-      real(wp), allocatable, intent(out) :: z(:)
+      integer, intent(in) :: skip
+      real(wp), intent(out) :: t
+      real(wp), allocatable, intent(out) :: z(:), z_rate(:)
     end function set_unchecked
     !> Expansion i compared with the exact coordinates x at its farthest state
     !> (reduction_expansion_set).

@@ -12,10 +12,7 @@ contains
     if (.not. allocated(this%item)) return
     if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta, &
       this%tol)
-    if (found) then
-      call note_served()
-      return
-    end if
+    if (found) return
     do i = 1, size(this%item)
       if (i == this%current) cycle
       if (this%item(i)%needs_update(p, eta, this%tol)) cycle
@@ -26,21 +23,22 @@ contains
     if (found) then
       this%clock = this%clock + 1
       this%last_use(this%current) = this%clock
-      call note_served()
     end if
-  contains
-    !> Keep the farthest state the expansion in use serves (set_unchecked).
-    subroutine note_served()
-      real(wp) :: d(2)
-      associate (ex => this%item(this%current))
-        d = ex%spread_at(p, eta)
-        if (d(2) > ex%far_d2) then
-          ex%far_d2 = d(2)
-          ex%far_z = [p, eta]
-        end if
-      end associate
-    end subroutine note_served
   end procedure set_find
+
+  module procedure set_note_served
+    real(wp) :: d(2)
+    if (this%current == 0) return
+    associate (ex => this%item(this%current))
+      d = ex%spread_at(p, eta)
+      if (d(2) > ex%far_d2) then
+        ex%far_d2 = d(2)
+        ex%far_t = t
+        ex%far_z = [p, eta]
+        ex%far_rate = eta_dot
+      end if
+    end associate
+  end procedure set_note_served
 
   !> Where to centre a new expansion for the state (t, p): the latest time ahead at which the
   !> prescribed coordinates alone use AHEAD_FRACTION of the tolerance, measured with the
@@ -119,12 +117,15 @@ contains
   end procedure set_note_stale
 
   module procedure set_unchecked
+    t = 0.0_wp
     do i = 1, size(this%last_use)
       if (.not. allocated(this%item)) exit
       if (i > size(this%item)) exit
-      if (.not. this%item(i)%valid) cycle
+      if (i == skip .or. .not. this%item(i)%valid) cycle
       if (this%item(i)%far_d2 <= this%item(i)%checked_d2) cycle
+      t = this%item(i)%far_t
       z = this%item(i)%far_z
+      z_rate = this%item(i)%far_rate
       return
     end do
     i = 0

@@ -74,7 +74,7 @@ contains
       metrics(6) = 0.0_wp
       if (allocated(run%red)) then
         metrics(6) = real(run%red%basis%k(), wp)
-        if (run%red%has_estimate) metrics(5) = maxval(run%red%estimate)
+        if (run%red%has_estimate) metrics(5) = run%red%estimate_max()
       end if
       if (allocated(run%control%error_hist)) then
         if (size(run%control%error_hist, 1) > 0) then

@@ -78,8 +78,29 @@ def test_an_expansion_never_left_is_compared(tmp_path):
         assert 0 < red["manifold_error_max"] < 10 * (L1 + L2) * tol**1.5
         outweighs = red["manifold_error_max"] > red["error_estimate_max"]
     assert ("the expansions are farther from the exact coordinates" in proc.stdout) == outweighs
-    # Here the one expansion, made at rest, measured the estimate at rest.
     assert outweighs
+
+
+def test_indicators_at_the_farthest_state(tmp_path):
+    """input/spin_up.nml (20 s) needs one expansion, made at rest: the error estimate is
+    measured at the farthest state it served too (it reported 0 m, the estimate at rest,
+    while the full evaluation's, at every output, reaches 2.3e-4 m; 6.0e-5 m now)."""
+    spin = (ROOT / "input" / "spin_up.nml").read_text()
+    estimates = {}
+    for evaluation in ("full", "expanded"):
+        proc, out = run_scene(tmp_path, spin + f"&reduction n_modes = 3, evaluation = "
+                              f"'{evaluation}' /\n", evaluation, quiet=False)
+        assert proc.returncode == 0, proc.stderr
+        with h5py.File(out) as f:
+            red = f["reduction"].attrs
+            estimates[evaluation] = red["error_estimate_max"]
+            if evaluation == "expanded":
+                assert red["n_expansions"] == 1
+                manifold = red["manifold_error_max"]
+    assert 0 < estimates["expanded"] < 10 * estimates["full"], estimates
+    # The expansion is close to the exact coordinates (1.9e-6 m): no advice to make more.
+    assert manifold < estimates["expanded"]
+    assert "the expansions are farther" not in proc.stdout
 
 
 def test_energies_and_integrators_agree(tmp_path):
