@@ -93,6 +93,7 @@ module reduction_expansion
     procedure :: needs_update => exp_needs_update
     procedure :: spread => exp_spread
     procedure :: spread_at => exp_spread_at
+    procedure, nopass :: beyond => exp_beyond
     procedure :: accel => exp_accel
     procedure :: coordinates => exp_coordinates
     procedure :: energy => exp_energy
@@ -120,7 +121,6 @@ module reduction_expansion
     procedure :: centre_time => set_centre_time
     procedure :: centre_modal => set_centre_modal
     procedure :: note_stale => set_note_stale
-    procedure :: note_served => set_note_served
     procedure :: unchecked => set_unchecked
     procedure :: note_checked => set_note_checked
     procedure :: expand => set_expand
@@ -155,10 +155,11 @@ module reduction_expansion
       type(turn_t), intent(in) :: turns(:)
       integer, intent(in) :: first
     end subroutine third_terms
-    !> Make a kept expansion that serves (p, eta) current (reduction_expansion_set).
-    module logical function set_find(this, p, eta) result(found)
+    !> Make a kept expansion that serves the state (t, p, eta, eta_dot) current, and keep the
+    !> state if it is the farthest that one has served (reduction_expansion_set).
+    module logical function set_find(this, t, p, eta, eta_dot) result(found)
       class(expansion_set_t), intent(inout) :: this
-      real(wp), intent(in) :: p(:), eta(:)
+      real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
     end function set_find
     !> Where on the joints' path to centre a new expansion (reduction_expansion_set).
     module real(wp) function set_centre_time(this, dyn, t, p) result(tc)
@@ -178,12 +179,6 @@ module reduction_expansion
       type(model_t), intent(in) :: model
       real(wp), intent(in) :: x(:), p(:), eta(:)
     end subroutine set_note_stale
-    !> Keep the state (t, p, eta, eta_dot) if it is the farthest the expansion in use has
-    !> served (reduction_expansion_set).
-    module subroutine set_note_served(this, t, p, eta, eta_dot)
-      class(expansion_set_t), intent(inout) :: this
-      real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
-    end subroutine set_note_served
     !> A kept expansion other than skip that served a state farther than where it was
     !> compared with the exact model (0: none), and that state (reduction_expansion_set).
     module integer function set_unchecked(this, skip, t, z, z_rate) result(i)
@@ -255,14 +250,15 @@ contains
   pure logical function exp_needs_update(this, p, eta, tol)
     class(expansion_t), intent(in) :: this
     real(wp), intent(in) :: p(:), eta(:), tol
-    real(wp) :: d(2)
-    if (.not. this%valid) then
-      exp_needs_update = .true.
-      return
-    end if
-    d = this%spread_at(p, eta)
-    exp_needs_update = d(2)**2 > tol * d(1)**2
+    exp_needs_update = .true.
+    if (this%valid) exp_needs_update = this%beyond(this%spread_at(p, eta), tol)
   end function exp_needs_update
+
+  !> Whether spreads d = (d1, d2) are beyond the tolerance: (d2 / d1)^2 > tol.
+  pure logical function exp_beyond(d, tol)
+    real(wp), intent(in) :: d(2), tol
+    exp_beyond = d(2)**2 > tol * d(1)**2
+  end function exp_beyond
 
   !> exp_spread of the step from the centre to the state (p, eta).
   pure function exp_spread_at(this, p, eta) result(d)

@@ -6,31 +6,26 @@ contains
 
   !> Make an expansion that serves (p, eta) current, if one is kept; false if none is.
   module procedure set_find
+    real(wp) :: d(2)
     integer :: i
     found = .false.
     this%p_last = p
     if (.not. allocated(this%item)) return
-    if (this%current > 0) found = .not. this%item(this%current)%needs_update(p, eta, &
-      this%tol)
-    if (found) return
-    do i = 1, size(this%item)
-      if (i == this%current) cycle
-      if (this%item(i)%needs_update(p, eta, this%tol)) cycle
-      this%current = i
-      found = .true.
-      exit
-    end do
-    if (found) then
-      this%clock = this%clock + 1
-      this%last_use(this%current) = this%clock
+    if (this%current > 0) found = serves(this%current)
+    if (.not. found) then
+      do i = 1, size(this%item)
+        if (i == this%current) cycle
+        if (.not. serves(i)) cycle
+        this%current = i
+        found = .true.
+        this%clock = this%clock + 1
+        this%last_use(i) = this%clock
+        exit
+      end do
     end if
-  end procedure set_find
-
-  module procedure set_note_served
-    real(wp) :: d(2)
-    if (this%current == 0) return
+    if (.not. found) return
+    ! The farthest state served, where set_unchecked compares it with the exact model.
     associate (ex => this%item(this%current))
-      d = ex%spread_at(p, eta)
       if (d(2) > ex%far_d2) then
         ex%far_d2 = d(2)
         ex%far_t = t
@@ -38,7 +33,16 @@ contains
         ex%far_rate = eta_dot
       end if
     end associate
-  end procedure set_note_served
+  contains
+    !> Whether kept expansion i serves the state (its spreads there in d).
+    logical function serves(i)
+      integer, intent(in) :: i
+      serves = .false.
+      if (.not. this%item(i)%valid) return
+      d = this%item(i)%spread_at(p, eta)
+      serves = .not. this%item(i)%beyond(d, this%tol)
+    end function serves
+  end procedure set_find
 
   !> Where to centre a new expansion for the state (t, p): the latest time ahead at which the
   !> prescribed coordinates alone use AHEAD_FRACTION of the tolerance, measured with the

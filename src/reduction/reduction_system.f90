@@ -13,6 +13,7 @@ module reduction_system
   use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use core_linalg, only: chol_factor, chol_solve
   use model_system, only: model_t
+  use model_kinematics, only: kin_state_t
   use dynamics_system, only: dynamics_t, check_finite
   use integrators_system, only: ode2_system_t, system_fd_jacobian
   use reduction_basis, only: basis_t
@@ -195,11 +196,10 @@ contains
     type(error_t), intent(out) :: err
     real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
     call this%dyn%prescribed(t, p, pd, pdd)
-    if (.not. this%expansions%find(p, eta)) then
+    if (.not. this%expansions%find(t, p, eta, eta_dot)) then
       call new_expansion(this, t, p, eta, eta_dot, err)
       if (.not. err%ok()) return
     end if
-    call this%expansions%note_served(t, p, eta, eta_dot)
     call this%expansions%item(this%expansions%current)%accel(this%dyn, t, p, pd, pdd, eta, &
       eta_dot, a, err)
     if (err%ok()) call check_finite(a, t, err)
@@ -258,13 +258,19 @@ contains
     real(wp) :: q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy), dq(this%dyn%model%n_dy)
     real(wp) :: t, residual, estimate
     type(error_t) :: err
+    type(kin_state_t) :: before
     integer :: i, nr, not_this
+    logical :: moved
     nr = this%dyn%model%n_rh
     not_this = 0
     if (present(skip)) not_this = skip
+    moved = .false.
     do
       i = this%expansions%unchecked(not_this, t, z, z_rate)
-      if (i == 0) return
+      if (i == 0) exit
+      ! The run's kinematics goes on from where it was, as if nothing had been checked.
+      if (.not. moved) call this%dyn%kin%save_state(before)
+      moved = .true.
       call this%full_state(z(nr + 1:), z_rate, q_dy, v_dy)
       call indicators(this, t, z(nr + 1:), z_rate, q_dy, v_dy, residual, estimate, dq, err)
       if (err%ok()) then
@@ -276,6 +282,7 @@ contains
         this%expansions%item(i)%checked_d2 = this%expansions%item(i)%far_d2
       end if
     end do
+    if (moved) call this%dyn%kin%restore_state(before)
   end subroutine red_check_expansions
 
   !> The largest residual norm of the run: at the outputs and the expansions' farthest states.
@@ -402,7 +409,7 @@ contains
     real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
     real(wp) :: a(size(eta)), x(this%dyn%model%n_x)
     call this%dyn%prescribed(t, p, pd, pdd)
-    if (.not. this%expansions%find(p, eta)) then
+    if (.not. this%expansions%find(t, p, eta, eta_dot)) then
       call expanded_accel(this, t, eta, eta_dot, a, err)
       if (.not. err%ok()) return
     end if
