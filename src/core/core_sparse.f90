@@ -50,6 +50,7 @@ module core_sparse
   contains
     procedure :: setup => sparse_setup
     procedure :: factor => sparse_factor
+    procedure :: factor_pivoting => sparse_factor_pivoting
     procedure :: solve => sparse_solve
     procedure :: solve_many => sparse_solve_many
     procedure :: multiply => sparse_multiply
@@ -71,6 +72,14 @@ module core_sparse
       real(c_double), intent(out) :: rcond
       integer(c_int) :: info
     end function klu_factor
+    function klu_factor_pivoting(h, ax, rcond) result(info) &
+      bind(C, name='flexmor_klu_factor_pivoting')
+      import :: c_ptr, c_int, c_double
+      type(c_ptr), value :: h
+      real(c_double), intent(in) :: ax(*)
+      real(c_double), intent(out) :: rcond
+      integer(c_int) :: info
+    end function klu_factor_pivoting
     function klu_solve(h, nrhs, b, transposed) result(info) bind(C, name='flexmor_klu_solve')
       import :: c_ptr, c_int, c_double
       type(c_ptr), value :: h
@@ -188,6 +197,20 @@ contains
       info = klu_factor(this%handle, this%val, rcond)
     end if
   end subroutine sparse_factor
+
+  !> LU factors as sparse_factor, but afresh with full partial pivoting (KLU's own prefers the
+  !> diagonal): for values whose factors came out unusable. The block solver's factors are
+  !> redone as they are (it already picks the largest pivot in its blocks).
+  subroutine sparse_factor_pivoting(this, info, rcond)
+    class(sparse_lu_t), intent(inout), target :: this
+    integer, intent(out) :: info
+    real(wp), intent(out) :: rcond
+    if (this%blocked .or. .not. owns_handle(this)) then
+      call this%factor(info, rcond)
+      return
+    end if
+    info = klu_factor_pivoting(this%handle, this%val, rcond)
+  end subroutine sparse_factor_pivoting
 
   !> Take KLU's ordering for the block solver when its diagonal blocks are all small (KLU's
   !> handle is then freed: the block solver is plain data).

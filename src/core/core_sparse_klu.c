@@ -112,6 +112,21 @@ int flexmor_klu_factor(void *handle, const double *ax, double *rcond)
     return h->common.status == KLU_SINGULAR || !(h->common.rcond > 0.0);
 }
 
+/* Factorise afresh with full partial pivoting (KLU's tol = 1 instead of its 0.001, which
+ * prefers the diagonal): for a matrix whose factors came out unusable. Later refactorisations
+ * keep the pivot order found here while their rcond holds. */
+int flexmor_klu_factor_pivoting(void *handle, const double *ax, double *rcond)
+{
+    flexmor_klu_t *h = handle;
+    const double tol = h->common.tol;
+    int info;
+    if (h->numeric) klu_free_numeric(&h->numeric, &h->common);
+    h->common.tol = 1.0;
+    info = flexmor_klu_factor(handle, ax, rcond);
+    h->common.tol = tol;
+    return info;
+}
+
 /* Solve A x = b (transposed != 0: A^T x = b) in place for nrhs columns of length n. With
  * A = R A_s (R = diag(rs)): A x = b is A_s x = R^-1 b, and A^T x = b is x = R^-1 (A_s^-T b),
  * by the reciprocals (KLU divides: the solutions differ from its own in the last bit). */

@@ -146,6 +146,10 @@ contains
     integer :: k, n_dy
     logical :: replace, controls_on, held_joints_given
 
+    ! The expansions of this basis are compared with the exact model first, while they are
+    ! kept: the checks evaluate the model elsewhere, and the modal analysis below leaves it
+    ! prepared at this state for the modal masses.
+    if (red%expanded) call red%check_expansions()
     k = red%basis%k()
     n_dy = red%dyn%model%n_dy
     allocate(q_dy(n_dy), v_dy(n_dy), tracked(n_dy, k), mac(k), pick(k))
@@ -174,8 +178,6 @@ contains
     end if
     replace = spec%mode == 'interval' .or. minval(mac) < spec%mac_threshold
     if (replace) then
-      ! The old basis's expansions are compared with the exact coordinates before they go.
-      if (red%expanded) call red%check_expansions()
       red%last_eta_dot = matmul(transpose(tracked), &
         reshape(modal_mass_times(red%dyn, modes, reshape(v_dy, [n_dy, 1])), [n_dy]))
       red%last_eta = 0.0_wp
