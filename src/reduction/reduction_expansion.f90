@@ -161,6 +161,19 @@ module reduction_expansion
       class(expansion_set_t), intent(inout) :: this
       real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
     end function set_find
+    !> A new expansion about (t, eta), in an empty slot or the one used longest ago
+    !> (reduction_expansion_set).
+    module subroutine set_expand(this, dyn, basis, t, eta, err)
+      class(expansion_set_t), intent(inout) :: this
+      type(dynamics_t), intent(inout) :: dyn
+      type(basis_t), intent(in) :: basis
+      real(wp), intent(in) :: t, eta(:)
+      type(error_t), intent(out) :: err
+    end subroutine set_expand
+    !> Drop every expansion, a new basis (reduction_expansion_set).
+    module subroutine set_forget(this)
+      class(expansion_set_t), intent(inout) :: this
+    end subroutine set_forget
     !> Where on the joints' path to centre a new expansion (reduction_expansion_set).
     module real(wp) function set_centre_time(this, dyn, t, p) result(tc)
       class(expansion_set_t), intent(in) :: this
@@ -209,27 +222,6 @@ contains
     if (size(model%actuator_element) > 0) why = 'actuators'
   end function expansion_unsupported
 
-  !> A new expansion about (t, eta), in an empty slot or the one used longest ago.
-  subroutine set_expand(this, dyn, basis, t, eta, err)
-    class(expansion_set_t), intent(inout) :: this
-    type(dynamics_t), intent(inout) :: dyn
-    type(basis_t), intent(in) :: basis
-    real(wp), intent(in) :: t, eta(:)
-    type(error_t), intent(out) :: err
-    integer :: slot
-    if (.not. allocated(this%item)) allocate(this%item(kept_slots(dyn%model%n_x, &
-      dyn%model%n_rh + size(eta))))
-    slot = minloc(merge(this%last_use(1:size(this%item)), -1, this%item%valid), 1)
-    this%item(slot)%use_frames = this%use_frames
-    call this%item(slot)%build(dyn, basis, t, eta, err)
-    if (.not. err%ok()) return
-    this%current = slot
-    this%clock = this%clock + 1
-    this%last_use(slot) = this%clock
-    this%n_expansions = this%n_expansions + 1
-    if (this%item(slot)%frames%on) this%n_exact_turns = this%n_exact_turns + 1
-  end subroutine set_expand
-
   !> How many expansions of n coordinates and m = n_rh + k terms to keep.
   pure integer function kept_slots(n, m) result(slots)
     integer, intent(in) :: n, m
@@ -237,14 +229,6 @@ contains
     per_expansion = 8_8 * n * (m + m**2 + m * (m + 1) * (m + 2) / 6)
     slots = int(max(int(MIN_KEPT, 8), min(int(MAX_KEPT, 8), KEPT_BYTES / per_expansion)))
   end function kept_slots
-
-  !> Drop every expansion (a new basis).
-  subroutine set_forget(this)
-    class(expansion_set_t), intent(inout) :: this
-    if (allocated(this%item)) this%item%valid = .false.
-    this%current = 0
-    this%last_use = 0
-  end subroutine set_forget
 
   !> Whether the state (p, eta) is outside this expansion's range (see the module).
   pure logical function exp_needs_update(this, p, eta, tol)

@@ -142,4 +142,27 @@ contains
       ex%checked_d2 = ex%far_d2
     end associate
   end procedure set_note_checked
+  !> A new expansion about (t, eta), in an empty slot or the one used longest ago.
+  module procedure set_expand
+    integer :: slot
+    if (.not. allocated(this%item)) allocate(this%item(kept_slots(dyn%model%n_x, &
+      dyn%model%n_rh + size(eta))))
+    slot = minloc(merge(this%last_use(1:size(this%item)), -1, this%item%valid), 1)
+    this%item(slot)%use_frames = this%use_frames
+    call this%item(slot)%build(dyn, basis, t, eta, err)
+    if (.not. err%ok()) return
+    this%current = slot
+    this%clock = this%clock + 1
+    this%last_use(slot) = this%clock
+    this%n_expansions = this%n_expansions + 1
+    if (this%item(slot)%frames%on) this%n_exact_turns = this%n_exact_turns + 1
+  end procedure set_expand
+
+  !> Drop every expansion (a new basis).
+  module procedure set_forget
+    if (allocated(this%item)) this%item%valid = .false.
+    this%current = 0
+    this%last_use = 0
+  end procedure set_forget
+
 end submodule reduction_expansion_set
