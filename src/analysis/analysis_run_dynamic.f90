@@ -209,7 +209,8 @@ contains
       ' expansions (' // int_str(red%expansions%n_exact_turns) // ' with exact turns), ' // &
       'up to ' // approx_str(red%expansions%manifold_error) // ' m from the exact coordinates'
     if (red%expanded .and. red%expansions%n_unchecked > 0) line = line // ' (' // &
-      int_str(red%expansions%n_unchecked) // ' not compared: the exact kinematics failed there)'
+      int_str(red%expansions%n_unchecked) // ' not compared: the exact model could not ' // &
+      'be evaluated there)'
     write(*, '(a)') line
     if (.not. (red%expanded .and. red%has_estimate)) return
     ! The expansions' own error then outweighs what the modes leave out.

@@ -115,7 +115,7 @@ module reduction_expansion
     !> is left for a new one (set_note_stale) and at the farthest state it served otherwise
     !> (set_unchecked, at the end of a run and before a new basis).
     real(wp) :: manifold_error = 0.0_wp
-    integer :: n_unchecked = 0   !< of them, where the exact kinematics failed (not compared)
+    integer :: n_unchecked = 0   !< of them, where the exact model failed (not compared)
   contains
     procedure :: find => set_find
     procedure :: centre_time => set_centre_time
