@@ -238,7 +238,9 @@ contains
     if (this%valid) exp_needs_update = this%beyond(this%spread_at(p, eta), tol)
   end function exp_needs_update
 
-  !> Whether spreads d = (d1, d2) are beyond the tolerance: (d2 / d1)^2 > tol.
+  !> Whether spreads d = (d1, d2) are beyond the tolerance: (d2 / d1)^2 > tol. Type-bound
+  !> (as spread_at) so that the set's submodule reaches it: gfortran 12 emits no symbol for a
+  !> private module function it has inlined everywhere in the module.
   pure logical function exp_beyond(d, tol)
     real(wp), intent(in) :: d(2), tol
     exp_beyond = d(2)**2 > tol * d(1)**2
