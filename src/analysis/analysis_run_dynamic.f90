@@ -144,6 +144,7 @@ contains
       this%red%expanded = r%evaluation == 'expanded'
       this%red%expansions%tol = r%expansion_tol
       this%red%expansions%use_frames = r%exact_turns
+      this%red%estimate_samples = r%estimate_samples
       if (this%red%expanded) call check_expanded(this, err)
       if (.not. err%ok()) return
       ! &linear times linearises at the basis each sample was computed in.
@@ -205,12 +206,14 @@ contains
       line = 'reduction: residual up to ' // approx_str(red%residual_max()) // &
         ' (no error estimate without a definite stiffness)'
     end if
+    if (red%expanded) line = line // ' (measured at ' // int_str(red%n_measured) // &
+      ' states: estimate_samples sets more)'
     if (red%expanded) line = line // '; ' // int_str(red%expansions%n_expansions) // &
       ' expansions (' // int_str(red%expansions%n_exact_turns) // ' with exact turns), ' // &
       'up to ' // approx_str(red%expansions%manifold_error) // ' m from the exact coordinates'
     if (red%expanded .and. red%expansions%n_unchecked > 0) line = line // ' (' // &
-      int_str(red%expansions%n_unchecked) // ' not compared: the exact model could not ' // &
-      'be evaluated there)'
+      int_str(red%expansions%n_unchecked) // ' states not compared: the exact model ' // &
+      'could not be evaluated there)'
     write(*, '(a)') line
     if (.not. (red%expanded .and. red%has_estimate)) return
     ! The expansions' own error then outweighs what the modes leave out.

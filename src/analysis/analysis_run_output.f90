@@ -322,6 +322,8 @@ contains
         red%expansions%n_exact_turns, err)
       if (err%ok() .and. red%expanded) call h5%write_real_attr(g, 'manifold_error_max', &
         red%expansions%manifold_error, err)
+      if (err%ok() .and. red%expanded) call h5%write_int_attr(g, 'n_measured', &
+        red%n_measured, err)
       if (err%ok()) call h5%write_string_attr(g, 'update', r%update, err)
       if (err%ok()) call h5%write_int_attr(g, 'n_updates', this%updates%n_updates, err)
       if (err%ok() .and. size(this%updates%time) > 0) then

@@ -195,10 +195,11 @@ contains
       if (r%update /= 'none') call rd_real(g, 'update_interval', r%update_interval, err)
       call rd_choice(g, 'joints', r%joints, err)
       call rd_choice(g, 'evaluation', r%evaluation, err)
-      if (err%ok()) call only_with(g, ['expansion_tol', 'exact_turns  '], &
-        r%evaluation == 'expanded', 'with evaluation = ''expanded''', err)
+      if (err%ok()) call only_with(g, ['expansion_tol   ', 'exact_turns     ', &
+        'estimate_samples'], r%evaluation == 'expanded', 'with evaluation = ''expanded''', err)
       call rd_real(g, 'expansion_tol', r%expansion_tol, err)
       call rd_logical(g, 'exact_turns', r%exact_turns, err)
+      call rd_int(g, 'estimate_samples', r%estimate_samples, err)
       if (err%ok() .and. r%joints == 'held') then
         if (r%selection /= 'count') call err%set(ERR_INPUT, g%where() // ': variable ' // &
           '''joints'': ''held'' takes n_modes (cutoff_hz and auto_factor are not built for it)')

@@ -456,7 +456,7 @@ module io_schema_tables
     var_spec_t('dynamic', 'rho_inf', VK_REAL, '', '0.8', .false., &
       0.0_wp, .false., 1.0_wp, .false., &
       '', 'spectral radius at infinite frequency')]
-  type(var_spec_t), parameter :: REDUCTION_VARS(14) = [ &
+  type(var_spec_t), parameter :: REDUCTION_VARS(15) = [ &
     var_spec_t('reduction', 'n_modes', VK_INT, '', 'one of three', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
       '', 'modes kept'), &
@@ -498,7 +498,10 @@ module io_schema_tables
       '', 'relative size of the expansion''s dropped terms'), &
     var_spec_t('reduction', 'exact_turns', VK_LOGICAL, '', '.true.', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'joints that turn parts rigidly exact in an expansion')]
+      '', 'joints that turn parts rigidly exact in an expansion'), &
+    var_spec_t('reduction', 'estimate_samples', VK_INT, '', '10', .false., &
+      0.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'outputs where an expanded run measures its error exactly')]
   type(var_spec_t), parameter :: OUTPUT_VARS(2) = [ &
     var_spec_t('output', 'nodes', VK_STRING_LIST, '', 'all nodes', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
@@ -507,7 +510,7 @@ module io_schema_tables
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(160) = [ &
+  type(var_spec_t), parameter :: SCHEMA(161) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

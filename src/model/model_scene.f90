@@ -219,6 +219,8 @@ module model_scene
     real(wp) :: expansion_tol = 1.0e-3_wp
     !> Joints that turn parts rigidly kept exact in the expansions (reduction_frames)
     logical :: exact_turns = .true.
+    !> Outputs (spread evenly) where an expanded run measures its error indicators exactly
+    integer :: estimate_samples = 10
   end type reduction_rec_t
 
   type :: scene_t

@@ -66,10 +66,12 @@ def test_difference_proportional_to_the_tolerance(tmp_path):
 def test_an_expansion_never_left_is_compared(tmp_path):
     """An expansion that serves the whole run is compared with the exact coordinates at the
     farthest state it served (it used to report 0 m, never having been left), and the run
-    says when the expansions' error outweighs the reduction's estimate."""
+    says when the expansions' error outweighs the reduction's estimate. No samples at outputs
+    (estimate_samples = 0): they would compare it too."""
     tol = 3e-2
     proc, out = run_scene(tmp_path, two_link(
-        f", evaluation = 'expanded', expansion_tol = {tol}", t_end=0.7), "one", quiet=False)
+        f", evaluation = 'expanded', expansion_tol = {tol}, estimate_samples = 0", t_end=0.7),
+        "one", quiet=False)
     assert proc.returncode == 0, proc.stderr
     with h5py.File(out) as f:
         red = f["reduction"].attrs
@@ -81,26 +83,37 @@ def test_an_expansion_never_left_is_compared(tmp_path):
     assert outweighs
 
 
-def test_indicators_at_the_farthest_state(tmp_path):
-    """input/spin_up.nml (20 s) needs one expansion, made at rest: the error estimate is
-    measured at the farthest state it served too (it reported 0 m, the estimate at rest,
-    while the full evaluation's, at every output, reaches 2.3e-4 m; 6.0e-5 m now)."""
+def test_indicators_at_the_farthest_state_and_sampled(tmp_path):
+    """input/spin_up.nml (20 s) needs one expansion, made at rest. Its error indicators are
+    measured there, at the farthest modal state it served and at estimate_samples outputs
+    spread over the run. The farthest state alone gave 6.0e-5 m (before it, 0 m: the estimate
+    at rest) while the full evaluation's, at every output, reaches 2.3e-4 m at full speed;
+    the default 10 samples find 2.29e-4 m."""
     spin = (ROOT / "input" / "spin_up.nml").read_text()
-    estimates = {}
-    for evaluation in ("full", "expanded"):
+    estimates, measured = {}, {}
+    for name, extra in (("full", ""), ("far", ", estimate_samples = 0"), ("sampled", "")):
+        evaluation = "full" if name == "full" else "expanded"
         proc, out = run_scene(tmp_path, spin + f"&reduction n_modes = 3, evaluation = "
-                              f"'{evaluation}' /\n", evaluation, quiet=False)
+                              f"'{evaluation}'{extra} /\n", name, quiet=False)
         assert proc.returncode == 0, proc.stderr
         with h5py.File(out) as f:
             red = f["reduction"].attrs
-            estimates[evaluation] = red["error_estimate_max"]
+            estimates[name] = red["error_estimate_max"]
             if evaluation == "expanded":
                 assert red["n_expansions"] == 1
+                measured[name] = int(red["n_measured"])
                 manifold = red["manifold_error_max"]
-    assert 0 < estimates["expanded"] < 10 * estimates["full"], estimates
-    # The expansion is close to the exact coordinates (1.9e-6 m): no advice to make more.
-    assert manifold < estimates["expanded"]
-    assert "the expansions are farther" not in proc.stdout
+                # The expansion is close to the exact coordinates (1.9e-6 m): no advice to
+                # make more.
+                assert manifold < estimates[name]
+                assert "the expansions are farther" not in proc.stdout
+                assert f"measured at {measured[name]} states" in proc.stdout
+    # Where it was made (at rest) and the farthest state; then the 10 samples too.
+    assert measured == {"far": 2, "sampled": 12}, measured
+    assert 0 < estimates["far"] < 10 * estimates["full"], estimates
+    # The samples reach the plateau at full speed (the states there differ from the full
+    # evaluation's by the expansion's 1.9e-6 m): observed 0.997 of the full estimate.
+    assert 0.5 * estimates["full"] < estimates["sampled"] < 2 * estimates["full"], estimates
 
 
 def test_energies_and_integrators_agree(tmp_path):
@@ -176,6 +189,8 @@ def test_updates_with_the_krylov_basis(tmp_path):
     (", evaluation = 'expanded', static_correction = .true.",
      ("evaluation = 'expanded'", "static_correction")),
     (", exact_turns = .false.", ("exact_turns", "evaluation = 'expanded'")),
+    (", estimate_samples = 5", ("estimate_samples", "evaluation = 'expanded'")),
+    (", evaluation = 'expanded', estimate_samples = -1", ("estimate_samples",)),
 ])
 def test_bad_settings(tmp_path, extra, fragments):
     proc, out = run_scene(tmp_path, two_link(extra))
