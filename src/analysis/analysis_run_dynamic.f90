@@ -206,7 +206,7 @@ contains
       line = 'reduction: residual up to ' // approx_str(red%residual_max()) // &
         ' (no error estimate without a definite stiffness)'
     end if
-    if (red%expanded) line = line // ' (measured at ' // int_str(red%n_measured) // &
+    if (red%expanded) line = line // ' (measured at ' // int_str(red%measured%n) // &
       ' states: estimate_samples sets more)'
     if (red%expanded) line = line // '; ' // int_str(red%expansions%n_expansions) // &
       ' expansions (' // int_str(red%expansions%n_exact_turns) // ' with exact turns), ' // &

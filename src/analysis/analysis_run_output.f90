@@ -322,8 +322,7 @@ contains
         red%expansions%n_exact_turns, err)
       if (err%ok() .and. red%expanded) call h5%write_real_attr(g, 'manifold_error_max', &
         red%expansions%manifold_error, err)
-      if (err%ok() .and. red%expanded) call h5%write_int_attr(g, 'n_measured', &
-        red%n_measured, err)
+      if (err%ok() .and. red%expanded) call write_measured(h5, red, err)
       if (err%ok()) call h5%write_string_attr(g, 'update', r%update, err)
       if (err%ok()) call h5%write_int_attr(g, 'n_updates', this%updates%n_updates, err)
       if (err%ok() .and. size(this%updates%time) > 0) then
@@ -336,4 +335,21 @@ contains
       end if
     end associate
   end subroutine write_reduction
+
+  !> The exact measurements of an expanded run's error indicators (/reduction/measured).
+  subroutine write_measured(h5, red, err)
+    type(h5_writer_t), intent(inout) :: h5
+    type(reduced_t), intent(in) :: red
+    type(error_t), intent(inout) :: err
+    character(len=*), parameter :: g = '/reduction/measured'
+    integer :: n
+    n = red%measured%n
+    call h5%write_int_attr('/reduction', 'n_measured', n, err)
+    if (n == 0) return
+    if (err%ok()) call h5%write_real_1d(g // '/time', red%measured%time(1:n), err, units='s')
+    if (err%ok()) call h5%write_real_1d(g // '/residual', red%measured%residual(1:n), err)
+    if (err%ok() .and. red%has_estimate) call h5%write_real_1d(g // '/error_estimate', &
+      red%measured%estimate(1:n), err, units='m')
+    if (err%ok()) call h5%write_int_1d(g // '/kind', red%measured%kind(1:n), err)
+  end subroutine write_measured
 end submodule analysis_run_output

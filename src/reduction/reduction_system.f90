@@ -22,6 +22,22 @@ module reduction_system
   private
   public :: reduced_t
 
+  !> What a measurement of the error indicators was taken at (expanded runs; the codes of
+  !> /reduction/measured/kind).
+  integer, parameter :: MEASURED_EXPANSION = 1  !< where a new expansion was needed
+  integer, parameter :: MEASURED_FARTHEST = 2   !< the farthest state an expansion served
+  integer, parameter :: MEASURED_SAMPLE = 3     !< an output (estimate_samples)
+
+  !> The exact measurements of the error indicators along an expanded run, in order.
+  type :: measurements_t
+    integer :: n = 0
+    real(wp), allocatable :: time(:), residual(:), estimate(:)
+    integer, allocatable :: kind(:)
+  contains
+    procedure :: add => measurements_add
+    procedure :: clear => measurements_clear
+  end type measurements_t
+
   type, extends(ode2_system_t) :: reduced_t
     type(dynamics_t) :: dyn                   !< the full model, evaluated at q_ref + V eta
     type(basis_t) :: basis
@@ -40,19 +56,15 @@ module reduction_system
     logical :: keep_bases = .false.
     type(basis_t), allocatable :: bases(:)
     integer, allocatable :: basis_of(:)
-    !> evaluation = 'expanded' (reduction_expansion): evaluations from the expansion, which
-    !> is redone where it goes stale. The error indicators are measured exactly where an
-    !> expansion is made and at estimate_samples outputs spread over the run; each output
-    !> reports the latest measurement (measured_residual, measured_estimate).
+    !> evaluation = 'expanded' (reduction_expansion_eval): evaluations from the expansion,
+    !> which is redone where it goes stale. The error indicators are measured exactly where
+    !> an expansion is left, at the farthest state each served and at estimate_samples
+    !> outputs spread over the run; each output reports the latest measurement.
     logical :: expanded = .false.
     type(expansion_set_t) :: expansions
     integer :: estimate_samples = 10
     integer :: sample_every = 0                !< outputs between samples, 0: none
-    integer :: n_measured = 0                  !< states where the indicators were measured
-    real(wp) :: measured_residual = 0.0_wp, measured_estimate = 0.0_wp
-    !> The indicators' largest values at the expansions' farthest states (check_expansions),
-    !> which no output reports.
-    real(wp) :: far_residual = 0.0_wp, far_estimate = 0.0_wp
+    type(measurements_t) :: measured
   contains
     procedure :: keep_basis => red_keep_basis
     procedure :: accel => red_accel
@@ -64,7 +76,34 @@ module reduction_system
     procedure :: check_expansions => red_check_expansions
     procedure :: residual_max => red_residual_max
     procedure :: estimate_max => red_estimate_max
+    !> Type-bound so that the submodule links to it: gfortran 12 emits no symbol for a
+    !> private module procedure it has inlined.
+    procedure :: indicators => red_indicators
   end type reduced_t
+
+  interface
+    !> Accelerations from the expansion, expanded anew (with the error indicators measured
+    !> there, exactly) when the state has left its range (reduction_system_expanded).
+    module subroutine expanded_accel(this, t, eta, eta_dot, a, err)
+      class(reduced_t), intent(inout) :: this
+      real(wp), intent(in) :: t, eta(:), eta_dot(:)
+      real(wp), intent(out) :: a(:)
+      type(error_t), intent(out) :: err
+    end subroutine expanded_accel
+    !> Compare each kept expansion (but skip) that served a state beyond where it was last
+    !> compared with the exact model at the farthest such state (reduction_system_expanded).
+    module subroutine red_check_expansions(this, skip)
+      class(reduced_t), intent(inout) :: this
+      integer, intent(in), optional :: skip
+    end subroutine red_check_expansions
+    !> An output of the expanded evaluation (reduction_system_expanded).
+    module subroutine expanded_store(this, kg, t, eta, eta_dot, q_dy, v_dy, err)
+      type(reduced_t), intent(inout) :: this
+      integer, intent(in) :: kg
+      real(wp), intent(in) :: t, eta(:), eta_dot(:), q_dy(:), v_dy(:)
+      type(error_t), intent(out) :: err
+    end subroutine expanded_store
+  end interface
 
 contains
 
@@ -104,9 +143,7 @@ contains
     allocate(this%eta_hist(k, nt), this%eta_dot_hist(k, nt), this%residual(nt))
     allocate(this%estimate(nt))
     this%estimate = 0.0_wp
-    this%far_residual = 0.0_wp
-    this%far_estimate = 0.0_wp
-    this%n_measured = 0
+    call this%measured%clear()
     ! The outputs after the first (the initial state) in estimate_samples equal runs: the
     ! last output is always one of them.
     this%sample_every = 0
@@ -197,120 +234,18 @@ contains
     if (status /= 0) a = 0.0_wp
   end subroutine red_accel
 
-  !> Accelerations from the expansion, expanded anew (with the error indicators measured
-  !> there, exactly) when the state has left its range.
-  subroutine expanded_accel(this, t, eta, eta_dot, a, err)
-    class(reduced_t), intent(inout) :: this
-    real(wp), intent(in) :: t, eta(:), eta_dot(:)
-    real(wp), intent(out) :: a(:)
-    type(error_t), intent(out) :: err
-    real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
-    call this%dyn%prescribed(t, p, pd, pdd)
-    if (.not. this%expansions%find(t, p, eta, eta_dot)) then
-      call new_expansion(this, t, p, eta, eta_dot, err)
-      if (.not. err%ok()) return
-    end if
-    call this%expansions%item(this%expansions%current)%accel(this%dyn, t, p, pd, pdd, eta, &
-      eta_dot, a, err)
-    if (err%ok()) call check_finite(a, t, err)
-  end subroutine expanded_accel
-
-  !> A new expansion for the state (t, p, eta, eta_dot), which has left the kept ones, with the
-  !> error indicators measured there, exactly (apart from expanded_accel: the full model's
-  !> arrays are made only here).
-  subroutine new_expansion(this, t, p, eta, eta_dot, err)
-    class(reduced_t), intent(inout) :: this
-    real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
-    type(error_t), intent(out) :: err
-    real(wp) :: dq(this%dyn%model%n_dy), q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
-    real(wp) :: t_centre, eta_c(size(eta)), tau_max
-    ! Kept ones taken again since they were left (before a slot is reused; the one left now
-    ! is measured here).
-    call this%check_expansions(skip=this%expansions%current)
-    call this%full_state(eta, eta_dot, q_dy, v_dy)
-    ! The last exact solution may lie far back along the motion (see sample).
-    if (this%expansions%current > 0) call this%dyn%kin%restart_from(this%expansions%item( &
-      this%expansions%current)%coordinates([p, eta]))
-    call indicators(this, t, eta, eta_dot, q_dy, v_dy, this%measured_residual, &
-      this%measured_estimate, dq, err)
-    if (.not. err%ok()) return
-    this%n_measured = this%n_measured + 1
-    ! The indicators leave the exact kinematics of this state.
-    call this%expansions%note_stale(this%dyn%model, this%dyn%kin%x, p, eta)
-    t_centre = this%expansions%centre_time(this%dyn, t, p)
-    ! Along the modal rates no further than a quarter period of the lowest mode, where the
-    ! motion may turn back.
-    tau_max = 0.0_wp
-    if (allocated(this%basis%frequency_hz)) then
-      if (size(this%basis%frequency_hz) > 0) then
-        if (this%basis%frequency_hz(1) > 0) tau_max = 0.25_wp / this%basis%frequency_hz(1)
-      end if
-    end if
-    eta_c = this%expansions%centre_modal(eta, eta_dot, tau_max)
-    call this%expansions%expand(this%dyn, this%basis, t_centre, eta_c, err)
-    ! Centred ahead, it may fail there (the kinematics) or still miss this state: then centre
-    ! it here.
-    if (err%ok()) then
-      if (.not. this%expansions%item(this%expansions%current)%needs_update(p, eta, &
-        this%expansions%tol)) return
-    else if (t_centre == t .and. all(eta_c == eta)) then
-      return
-    end if
-    call this%expansions%expand(this%dyn, this%basis, t, eta, err)
-  end subroutine new_expansion
-
-  !> Compare each kept expansion (but skip) that served a state beyond where it was last
-  !> compared with the exact model at the farthest such state: the distance from the exact
-  !> coordinates and the error indicators there (one evaluation each). Else the expansion a
-  !> run or a basis ends in, or one never replaced, would be measured only where it was made
-  !> (spin_up's one expansion: at rest). Where the model cannot be evaluated there the
-  !> expansion counts as not compared (n_unchecked).
-  subroutine red_check_expansions(this, skip)
-    class(reduced_t), intent(inout) :: this
-    integer, intent(in), optional :: skip
-    real(wp), allocatable :: z(:), z_rate(:)
-    real(wp) :: q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy), dq(this%dyn%model%n_dy)
-    real(wp) :: t, residual, estimate
-    type(error_t) :: err
-    type(kin_state_t) :: before
-    integer :: i, nr, not_this
-    logical :: moved
-    nr = this%dyn%model%n_rh
-    not_this = 0
-    if (present(skip)) not_this = skip
-    moved = .false.
-    do
-      i = this%expansions%unchecked(not_this, t, z, z_rate)
-      if (i == 0) exit
-      ! The run's kinematics goes on from where it was, as if nothing had been checked.
-      if (.not. moved) call this%dyn%kin%save_state(before)
-      moved = .true.
-      call this%dyn%kin%restart_from(this%expansions%item(i)%coordinates(z))
-      call this%full_state(z(nr + 1:), z_rate, q_dy, v_dy)
-      call indicators(this, t, z(nr + 1:), z_rate, q_dy, v_dy, residual, estimate, dq, err)
-      if (err%ok()) then
-        call this%expansions%note_checked(i, this%dyn%model, this%dyn%kin%x)
-        this%n_measured = this%n_measured + 1
-        this%far_residual = max(this%far_residual, residual)
-        this%far_estimate = max(this%far_estimate, estimate)
-      else
-        this%expansions%n_unchecked = this%expansions%n_unchecked + 1
-        this%expansions%item(i)%checked_d2 = this%expansions%item(i)%far_d2
-      end if
-    end do
-    if (moved) call this%dyn%kin%restore_state(before)
-  end subroutine red_check_expansions
-
-  !> The largest residual norm of the run: at the outputs and the expansions' farthest states.
+  !> The largest residual norm of the run: at the outputs and every exact measurement.
   real(wp) function red_residual_max(this) result(r)
     class(reduced_t), intent(in) :: this
-    r = max(maxval(this%residual), this%far_residual)
+    r = maxval(this%residual)
+    if (this%measured%n > 0) r = max(r, maxval(this%measured%residual(1:this%measured%n)))
   end function red_residual_max
 
   !> The largest error estimate [m] of the run, as red_residual_max.
   real(wp) function red_estimate_max(this) result(e)
     class(reduced_t), intent(in) :: this
-    e = max(maxval(this%estimate), this%far_estimate)
+    e = maxval(this%estimate)
+    if (this%measured%n > 0) e = max(e, maxval(this%measured%estimate(1:this%measured%n)))
   end function red_estimate_max
 
   !> V^T of the full model's linearised Jacobian: -(V^T Mbar V)^-1 V^T [K0, D0] V, with the
@@ -370,7 +305,7 @@ contains
       call this%dyn%report(err, status)
       return
     end if
-    call indicators(this, t, q, v, q_dy, v_dy, this%residual(kg), this%estimate(kg), dq, err)
+    call this%indicators(t, q, v, q_dy, v_dy, this%residual(kg), this%estimate(kg), dq, err)
     call this%dyn%report(err, status)
     if (status /= 0) return
     if (this%static_correction) then
@@ -383,8 +318,8 @@ contains
   !> The error indicators at a reduced state, exactly: the residual's norm and, with a definite
   !> K0, the estimate from dq = K0^-1 r (the static correction). Leaves the full model
   !> evaluated at the state.
-  subroutine indicators(this, t, eta, eta_dot, q_dy, v_dy, residual, estimate, dq, err)
-    type(reduced_t), intent(inout) :: this
+  subroutine red_indicators(this, t, eta, eta_dot, q_dy, v_dy, residual, estimate, dq, err)
+    class(reduced_t), intent(inout) :: this
     real(wp), intent(in) :: t, eta(:), eta_dot(:), q_dy(:), v_dy(:)
     real(wp), intent(out) :: residual, estimate, dq(:)
     type(error_t), intent(out) :: err
@@ -413,61 +348,7 @@ contains
     else
       this%has_estimate = .false.
     end if
-  end subroutine indicators
-
-  !> An output of the expanded evaluation: the nodal coordinates (O(n m^3), no solve) and the
-  !> energies from the expansion, the indicators' latest measurement (here, at a sample).
-  subroutine expanded_store(this, kg, t, eta, eta_dot, q_dy, v_dy, err)
-    type(reduced_t), intent(inout) :: this
-    integer, intent(in) :: kg
-    real(wp), intent(in) :: t, eta(:), eta_dot(:), q_dy(:), v_dy(:)
-    type(error_t), intent(out) :: err
-    real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
-    real(wp) :: a(size(eta)), x(this%dyn%model%n_x)
-    call this%dyn%prescribed(t, p, pd, pdd)
-    if (.not. this%expansions%find(t, p, eta, eta_dot)) then
-      call expanded_accel(this, t, eta, eta_dot, a, err)
-      if (.not. err%ok()) return
-    end if
-    associate (ex => this%expansions%item(this%expansions%current))
-      x = ex%coordinates([p, eta])
-      call this%dyn%store(kg, t, q_dy, v_dy, x, ex%energy([p, eta], [pd, eta_dot], &
-        this%dyn%load_factor * this%dyn%loads_at(t), x))
-    end associate
-    if (this%sample_every > 0 .and. kg > 1) then
-      if (mod(kg - 1, this%sample_every) == 0 .or. kg == size(this%estimate)) &
-        call sample(this, t, eta, eta_dot, q_dy, v_dy, x)
-    end if
-    this%residual(kg) = this%measured_residual
-    this%estimate(kg) = this%measured_estimate
-  end subroutine expanded_store
-
-  !> The error indicators and the expansion's distance from the exact coordinates (x: its
-  !> own) at an output, by one exact evaluation. The error depends on the rates and loads as
-  !> well as on where the expansions were made: spin_up's, measured at its one expansion and
-  !> the farthest modal state, 6.0e-5 m, reaches 2.3e-4 m at full speed. The kinematics
-  !> starts from x: its last exact solution may lie turns back (spin_up's hub turns 8 rad
-  !> between samples, too far for Newton).
-  subroutine sample(this, t, eta, eta_dot, q_dy, v_dy, x)
-    type(reduced_t), intent(inout) :: this
-    real(wp), intent(in) :: t, eta(:), eta_dot(:), q_dy(:), v_dy(:), x(:)
-    real(wp) :: dq(size(q_dy)), residual, estimate
-    type(kin_state_t) :: before
-    type(error_t) :: err
-    call this%dyn%kin%save_state(before)
-    call this%dyn%kin%restart_from(x)
-    call indicators(this, t, eta, eta_dot, q_dy, v_dy, residual, estimate, dq, err)
-    if (err%ok()) then
-      this%measured_residual = residual
-      this%measured_estimate = estimate
-      this%n_measured = this%n_measured + 1
-      this%expansions%manifold_error = max(this%expansions%manifold_error, &
-        this%dyn%model%largest_translation(this%dyn%kin%x - x))
-    else
-      this%expansions%n_unchecked = this%expansions%n_unchecked + 1
-    end if
-    call this%dyn%kin%restore_state(before)
-  end subroutine sample
+  end subroutine red_indicators
 
   !> The residual of the full equations r = DF_dy^T (f - M W a_eta) - sigma_dy (W = DF_dy V)
   !> at the prepared state, by one transposed solve, and its norm sqrt(r^T Mbar^-1 r):
@@ -492,4 +373,41 @@ contains
     dq_full(this%dyn%model%n_rh + 1:) = dq
     call this%dyn%kin%apply_df(this%dyn%model, dq_full, dx)
   end function nodal_motion
+
+  !> Append a measurement, the arrays growing by doubling.
+  subroutine measurements_add(this, t, residual, estimate, kind)
+    class(measurements_t), intent(inout) :: this
+    real(wp), intent(in) :: t, residual, estimate
+    integer, intent(in) :: kind
+    real(wp), allocatable :: rt(:, :)
+    integer, allocatable :: kt(:)
+    integer :: cap
+    if (.not. allocated(this%time)) call this%clear()
+    if (this%n == size(this%time)) then
+      cap = max(16, 2 * this%n)
+      allocate(rt(cap, 3), kt(cap))
+      rt(1:this%n, 1) = this%time(1:this%n)
+      rt(1:this%n, 2) = this%residual(1:this%n)
+      rt(1:this%n, 3) = this%estimate(1:this%n)
+      kt(1:this%n) = this%kind(1:this%n)
+      this%time = rt(:, 1)
+      this%residual = rt(:, 2)
+      this%estimate = rt(:, 3)
+      call move_alloc(kt, this%kind)
+    end if
+    this%n = this%n + 1
+    this%time(this%n) = t
+    this%residual(this%n) = residual
+    this%estimate(this%n) = estimate
+    this%kind(this%n) = kind
+  end subroutine measurements_add
+
+  subroutine measurements_clear(this)
+    class(measurements_t), intent(inout) :: this
+    this%n = 0
+    this%time = [real(wp) ::]
+    this%residual = [real(wp) ::]
+    this%estimate = [real(wp) ::]
+    this%kind = [integer ::]
+  end subroutine measurements_clear
 end module reduction_system

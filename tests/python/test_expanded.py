@@ -110,6 +110,18 @@ def test_indicators_at_the_farthest_state_and_sampled(tmp_path):
                 assert f"measured at {measured[name]} states" in proc.stdout
     # Where it was made (at rest) and the farthest state; then the 10 samples too.
     assert measured == {"far": 2, "sampled": 12}, measured
+    with h5py.File(tmp_path / "sampled.h5") as f, h5py.File(tmp_path / "full.h5") as g:
+        log = {key: f["reduction/measured"][key][:] for key in ("time", "kind", "error_estimate")}
+        t_full, e_full = g["time"][:], g["reduction/error_estimate"][:]
+    assert list(log["kind"]) == [1] + [3] * 10 + [2], log["kind"]
+    # Samples at every 40th of the 401 outputs (2 s apart), the last at t_end.
+    assert np.allclose(log["time"][1:11], np.arange(1, 11) * 2.0, atol=1e-9), log["time"]
+    # Each sample is the full evaluation's estimate at that output, up to the states'
+    # difference (the expansion's 1.9e-6 m against estimates from 1.6e-6 m): observed 0.997
+    # to 1.000 of it, 0.5 to 2 required.
+    at = np.searchsorted(t_full, log["time"][1:11] - 1e-9)
+    assert np.all(np.abs(log["error_estimate"][1:11] / e_full[at] - 1) < 0.5), \
+        (log["error_estimate"][1:11], e_full[at])
     assert 0 < estimates["far"] < 10 * estimates["full"], estimates
     # The samples reach the plateau at full speed (the states there differ from the full
     # evaluation's by the expansion's 1.9e-6 m): observed 0.997 of the full estimate.
