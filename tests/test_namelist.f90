@@ -1,7 +1,9 @@
 program test_namelist
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_INPUT
+  use core_error, only: error_t, ERR_INPUT, ERR_INTERNAL
   use io_namelist, only: nml_file_t, nml_group_t, string_t
+  use io_fields, only: rd_enum
+  use model_scene, only: UPDATE_NAMES, UPDATE_MAC, UPDATE_NONE
   use testing, only: suite_t
   implicit none
   character(*), parameter :: NL = new_line('a')
@@ -17,6 +19,7 @@ program test_namelist
   call test_getter_errors()
   call test_parse_errors()
   call test_load()
+  call test_enum()
   call t%finish()
 
 contains
@@ -422,4 +425,27 @@ contains
     open(newunit=u, file=path, status='old')
     close(u, status='delete')
   end subroutine test_load
+
+  !> A keyword read as an enum (io_fields' rd_enum): its constant, the schema's default, a
+  !> clear error for a bad keyword, and the program's names checked against the schema's.
+  subroutine test_enum()
+    type(nml_file_t) :: f
+    type(error_t) :: err
+    integer :: mode
+    call parse_ok(f, '&reduction n_modes = 2, update = ''MAC'' /' // NL // &
+      '&reduction n_modes = 2 /' // NL // '&reduction n_modes = 2, update = ''often'' /')
+    mode = 0
+    call rd_enum(f%groups(1), 'update', UPDATE_NAMES, mode, err)
+    call t%check(err%ok() .and. mode == UPDATE_MAC, 'enum of a keyword (case folded)')
+    call rd_enum(f%groups(2), 'update', UPDATE_NAMES, mode, err)
+    call t%check(err%ok() .and. mode == UPDATE_NONE, 'enum of the schema''s default')
+    call rd_enum(f%groups(3), 'update', UPDATE_NAMES, mode, err)
+    call expect_error(err, [character(30) :: '''update''', 'often', 'interval'], &
+      'bad keyword named with the choices')
+    call err%clear()
+    call rd_enum(f%groups(1), 'update', [character(8) :: 'none', 'interval'], mode, err)
+    call t%check(err%code == ERR_INTERNAL .and. index(err%message, 'update') > 0, &
+      'names that are not the schema''s choices: an internal error')
+    if (.not. err%ok()) write(*, '(a)') '        -> ' // err%message
+  end subroutine test_enum
 end program test_namelist

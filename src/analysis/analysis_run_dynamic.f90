@@ -1,6 +1,7 @@
 !> The dynamic analysis of a run: the integrator and its options, the full or reduced model,
 !> the controllers' sampling times and feedforward.
 submodule (analysis_run) analysis_run_dynamic
+  use model_scene, only: UPDATE_NONE, JOINTS_HELD, EVALUATION_EXPANDED
   implicit none
 
 contains
@@ -133,7 +134,7 @@ contains
       update%interval = r%update_interval
       update%mac_threshold = r%mac_threshold
       update%eigensolver = r%eigensolver
-      if (r%joints == 'held') call held_joints(this%dyn%model, update%held, err)
+      if (r%joints == JOINTS_HELD) call held_joints(this%dyn%model, update%held, err)
       if (.not. err%ok()) return
       if (allocated(this%red)) deallocate(this%red)
       allocate(this%red)
@@ -141,7 +142,7 @@ contains
       ! The basis is the open-loop plant's; the controllers act in the integration.
       this%red%dyn%controls_on = .false.
       this%red%static_correction = r%static_correction
-      this%red%expanded = r%evaluation == 'expanded'
+      this%red%expanded = r%evaluation == EVALUATION_EXPANDED
       this%red%expansions%tol = r%expansion_tol
       this%red%expansions%use_frames = r%exact_turns
       this%red%estimate_samples = r%estimate_samples
@@ -188,7 +189,7 @@ contains
     ! What follows (&linear along the run) analyses the open loop.
     this%red%dyn%controls_on = .false.
     this%dyn = this%red%dyn
-    if (this%verbose .and. err%ok() .and. update%mode /= 'none') write(*, '(a,i0,a,i0,a)') &
+    if (this%verbose .and. err%ok() .and. update%mode /= UPDATE_NONE) write(*, '(a,i0,a,i0,a)') &
       'reduction: ', this%updates%n_updates, ' basis updates in ', size(this%updates%time), &
       ' checks'
     if (this%verbose .and. err%ok()) call report_quality(this%red)

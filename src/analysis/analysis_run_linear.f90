@@ -5,6 +5,7 @@ submodule (analysis_run) analysis_run_linear
   use dynamics_linear, only: linearise, linear_model_t
   use elements_base, only: MODE_DYNAMIC
   use reduction_basis, only: basis_spec_t, compute_basis, held_joints
+  use model_scene, only: JOINTS_HELD
   implicit none
 
   !> Component names of inputs (forces, moments) and outputs (displacements, rotations):
@@ -118,7 +119,7 @@ contains
       spec%cutoff_hz = r%cutoff_hz
       spec%auto_factor = r%auto_factor
       spec%eigensolver = r%eigensolver
-      if (r%joints == 'held') call held_joints(dyn%model, spec%held, err)
+      if (r%joints == JOINTS_HELD) call held_joints(dyn%model, spec%held, err)
       if (.not. err%ok()) return
       if (allocated(r%basis_prescribed)) then
         if (size(r%basis_prescribed) /= dyn%model%n_rh) then

@@ -2,6 +2,7 @@
 submodule (analysis_run) analysis_run_output
   use model_system, only: COORD_PHI, COORD_Y, COORD_Z, COORD_EULER, NODE_SLOTS
   use model_control, only: LAW_PID
+  use model_scene, only: UPDATE_NAMES, EVALUATION_NAMES
   implicit none
 
 contains
@@ -315,7 +316,8 @@ contains
       if (err%ok()) call h5%write_real_attr(g, 'residual_max', red%residual_max(), err)
       if (err%ok() .and. red%has_estimate) call h5%write_real_attr(g, 'error_estimate_max', &
         red%estimate_max(), err)
-      if (err%ok()) call h5%write_string_attr(g, 'evaluation', r%evaluation, err)
+      if (err%ok()) call h5%write_string_attr(g, 'evaluation', &
+        trim(EVALUATION_NAMES(r%evaluation)), err)
       if (err%ok() .and. red%expanded) call h5%write_int_attr(g, 'n_expansions', &
         red%expansions%n_expansions, err)
       if (err%ok() .and. red%expanded) call h5%write_int_attr(g, 'n_expansions_exact_turns', &
@@ -323,7 +325,7 @@ contains
       if (err%ok() .and. red%expanded) call h5%write_real_attr(g, 'manifold_error_max', &
         red%expansions%manifold_error, err)
       if (err%ok() .and. red%expanded) call write_measured(h5, red, err)
-      if (err%ok()) call h5%write_string_attr(g, 'update', r%update, err)
+      if (err%ok()) call h5%write_string_attr(g, 'update', trim(UPDATE_NAMES(r%update)), err)
       if (err%ok()) call h5%write_int_attr(g, 'n_updates', this%updates%n_updates, err)
       if (err%ok() .and. size(this%updates%time) > 0) then
         call h5%write_real_1d(g // '/checks/time', this%updates%time, err, units='s')

@@ -10,8 +10,8 @@ module io_fields
   use model_scene, only: label_t
   implicit none
   private
-  public :: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, rd_classes, rd_label, &
-    only_with, rd_fixed_list, rd_labels, first_given
+  public :: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_enum, rd_choices, rd_classes, &
+    rd_label, only_with, rd_fixed_list, rd_labels, first_given
 
 contains
 
@@ -163,6 +163,32 @@ contains
     if (.not. has_choice(spec, value)) call err%set(ERR_INPUT, g%where() // ': variable ''' // &
       var // ''': ''' // value // ''' is not ' // choice_list(spec))
   end subroutine rd_choice
+
+  !> A keyword as an enum: its position in names, the program's names of its constants
+  !> (model_scene's UPDATE_NAMES, ...). These must be the schema's choices: a difference is a
+  !> bug, reported whenever the variable is read.
+  subroutine rd_enum(g, var, names, value, err)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: var, names(:)
+    integer, intent(inout) :: value
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: word
+    type(var_spec_t) :: spec
+    integer :: i, n_choices
+    if (.not. err%ok()) return
+    spec = spec_of(g, var, err)
+    if (.not. err%ok()) return
+    n_choices = 1 + count([(spec%choices(i:i) == '|', i = 1, len_trim(spec%choices))])
+    if (n_choices /= size(names) .or. .not. all([(has_choice(spec, trim(names(i))), i = 1, &
+        size(names))])) then
+      call err%set(ERR_INTERNAL, g%where() // ': variable ''' // var // ''': the schema''s ' // &
+        'choices ' // choice_list(spec) // ' are not the program''s')
+      return
+    end if
+    call rd_choice(g, var, word, err)
+    if (.not. err%ok()) return
+    value = findloc([(trim(names(i)) == word, i = 1, size(names))], .true., 1)
+  end subroutine rd_enum
 
   !> Keywords, each checked against the schema's choices (default: the schema's, if any).
   subroutine rd_choices(g, var, values, err)

@@ -5,9 +5,10 @@ module io_scene_analyses
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
   use io_namelist, only: nml_group_t
-  use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_label, only_with, &
-    rd_labels
-  use model_scene, only: auto_integrator, scene_t, controller_rec_t
+  use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_enum, rd_label, &
+    only_with, rd_labels
+  use model_scene, only: auto_integrator, scene_t, controller_rec_t, UPDATE_NAMES, UPDATE_NONE, &
+    UPDATE_INTERVAL, UPDATE_MAC, JOINTS_NAMES, JOINTS_HELD, EVALUATION_NAMES, EVALUATION_EXPANDED
   implicit none
   private
   public :: read_static, read_modal, read_buckling, read_controller, read_linear, &
@@ -183,24 +184,25 @@ contains
         if (.not. e%ok()) err = e
       end if
       call rd_logical(g, 'static_correction', r%static_correction, err)
-      call rd_choice(g, 'update', r%update, err)
+      call rd_enum(g, 'update', UPDATE_NAMES, r%update, err)
       if (err%ok()) then
-        call only_with(g, ['update_interval'], r%update == 'interval' .or. r%update == 'mac', &
-          'with update = ''interval'' or ''mac''', err)
-        call only_with(g, ['mac_threshold'], r%update == 'mac', &
+        call only_with(g, ['update_interval'], r%update == UPDATE_INTERVAL .or. &
+          r%update == UPDATE_MAC, 'with update = ''interval'' or ''mac''', err)
+        call only_with(g, ['mac_threshold'], r%update == UPDATE_MAC, &
           'with update = ''mac''', err)
       end if
       call rd_real(g, 'mac_threshold', r%mac_threshold, err)
       call rd_choice(g, 'eigensolver', r%eigensolver, err)
-      if (r%update /= 'none') call rd_real(g, 'update_interval', r%update_interval, err)
-      call rd_choice(g, 'joints', r%joints, err)
-      call rd_choice(g, 'evaluation', r%evaluation, err)
+      if (r%update /= UPDATE_NONE) call rd_real(g, 'update_interval', r%update_interval, err)
+      call rd_enum(g, 'joints', JOINTS_NAMES, r%joints, err)
+      call rd_enum(g, 'evaluation', EVALUATION_NAMES, r%evaluation, err)
       if (err%ok()) call only_with(g, ['expansion_tol   ', 'exact_turns     ', &
-        'estimate_samples'], r%evaluation == 'expanded', 'with evaluation = ''expanded''', err)
+        'estimate_samples'], r%evaluation == EVALUATION_EXPANDED, &
+        'with evaluation = ''expanded''', err)
       call rd_real(g, 'expansion_tol', r%expansion_tol, err)
       call rd_logical(g, 'exact_turns', r%exact_turns, err)
       call rd_int(g, 'estimate_samples', r%estimate_samples, err)
-      if (err%ok() .and. r%joints == 'held') then
+      if (err%ok() .and. r%joints == JOINTS_HELD) then
         if (r%selection /= 'count') call err%set(ERR_INPUT, g%where() // ': variable ' // &
           '''joints'': ''held'' takes n_modes (cutoff_hz and auto_factor are not built for it)')
       end if

@@ -197,6 +197,17 @@ module model_scene
     real(wp) :: dt = 1.0e-3_wp, rho_inf = 0.8_wp
   end type dynamic_rec_t
 
+  !> The keywords of &reduction's choices as enums, in the order of their names (read with
+  !> io_fields' rd_enum, which checks the names against the schema's choices).
+  integer, parameter, public :: UPDATE_NONE = 1, UPDATE_INTERVAL = 2, UPDATE_MAC = 3
+  character(len=*), parameter, public :: UPDATE_NAMES(3) = [character(len=8) :: 'none', &
+    'interval', 'mac']
+  integer, parameter, public :: EVALUATION_FULL = 1, EVALUATION_EXPANDED = 2
+  character(len=*), parameter, public :: EVALUATION_NAMES(2) = [character(len=8) :: 'full', &
+    'expanded']
+  integer, parameter, public :: JOINTS_FREE = 1, JOINTS_HELD = 2
+  character(len=*), parameter, public :: JOINTS_NAMES(2) = [character(len=4) :: 'free', 'held']
+
   !> A reduced dynamic analysis: dq_dy = V eta (docs/input.md, &reduction).
   type :: reduction_rec_t
     logical :: active = .false.
@@ -208,14 +219,15 @@ module model_scene
     real(wp) :: basis_time = 0.0_wp
     real(wp), allocatable :: basis_prescribed(:)   !< optional, overrides basis_time
     logical :: static_correction = .false.
-    character(len=:), allocatable :: update        !< 'none', 'interval' or 'mac'
+    integer :: update = UPDATE_NONE                !< UPDATE_*
     real(wp) :: update_interval = 0.0_wp, mac_threshold = 0.9_wp
     character(len=:), allocatable :: eigensolver   !< 'auto', 'lapack', 'arpack' or 'krylov'
-    !> 'free' (modes of the free structure) or 'held' (the controlled joints held: their unit
-    !> motions plus the modes with them held)
-    character(len=:), allocatable :: joints
-    !> 'full' (the full model evaluated at every call) or 'expanded' (reduction_expansion)
-    character(len=:), allocatable :: evaluation
+    !> JOINTS_FREE (modes of the free structure) or JOINTS_HELD (the controlled joints held:
+    !> their unit motions plus the modes with them held)
+    integer :: joints = JOINTS_FREE
+    !> EVALUATION_FULL (the full model evaluated at every call) or EVALUATION_EXPANDED
+    !> (reduction_expansion)
+    integer :: evaluation = EVALUATION_FULL
     real(wp) :: expansion_tol = 1.0e-3_wp
     !> Joints that turn parts rigidly kept exact in the expansions (reduction_frames)
     logical :: exact_turns = .true.

@@ -11,6 +11,7 @@ module reduction_adaptive
   use core_kinds, only: wp
   use core_strings, only: real_str
   use core_error, only: error_t
+  use model_scene, only: UPDATE_NONE, UPDATE_INTERVAL
   use integrators_system, only: integrator_options_t, integrator_stats_t
   use integrators_driver, only: integrate
   use reduction_modal, only: modal_result_t, modal_analysis, modal_mass_times
@@ -22,7 +23,7 @@ module reduction_adaptive
   public :: update_spec_t, update_log_t, integrate_reduced
 
   type :: update_spec_t
-    character(len=8) :: mode = 'none'         !< 'none', 'interval' or 'mac'
+    integer :: mode = UPDATE_NONE             !< UPDATE_* (model_scene)
     real(wp) :: interval = 0.0_wp             !< time between checks [s]
     real(wp) :: mac_threshold = 0.9_wp
     character(len=8) :: eigensolver = 'auto'
@@ -66,7 +67,7 @@ contains
     red%last_eta_dot = red%last_eta
     all_index = [(iseg, iseg = 1, nt)]
     seg_start = t_out(1)
-    if (associated(opts%progress) .and. spec%mode /= 'none') opts%progress%n_updates = 0
+    if (associated(opts%progress) .and. spec%mode /= UPDATE_NONE) opts%progress%n_updates = 0
     do iseg = 1, size(checks) + 1
       seg_end = t_out(nt)
       if (iseg <= size(checks)) seg_end = checks(iseg)
@@ -90,7 +91,7 @@ contains
       if (.not. err%ok()) return
       if (iseg <= size(checks)) call check_basis(red, spec, seg_end, log, err)
       if (.not. err%ok()) return
-      if (associated(opts%progress) .and. spec%mode /= 'none') &
+      if (associated(opts%progress) .and. spec%mode /= UPDATE_NONE) &
         opts%progress%n_updates = log%n_updates
       seg_start = seg_end
     end do
@@ -107,7 +108,7 @@ contains
     real(wp) :: t, tiny_t
     integer :: j, i
     allocate(checks(0))
-    if (spec%mode == 'none') return
+    if (spec%mode == UPDATE_NONE) return
     tiny_t = 1.0e-9_wp * (t_out(size(t_out)) - t_out(1))
     j = 1
     do
@@ -176,7 +177,7 @@ contains
       call err%prefix('basis update at t = ' // real_str(t) // ': ')
       return
     end if
-    replace = spec%mode == 'interval' .or. minval(mac) < spec%mac_threshold
+    replace = spec%mode == UPDATE_INTERVAL .or. minval(mac) < spec%mac_threshold
     if (replace) then
       red%last_eta_dot = matmul(transpose(tracked), &
         reshape(modal_mass_times(red%dyn, modes, reshape(v_dy, [n_dy, 1])), [n_dy]))
