@@ -56,7 +56,7 @@ module reduction_system
     logical :: keep_bases = .false.
     type(basis_t), allocatable :: bases(:)
     integer, allocatable :: basis_of(:)
-    !> evaluation = 'expanded' (reduction_expansion_eval): evaluations from the expansion,
+    !> evaluation = 'expanded' (reduction_system_expanded): evaluations from the expansion,
     !> which is redone where it goes stale. The error indicators are measured exactly where
     !> an expansion is left, at the farthest state each served and at estimate_samples
     !> outputs spread over the run; each output reports the latest measurement.
