@@ -139,14 +139,26 @@ fi
 
 # --- the flexmor Python package ----------------------------------------------------------------
 # The installed copy (not one on PYTHONPATH; imported outside the repository) must have the
-# repository's version.
+# repository's version and the repository's modules: a module added or changed within a
+# version (a new command) would otherwise be missing from a machine that installed it before.
 root=$(cd "$(dirname "$0")/.." && pwd)
 want=$(tr -d '[:space:]' < "$root/VERSION")
 flexmor_version() {
   (cd / && env -u PYTHONPATH python3 -c 'import flexmor; print(flexmor.__version__)' 2> /dev/null) \
     || true
 }
+flexmor_modules_current() {
+  (cd / && env -u PYTHONPATH python3 -c '
+import filecmp, pathlib, sys, flexmor
+src, inst = pathlib.Path(sys.argv[1]), pathlib.Path(flexmor.__file__).parent
+names = sorted(p.name for p in src.glob("*.py"))
+sys.exit(0 if filecmp.cmpfiles(src, inst, names, shallow=False)[0] == names else 1)
+' "$root/python/flexmor" 2> /dev/null)
+}
 have=$(flexmor_version)
+if [[ "$have" == "$want" ]] && ! flexmor_modules_current; then
+  have="$want with other modules than the repository's"
+fi
 if [[ "$have" == "$want" ]]; then
   say "flexmor Python package: $want installed"
 elif [[ $check_only -eq 1 ]]; then
