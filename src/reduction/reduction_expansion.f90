@@ -186,11 +186,12 @@ module reduction_expansion
       real(wp), intent(in) :: eta(:), eta_dot(:), tau_max
       real(wp) :: eta_c(size(eta))
     end function set_centre_modal
-    !> The expansion's distance from the exact x where it is left (reduction_expansion_set).
-    module subroutine set_note_stale(this, model, x, p, eta)
+    !> The distance of the expansion in use (its coordinates x_series) from the exact x at
+    !> (p, eta), where it is left (reduction_expansion_set).
+    module subroutine set_note_stale(this, model, x, x_series, p, eta)
       class(expansion_set_t), intent(inout) :: this
       type(model_t), intent(in) :: model
-      real(wp), intent(in) :: x(:), p(:), eta(:)
+      real(wp), intent(in) :: x(:), x_series(:), p(:), eta(:)
     end subroutine set_note_stale
     !> A kept expansion other than skip that served a state farther than where it was
     !> compared with the exact model (0: none), and that state (reduction_expansion_set).

@@ -111,8 +111,7 @@ contains
     real(wp) :: d(2)
     if (this%current == 0) return
     associate (ex => this%item(this%current))
-      this%manifold_error = max(this%manifold_error, model%largest_translation(x - &
-        ex%coordinates([p, eta])))
+      this%manifold_error = max(this%manifold_error, model%largest_translation(x - x_series))
       ! The states it served up to the d2 of this one, which has left its range, count as
       ! compared.
       d = ex%spread_at(p, eta)

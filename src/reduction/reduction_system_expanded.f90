@@ -28,18 +28,22 @@ contains
     type(error_t), intent(out) :: err
     real(wp) :: dq(this%dyn%model%n_dy), q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
     real(wp) :: t_centre, eta_c(size(eta)), tau_max, residual, estimate
+    real(wp), allocatable :: x_series(:)
     ! Kept ones taken again since they were left (before a slot is reused; the one left now
     ! is measured here).
     call this%check_expansions(skip=this%expansions%current)
     call this%full_state(eta, eta_dot, q_dy, v_dy)
     ! The last exact solution may lie far back along the motion (see sample).
-    if (this%expansions%current > 0) call this%dyn%kin%restart_from(this%expansions%item( &
-      this%expansions%current)%coordinates([p, eta]))
+    if (this%expansions%current > 0) then
+      x_series = this%expansions%item(this%expansions%current)%coordinates([p, eta])
+      call this%dyn%kin%restart_from(x_series)
+    end if
     call this%indicators(t, eta, eta_dot, q_dy, v_dy, residual, estimate, dq, err)
     if (.not. err%ok()) return
     call this%measured%add(t, residual, estimate, MEASURED_EXPANSION)
     ! The indicators leave the exact kinematics of this state.
-    call this%expansions%note_stale(this%dyn%model, this%dyn%kin%x, p, eta)
+    if (allocated(x_series)) call this%expansions%note_stale(this%dyn%model, this%dyn%kin%x, &
+      x_series, p, eta)
     t_centre = this%expansions%centre_time(this%dyn, t, p)
     ! Along the modal rates no further than a quarter period of the lowest mode, where the
     ! motion may turn back.
