@@ -210,8 +210,9 @@ contains
     if (red%expanded) line = line // ' (measured at ' // int_str(red%measured%n) // &
       ' states: estimate_samples sets more)'
     if (red%expanded) line = line // '; ' // int_str(red%expansions%n_expansions) // &
-      ' expansions (' // int_str(red%expansions%n_exact_turns) // ' with exact turns), ' // &
-      'up to ' // approx_str(red%expansions%manifold_error) // ' m from the exact coordinates'
+      trim(merge(' expansion ', ' expansions', red%expansions%n_expansions == 1)) // ' (' // &
+      int_str(red%expansions%n_exact_turns) // ' with exact turns), ' // 'up to ' // &
+      approx_str(red%expansions%manifold_error) // ' m from the exact coordinates'
     if (red%expanded .and. red%expansions%n_unchecked > 0) line = line // ' (' // &
       int_str(red%expansions%n_unchecked) // ' states not compared: the exact model ' // &
       'could not be evaluated there)'
