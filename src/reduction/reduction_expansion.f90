@@ -201,13 +201,13 @@ module reduction_expansion
       real(wp), intent(out) :: t
       real(wp), allocatable, intent(out) :: z(:), z_rate(:)
     end function set_unchecked
-    !> Expansion i compared with the exact coordinates x at its farthest state
-    !> (reduction_expansion_set).
-    module subroutine set_note_checked(this, i, model, x)
+    !> Expansion i (its coordinates x_series) compared with the exact coordinates x at its
+    !> farthest state (reduction_expansion_set).
+    module subroutine set_note_checked(this, i, model, x, x_series)
       class(expansion_set_t), intent(inout) :: this
       integer, intent(in) :: i
       type(model_t), intent(in) :: model
-      real(wp), intent(in) :: x(:)
+      real(wp), intent(in) :: x(:), x_series(:)
     end subroutine set_note_checked
   end interface
 

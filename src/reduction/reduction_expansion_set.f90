@@ -136,8 +136,7 @@ contains
 
   module procedure set_note_checked
     associate (ex => this%item(i))
-      this%manifold_error = max(this%manifold_error, model%largest_translation(x - &
-        ex%coordinates(ex%far_z)))
+      this%manifold_error = max(this%manifold_error, model%largest_translation(x - x_series))
       ex%checked_d2 = ex%far_d2
     end associate
   end procedure set_note_checked

@@ -26,19 +26,17 @@ contains
     type(reduced_t), intent(inout) :: this
     real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
     type(error_t), intent(out) :: err
-    real(wp) :: dq(this%dyn%model%n_dy), q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
     real(wp) :: t_centre, eta_c(size(eta)), tau_max, residual, estimate
     real(wp), allocatable :: x_series(:)
     ! Kept ones taken again since they were left (before a slot is reused; the one left now
     ! is measured here).
     call this%check_expansions(skip=this%expansions%current)
-    call this%full_state(eta, eta_dot, q_dy, v_dy)
-    ! The last exact solution may lie far back along the motion (see sample).
     if (this%expansions%current > 0) then
       x_series = this%expansions%item(this%expansions%current)%coordinates([p, eta])
-      call this%dyn%kin%restart_from(x_series)
+      call measure(this, t, eta, eta_dot, residual, estimate, err, x_series)
+    else
+      call measure(this, t, eta, eta_dot, residual, estimate, err)
     end if
-    call this%indicators(t, eta, eta_dot, q_dy, v_dy, residual, estimate, dq, err)
     if (.not. err%ok()) return
     call this%measured%add(t, residual, estimate, MEASURED_EXPANSION)
     ! The indicators leave the exact kinematics of this state.
@@ -72,8 +70,7 @@ contains
   !> Where the model cannot be evaluated there the expansion counts as not compared
   !> (n_unchecked).
   module procedure red_check_expansions
-    real(wp), allocatable :: z(:), z_rate(:)
-    real(wp) :: q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy), dq(this%dyn%model%n_dy)
+    real(wp), allocatable :: z(:), z_rate(:), x_series(:)
     real(wp) :: t, residual, estimate
     type(error_t) :: err
     type(kin_state_t) :: before
@@ -89,11 +86,10 @@ contains
       ! The run's kinematics goes on from where it was, as if nothing had been checked.
       if (.not. moved) call this%dyn%kin%save_state(before)
       moved = .true.
-      call this%dyn%kin%restart_from(this%expansions%item(i)%coordinates(z))
-      call this%full_state(z(nr + 1:), z_rate, q_dy, v_dy)
-      call this%indicators(t, z(nr + 1:), z_rate, q_dy, v_dy, residual, estimate, dq, err)
+      x_series = this%expansions%item(i)%coordinates(z)
+      call measure(this, t, z(nr + 1:), z_rate, residual, estimate, err, x_series)
       if (err%ok()) then
-        call this%expansions%note_checked(i, this%dyn%model, this%dyn%kin%x)
+        call this%expansions%note_checked(i, this%dyn%model, this%dyn%kin%x, x_series)
         call this%measured%add(t, residual, estimate, MEASURED_FARTHEST)
       else
         this%expansions%n_unchecked = this%expansions%n_unchecked + 1
@@ -120,7 +116,7 @@ contains
     end associate
     if (this%sample_every > 0 .and. kg > 1) then
       if (mod(kg - 1, this%sample_every) == 0 .or. kg == size(this%estimate)) &
-        call sample(this, t, eta, eta_dot, q_dy, v_dy, x)
+        call sample(this, t, eta, eta_dot, x)
     end if
     if (this%measured%n > 0) then
       this%residual(kg) = this%measured%residual(this%measured%n)
@@ -134,18 +130,15 @@ contains
   !> The error indicators and the expansion's distance from the exact coordinates (x: its
   !> own) at an output, by one exact evaluation. The error depends on the rates and loads as
   !> well as on where the expansions were made: spin_up's, measured at its one expansion and
-  !> the farthest modal state, 6.0e-5 m, reaches 2.3e-4 m at full speed. The kinematics
-  !> starts from x: its last exact solution may lie turns back (spin_up's hub turns 8 rad
-  !> between samples, too far for Newton).
-  subroutine sample(this, t, eta, eta_dot, q_dy, v_dy, x)
+  !> the farthest modal state, 6.0e-5 m, reaches 2.3e-4 m at full speed.
+  subroutine sample(this, t, eta, eta_dot, x)
     type(reduced_t), intent(inout) :: this
-    real(wp), intent(in) :: t, eta(:), eta_dot(:), q_dy(:), v_dy(:), x(:)
-    real(wp) :: dq(size(q_dy)), residual, estimate
+    real(wp), intent(in) :: t, eta(:), eta_dot(:), x(:)
+    real(wp) :: residual, estimate
     type(kin_state_t) :: before
     type(error_t) :: err
     call this%dyn%kin%save_state(before)
-    call this%dyn%kin%restart_from(x)
-    call this%indicators(t, eta, eta_dot, q_dy, v_dy, residual, estimate, dq, err)
+    call measure(this, t, eta, eta_dot, residual, estimate, err, x)
     if (err%ok()) then
       call this%measured%add(t, residual, estimate, MEASURED_SAMPLE)
       this%expansions%manifold_error = max(this%expansions%manifold_error, &
@@ -155,4 +148,20 @@ contains
     end if
     call this%dyn%kin%restore_state(before)
   end subroutine sample
+
+  !> The error indicators at the reduced state (t, eta, eta_dot) by one exact evaluation, its
+  !> kinematics started from x_series, an expansion's coordinates there: after a stretch on
+  !> the expansions the last exact solution may lie turns back (spin_up's hub turns 8 rad
+  !> between samples, too far for Newton). Leaves the model evaluated at the state.
+  subroutine measure(this, t, eta, eta_dot, residual, estimate, err, x_series)
+    type(reduced_t), intent(inout) :: this
+    real(wp), intent(in) :: t, eta(:), eta_dot(:)
+    real(wp), intent(out) :: residual, estimate
+    type(error_t), intent(out) :: err
+    real(wp), intent(in), optional :: x_series(:)
+    real(wp) :: q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy), dq(this%dyn%model%n_dy)
+    if (present(x_series)) call this%dyn%kin%restart_from(x_series)
+    call this%full_state(eta, eta_dot, q_dy, v_dy)
+    call this%indicators(t, eta, eta_dot, q_dy, v_dy, residual, estimate, dq, err)
+  end subroutine measure
 end submodule reduction_system_expanded
