@@ -12,7 +12,7 @@ module core_progress
   use core_strings, only: int_str
   implicit none
   private
-  public :: progress_t
+  public :: progress_t, eta_text
 
   type :: progress_t
     !> Off (the default): `due` is always false and nothing is printed.
@@ -28,6 +28,9 @@ module core_progress
     character(len=8), private :: kind = ''
     integer(i8), private :: rate = 1, c_start = 0, c_next = huge(1_i8)
     real(wp), private :: t_begin = 0, t_end = 0, t_shown = -huge(1.0_wp)
+    !> Elapsed wall time and fraction done at the previous line (or the start): the ETA goes by
+    !> the rate since then, as runs slow down or speed up (the adaptive steps follow the motion).
+    real(wp), private :: elapsed_prev = 0, frac_prev = 0
   contains
     procedure :: start => progress_start
     procedure :: due => progress_due
@@ -50,6 +53,8 @@ contains
     this%steps_done = 0
     this%n_updates = -1
     this%n_lines = 0
+    this%elapsed_prev = 0
+    this%frac_prev = 0
     call system_clock(this%c_start, this%rate)
     this%c_next = this%c_start + ticks(this)
   end subroutine progress_start
@@ -84,7 +89,7 @@ contains
       fixed(this%t_end, d) // ' s (' // fixed(100 * frac, 1) // ' %), ' // &
       count_str(this%steps_done + n_steps) // ' steps, '
     if (this%n_updates >= 0) line = line // int_str(this%n_updates) // ' basis updates, '
-    line = line // duration(elapsed) // ' elapsed' // eta(elapsed, frac)
+    line = line // duration(elapsed) // ' elapsed' // next_eta(this, elapsed, frac)
     write(this%unit, '(a)') line
     flush(this%unit)
   end subroutine progress_report_time
@@ -99,7 +104,7 @@ contains
     write(this%unit, '(a)') 'flexmor: ' // this%kind // ' load step ' // &
       int_str(k) // ' of ' // int_str(n) // ' (load factor ' // &
       fixed(lambda, 4) // '), ' // duration(elapsed) // ' elapsed' // &
-      eta(elapsed, real(k - 1, wp) / n)
+      next_eta(this, elapsed, real(k - 1, wp) / n)
     flush(this%unit)
   end subroutine progress_report_load
 
@@ -120,16 +125,36 @@ contains
     this%n_lines = this%n_lines + 1
   end function next_line
 
-  !> ', ETA ...' from the fraction done so far, or nothing before there is a rate to go by.
-  function eta(elapsed, frac) result(s)
+  !> The ETA text of a line at (elapsed, frac); the line becomes the previous one.
+  function next_eta(this, elapsed, frac) result(s)
+    type(progress_t), intent(inout) :: this
     real(wp), intent(in) :: elapsed, frac
     character(len=:), allocatable :: s
+    s = eta_text(elapsed, frac, this%elapsed_prev, this%frac_prev)
+    this%elapsed_prev = elapsed
+    this%frac_prev = frac
+  end function next_eta
+
+  !> ', ETA ...' at the rate since the previous line (elapsed_prev, frac_prev), not the
+  !> average since the start: an adaptive run whose steps shrink a hundredfold half-way (a
+  !> whipping arm) would otherwise be promised seconds for minutes. ', ETA unknown: ...' when
+  !> frac has not moved (a load step longer than a line's interval); nothing before anything
+  !> is done.
+  pure function eta_text(elapsed, frac, elapsed_prev, frac_prev) result(s)
+    real(wp), intent(in) :: elapsed, frac, elapsed_prev, frac_prev
+    character(len=:), allocatable :: s
     s = ''
-    if (frac > 1.0e-6_wp .and. frac <= 1) s = ', ETA ' // duration(elapsed * (1 - frac) / frac)
-  end function eta
+    if (frac <= 1.0e-6_wp .or. frac > 1) return
+    if (frac <= frac_prev) then
+      s = ', ETA unknown: no progress since the last line'
+    else
+      s = ', ETA ' // duration(max(0.0_wp, elapsed - elapsed_prev) * (1 - frac) / &
+        (frac - frac_prev))
+    end if
+  end function eta_text
 
   !> Seconds below two minutes, then minutes, then hours.
-  function duration(sec) result(s)
+  pure function duration(sec) result(s)
     real(wp), intent(in) :: sec
     character(len=:), allocatable :: s
     if (sec < 120) then
@@ -142,7 +167,7 @@ contains
   end function duration
 
   !> v with d decimals and a leading zero (F0.d leaves it out for |v| < 1 on some compilers).
-  function fixed(v, d) result(s)
+  pure function fixed(v, d) result(s)
     real(wp), intent(in) :: v
     integer, intent(in) :: d
     character(len=:), allocatable :: s

@@ -68,12 +68,15 @@ SHORT = "\n" + ARM + """&motion label = 'm1', law = 'cubic', start = 0, end = 0.
 """
 
 DURATION = r"(\d+\.\d) (s|min|h)"
+# The ETA goes by the rate since the previous line; where nothing has advanced since (lines 1 ms
+# apart here) it says so instead.
+ETA = r"(?:, ETA " + DURATION + r"|, ETA unknown: no progress since the last line)?$"
 TIME_LINE = re.compile(
     r"^flexmor: (dynamic|reduced)  t = (\d+\.\d+) of (\d+\.\d+) s \((\d+\.\d) %\), (\d+) steps, "
-    r"(?:(\d+) basis updates, )?" + DURATION + r" elapsed(?:, ETA " + DURATION + r")?$")
+    r"(?:(\d+) basis updates, )?" + DURATION + r" elapsed" + ETA)
 LOAD_LINE = re.compile(
     r"^flexmor: static   load step (\d+) of (\d+) \(load factor (\d\.\d{4})\), " + DURATION +
-    r" elapsed(?:, ETA " + DURATION + r")?$")
+    r" elapsed" + ETA)
 
 
 def seconds(value, unit):

@@ -1,0 +1,25 @@
+!> The progress lines' ETA goes by the rate since the previous line (core_progress eta_text).
+program test_progress
+  use core_kinds, only: wp
+  use core_progress, only: eta_text
+  use testing, only: suite_t
+  implicit none
+  type(suite_t) :: t
+  call t%init('progress ETA')
+  call t%check(eta_text(4.0_wp, 0.5_wp, 2.0_wp, 0.25_wp) == ', ETA 4.0 s', &
+    'a steady rate: the remaining half takes as long as the first ('// &
+    eta_text(4.0_wp, 0.5_wp, 2.0_wp, 0.25_wp) // ')')
+  ! The full two-link at 32 elements per link with 0.2 s turns: 88.5 % after 60 s, 88.9 % two
+  ! seconds later (the average since the start promised 7.8 s; the run took 85 s).
+  call t%check(eta_text(62.0_wp, 0.889_wp, 60.0_wp, 0.885_wp) == ', ETA 55.5 s', &
+    'a run that has slowed down: the recent rate (' // &
+    eta_text(62.0_wp, 0.889_wp, 60.0_wp, 0.885_wp) // ')')
+  call t%check(eta_text(30.0_wp, 0.9_wp, 28.0_wp, 0.3_wp) == ', ETA 0.3 s', &
+    'a run that has sped up: the recent rate (' // eta_text(30.0_wp, 0.9_wp, 28.0_wp, &
+    0.3_wp) // ')')
+  call t%check(eta_text(1.0e4_wp, 0.5_wp, 9.0e3_wp, 0.45_wp) == ', ETA 2.8 h', 'hours')
+  call t%check(eta_text(6.0_wp, 0.4_wp, 4.0_wp, 0.4_wp) == &
+    ', ETA unknown: no progress since the last line', 'no progress: said')
+  call t%check(eta_text(2.0_wp, 0.0_wp, 0.0_wp, 0.0_wp) == '', 'nothing done: no ETA')
+  call t%finish()
+end program test_progress
