@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from flexmor.results import Result, ResultFileError, read_result
+from flexmor.results import Result, ResultFileError, distance_from, read_result
 
 PROG = "flexmor-plot-reduction"
 
@@ -56,29 +56,7 @@ def reduction_errors(reduced: Result, reference: Result | None = None,
         data["updates"] = red["checks/time"][red["checks/updated"] == 1]
     if reference is None:
         return data
-    if reference.time is None:
-        raise ResultFileError(f"{reference.path}: no dataset /time (the reference needs "
-                              f"&dynamic)")
-    shared = [label for label in reduced.node_labels if label in reference.nodes]
-    if nodes:
-        missing = [label for label in nodes if label not in shared]
-        if missing:
-            raise ResultFileError(f"node(s) {', '.join(missing)} not in both files; shared: "
-                                  f"{', '.join(shared) if shared else 'none'}")
-        shared = list(nodes)
-    if not shared:
-        raise ResultFileError(f"{reduced.path} and {reference.path} share no output node "
-                              f"(&output nodes)")
-    t, t_ref = reduced.time, reference.time
-    slack = 1e-9 * max(1.0, abs(float(t[-1])))
-    if t[0] < t_ref[0] - slack or t[-1] > t_ref[-1] + slack:
-        raise ResultFileError(f"{reference.path}: its times {t_ref[0]:g} to {t_ref[-1]:g} s do "
-                              f"not cover the reduced run's {t[0]:g} to {t[-1]:g} s")
-    distance = np.zeros_like(t)
-    for label in shared:
-        xyz, xyz_ref = reduced.nodes[label].position, reference.nodes[label].position
-        at = np.column_stack([np.interp(t, t_ref, xyz_ref[:, c]) for c in range(3)])
-        distance = np.maximum(distance, np.linalg.norm(xyz - at, axis=1))
+    distance, shared = distance_from(reduced, reference, nodes)
     data["true"] = distance
     data["nodes"] = shared
     return data

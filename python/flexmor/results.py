@@ -174,7 +174,7 @@ class Result:
     empty dicts): ``time``, ``nodes``, ``q``, ``qd``, ``energy`` and ``x`` come from
     ``&dynamic``, ``static`` from ``&static``, ``modal`` from ``&modal``, ``buckling`` from
     ``&buckling``, ``linear`` (:class:`flexmor.control.Linear`) from ``&linear``, ``reduction``
-    from ``&reduction``, ``model`` from files that store the ``/model`` group, ``controllers``
+    from ``&reduction``, ``error_check`` from ``&dynamic error_check``, ``model`` from files that store the ``/model`` group, ``controllers``
     (label -> {"error": (n_t,), "input": ..., "measure": ...}) from ``&controller`` in a
     dynamic run."""
 
@@ -190,6 +190,7 @@ class Result:
     modal: Modal | None = None
     buckling: Buckling | None = None
     reduction: dict[str, Any] | None = None
+    error_check: dict[str, Any] | None = None
     model: Model | None = None
     linear: Linear | None = None
     controllers: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
@@ -409,4 +410,38 @@ def read_result(path: str | os.PathLike) -> Result:
         result.linear = _read_linear(path, f)
         if isinstance(f.get("reduction"), h5py.Group):
             result.reduction = _read_group(f["reduction"])
+        if isinstance(f.get("error_check"), h5py.Group):
+            result.error_check = _read_group(f["error_check"])
     return result
+
+
+def distance_from(run: Result, reference: Result,
+                  nodes: list[str] | None = None) -> tuple[np.ndarray, list[str]]:
+    """The largest distance [m] of ``nodes`` (default: every output node both files have)
+    from the reference's at each of ``run``'s output times (the reference interpolated
+    linearly), and the nodes. Raises :class:`ResultFileError` for a run or reference without
+    /time, nodes not in both files, or a reference that does not cover the run's times."""
+    for result in (run, reference):
+        if result.time is None:
+            raise ResultFileError(f"{result.path}: no dataset /time (a dynamic run, &dynamic)")
+    shared = [label for label in run.node_labels if label in reference.nodes]
+    if nodes:
+        missing = [label for label in nodes if label not in shared]
+        if missing:
+            raise ResultFileError(f"node(s) {', '.join(missing)} not in both files; shared: "
+                                  f"{', '.join(shared) if shared else 'none'}")
+        shared = list(nodes)
+    if not shared:
+        raise ResultFileError(f"{run.path} and {reference.path} share no output node "
+                              f"(&output nodes)")
+    t, t_ref = run.time, reference.time
+    slack = 1e-9 * max(1.0, abs(float(t[-1])))
+    if t[0] < t_ref[0] - slack or t[-1] > t_ref[-1] + slack:
+        raise ResultFileError(f"{reference.path}: its times {t_ref[0]:g} to {t_ref[-1]:g} s do "
+                              f"not cover the run's {t[0]:g} to {t[-1]:g} s")
+    distance = np.zeros_like(t)
+    for label in shared:
+        xyz, xyz_ref = run.nodes[label].position, reference.nodes[label].position
+        at = np.column_stack([np.interp(t, t_ref, xyz_ref[:, c]) for c in range(3)])
+        distance = np.maximum(distance, np.linalg.norm(xyz - at, axis=1))
+    return distance, shared

@@ -8,7 +8,8 @@ module analysis_run
   use core_version, only: FLEXMOR_VERSION
   use io_namelist, only: nml_file_t, string_t
   use io_scene, only: read_scene
-  use model_scene, only: scene_t, dynamic_rec_t, label_t, auto_by_stiffness
+  use model_scene, only: scene_t, dynamic_rec_t, label_t, auto_by_stiffness, &
+    ERROR_CHECK_NONE, ERROR_CHECK_MODES
   use io_hdf5, only: h5_writer_t
   use model_system, only: model_t, NODE_SLOTS
   use elements_base, only: MODE_DYNAMIC
@@ -73,6 +74,12 @@ module analysis_run
     !> a failure stays one line), a sweep's cases keep them to themselves.
     type(string_t), allocatable :: warnings(:)
     type(progress_t) :: progress
+    !> &dynamic error_check: the second run's settings in words, its steps and processor
+    !> time [s], and the largest distance [m] of the two runs' nodes at each output time.
+    character(len=:), allocatable :: check_rerun
+    integer :: check_steps = 0
+    real(wp) :: check_cpu_s = 0.0_wp
+    real(wp), allocatable :: check_distance(:)
   contains
     procedure :: load => run_load
     procedure :: load_text => run_load_text
@@ -120,6 +127,12 @@ module analysis_run
       type(h5_writer_t), intent(inout) :: h5
       type(error_t), intent(inout) :: err
     end subroutine write_linear
+    !> &dynamic error_check: the second run and the distance of its nodes from the run's
+    !> (analysis_run_check).
+    module subroutine run_error_check(this, err)
+      type(run_t), intent(inout) :: this
+      type(error_t), intent(out) :: err
+    end subroutine run_error_check
     !> &dynamic: the full or reduced model integrated (analysis_run_dynamic).
     module subroutine run_dynamic(this, err)
       type(run_t), intent(inout), target :: this
@@ -164,6 +177,10 @@ contains
     if (err%ok()) call check_output_nodes(this%scene, model, err)
     if (err%ok() .and. this%scene%dynamic%active) call check_history_size(this%scene%dynamic, &
       model, err)
+    if (err%ok() .and. this%scene%dynamic%error_check == ERROR_CHECK_MODES .and. .not. &
+      this%scene%reduction%active) call err%set(ERR_INPUT, 'group &dynamic: variable ' // &
+      '''error_check'': ''modes'' checks a reduced run (&reduction); ''tolerance'' checks ' // &
+      'the time integration of any run')
     if (err%ok()) then
       allocate(this%q_static(model%n_dy))
       this%q_static = 0.0_wp
@@ -308,6 +325,10 @@ contains
     if (this%scene%dynamic%active) then
       call run_dynamic(this, err)
       if (.not. err%ok()) return
+      if (this%scene%dynamic%error_check /= ERROR_CHECK_NONE) then
+        call run_error_check(this, err)
+        if (.not. err%ok()) return
+      end if
     end if
     if (this%scene%linear%active .and. allocated(this%scene%linear%times)) &
       call run_linear(this, err)

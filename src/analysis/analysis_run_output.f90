@@ -2,7 +2,7 @@
 submodule (analysis_run) analysis_run_output
   use model_system, only: COORD_PHI, COORD_Y, COORD_Z, COORD_EULER, NODE_SLOTS
   use model_control, only: LAW_PID
-  use model_scene, only: UPDATE_NAMES, EVALUATION_NAMES
+  use model_scene, only: UPDATE_NAMES, EVALUATION_NAMES, ERROR_CHECK_NAMES
   implicit none
 
 contains
@@ -22,6 +22,7 @@ contains
     if (err%ok() .and. this%scene%linear%active) call write_linear(this, h5, err)
     if (err%ok() .and. this%scene%dynamic%active) call write_dynamic(this, h5, err)
     if (err%ok() .and. allocated(this%red)) call write_reduction(this, h5, err)
+    if (err%ok() .and. allocated(this%check_distance)) call write_error_check(this, h5, err)
     if (err%ok()) call h5%commit(err)
     if (.not. err%ok()) call h5%abort()
   end subroutine run_write
@@ -337,6 +338,21 @@ contains
       end if
     end associate
   end subroutine write_reduction
+
+  !> &dynamic error_check: the distance of the second run's nodes (/error_check).
+  subroutine write_error_check(this, h5, err)
+    type(run_t), intent(in) :: this
+    type(h5_writer_t), intent(inout) :: h5
+    type(error_t), intent(inout) :: err
+    character(len=*), parameter :: g = '/error_check'
+    call h5%write_real_1d(g // '/distance', this%check_distance, err, units='m')
+    if (err%ok()) call h5%write_string_attr(g, 'kind', &
+      trim(ERROR_CHECK_NAMES(this%scene%dynamic%error_check)), err)
+    if (err%ok()) call h5%write_string_attr(g, 'second_run', this%check_rerun, err)
+    if (err%ok()) call h5%write_real_attr(g, 'distance_max', maxval(this%check_distance), err)
+    if (err%ok()) call h5%write_int_attr(g, 'n_steps', this%check_steps, err)
+    if (err%ok()) call h5%write_real_attr(g, 'cpu_time_s', this%check_cpu_s, err)
+  end subroutine write_error_check
 
   !> The exact measurements of an expanded run's error indicators (/reduction/measured).
   subroutine write_measured(h5, red, err)

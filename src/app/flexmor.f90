@@ -10,6 +10,7 @@ program flexmor_main
   use io_cli, only: cli_args_t, parse_cli
   use io_fs, only: check_output_path, install_interrupt_guard
   use core_version, only: FLEXMOR_VERSION
+  use core_strings, only: approx_str
   use analysis_run, only: run_t
   implicit none
   type(run_t) :: run
@@ -44,7 +45,8 @@ program flexmor_main
   end if
   if (allocated(run%warnings)) write(error_unit, '(a)') &
     ('flexmor: warning: ' // run%warnings(i)%s, i = 1, size(run%warnings))
-  if (run%verbose) write(*, '(a,f0.3,a)') 'wrote ' // args%output // ' (', run%wall_time_s, ' s)'
+  if (run%verbose) write(*, '(a)') 'wrote ' // args%output // ' (' // &
+    approx_str(run%wall_time_s) // ' s)'
 
 contains
 

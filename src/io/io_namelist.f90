@@ -50,6 +50,7 @@ module io_namelist
     procedure :: where_line => where_at
     procedure :: index_of => find_var
     procedure :: set_raw => group_set_raw
+    procedure :: unset => group_unset
   end type nml_group_t
 
   type :: nml_file_t
@@ -425,6 +426,16 @@ contains
     this%vars(k)%items = items
     this%vars(k)%overridden = .true.
   end subroutine group_set_raw
+
+  !> Remove variable `var` (if given), as if it had not been written (a run's error check
+  !> replaces cutoff_hz by n_modes).
+  subroutine group_unset(this, var)
+    class(nml_group_t), intent(inout) :: this
+    character(*), intent(in) :: var
+    integer :: k
+    k = find_var(this, lower_case(trim(var)))
+    if (k > 0) this%vars = [this%vars(:k - 1), this%vars(k + 1:)]
+  end subroutine group_unset
 
   ! ---------------------------------------------------------------- helpers
 

@@ -8,7 +8,8 @@ module io_scene_analyses
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_enum, rd_label, &
     only_with, rd_labels
   use model_scene, only: auto_integrator, scene_t, controller_rec_t, UPDATE_NAMES, UPDATE_NONE, &
-    UPDATE_INTERVAL, UPDATE_MAC, JOINTS_NAMES, JOINTS_HELD, EVALUATION_NAMES, EVALUATION_EXPANDED
+    UPDATE_INTERVAL, UPDATE_MAC, JOINTS_NAMES, JOINTS_HELD, EVALUATION_NAMES, &
+    EVALUATION_EXPANDED, ERROR_CHECK_NAMES, ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES
   implicit none
   private
   public :: read_static, read_modal, read_buckling, read_controller, read_linear, &
@@ -147,6 +148,15 @@ contains
       call rd_int(g, 'erk_order', d%erk_order, err)
       call rd_real(g, 'dt', d%dt, err)
       call rd_real(g, 'rho_inf', d%rho_inf, err)
+      call rd_enum(g, 'error_check', ERROR_CHECK_NAMES, d%error_check, err)
+      if (err%ok()) then
+        call only_with(g, ['error_check_factor'], d%error_check == ERROR_CHECK_TOLERANCE, &
+          'with error_check = ''tolerance''', err)
+        call only_with(g, ['error_check_modes'], d%error_check == ERROR_CHECK_MODES, &
+          'with error_check = ''modes''', err)
+      end if
+      call rd_real(g, 'error_check_factor', d%error_check_factor, err)
+      call rd_int(g, 'error_check_modes', d%error_check_modes, err)
       if (.not. err%ok()) return
       if (d%jacobian == 'internal' .and. d%integrator /= 'bdf') call err%set(ERR_INPUT, &
         g%where() // ': variable ''jacobian'': ''internal'' (CVODE''s difference quotients) ' &

@@ -422,7 +422,7 @@ module io_schema_tables
     var_spec_t('buckling', 'solver', VK_CHOICE, '', 'auto', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       'auto|dense|krylov', 'dense eigenproblem or matrix-free Arnoldi')]
-  type(var_spec_t), parameter :: DYNAMIC_VARS(11) = [ &
+  type(var_spec_t), parameter :: DYNAMIC_VARS(14) = [ &
     var_spec_t('dynamic', 't_end', VK_REAL, 's', '', .true., &
       0.0_wp, .true., huge(1.0_wp), .false., &
       '', 'end time'), &
@@ -455,7 +455,16 @@ module io_schema_tables
       '', 'generalized-alpha step'), &
     var_spec_t('dynamic', 'rho_inf', VK_REAL, '', '0.8', .false., &
       0.0_wp, .false., 1.0_wp, .false., &
-      '', 'spectral radius at infinite frequency')]
+      '', 'spectral radius at infinite frequency'), &
+    var_spec_t('dynamic', 'error_check', VK_CHOICE, '', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      'none|tolerance|modes', 'second run that measures the global error'), &
+    var_spec_t('dynamic', 'error_check_factor', VK_REAL, '', '10', .false., &
+      1.0_wp, .true., huge(1.0_wp), .false., &
+      '', 'tolerances (and dt) divided by this'), &
+    var_spec_t('dynamic', 'error_check_modes', VK_INT, '', '2', .false., &
+      1.0_wp, .false., huge(1.0_wp), .false., &
+      '', 'modes added for the check')]
   type(var_spec_t), parameter :: REDUCTION_VARS(15) = [ &
     var_spec_t('reduction', 'n_modes', VK_INT, '', 'one of three', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
@@ -510,7 +519,7 @@ module io_schema_tables
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(161) = [ &
+  type(var_spec_t), parameter :: SCHEMA(164) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

@@ -188,6 +188,12 @@ module model_scene
     real(wp), allocatable :: times(:)
   end type linear_rec_t
 
+  !> &dynamic error_check as an enum (read with io_fields' rd_enum).
+  integer, parameter, public :: ERROR_CHECK_NONE = 1, ERROR_CHECK_TOLERANCE = 2, &
+    ERROR_CHECK_MODES = 3
+  character(len=*), parameter, public :: ERROR_CHECK_NAMES(3) = [character(len=9) :: 'none', &
+    'tolerance', 'modes']
+
   type :: dynamic_rec_t
     logical :: active = .false.
     real(wp) :: t_end = 0.0_wp, output_dt = 1.0e-3_wp
@@ -195,6 +201,11 @@ module model_scene
     real(wp) :: rtol = 1.0e-6_wp, atol = 1.0e-8_wp, max_step = 0.0_wp
     integer :: max_order = 0, erk_order = 5
     real(wp) :: dt = 1.0e-3_wp, rho_inf = 0.8_wp
+    !> A second run that measures the first one's global error (ERROR_CHECK_*): tolerances
+    !> (and a fixed step) divided by error_check_factor, or error_check_modes more modes.
+    integer :: error_check = ERROR_CHECK_NONE
+    real(wp) :: error_check_factor = 10.0_wp
+    integer :: error_check_modes = 2
   end type dynamic_rec_t
 
   !> The keywords of &reduction's choices as enums, in the order of their names (read with

@@ -1,0 +1,126 @@
+"""Plot a run's error check (``&dynamic error_check``): the largest distance of its nodes from
+the second, more accurate run at every output time, and with ``--reference`` the true error
+(the largest distance of the output nodes both files share from a reference run's).
+
+    flexmor-plot-error-check RUN.h5 [--reference REF.h5] [--node tip ...] \\
+        [-o error_check.png] [--dpi 150]
+
+Exit status 0 on success, 2 with a one-line message (no traceback) for a missing or unreadable
+file, a file without ``/error_check``, nodes the files do not share, a reference that does not
+cover the run's times, or bad arguments.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from typing import Any
+
+import numpy as np
+
+from flexmor.results import Result, ResultFileError, distance_from, read_result
+
+PROG = "flexmor-plot-error-check"
+
+
+def error_check_data(run: Result, reference: Result | None = None,
+                     nodes: list[str] | None = None) -> dict[str, Any]:
+    """``t``, ``distance`` (the check's, per output), ``attrs`` of /error_check and, with a
+    reference, ``true`` (distance_from) and its ``nodes``."""
+    check = run.error_check
+    if check is None:
+        raise ResultFileError(f"{run.path}: no error check (no /error_check group; &dynamic "
+                              f"error_check = 'tolerance' or 'modes' writes it)")
+    data: dict[str, Any] = {"t": run.time, "distance": check["distance"],
+                            "attrs": check["attrs"], "true": None, "nodes": []}
+    if reference is not None:
+        data["true"], data["nodes"] = distance_from(run, reference, nodes)
+    return data
+
+
+def plot_error_check(data: dict[str, Any], output: str, title: str = "",
+                     dpi: int = 150) -> None:
+    """Draw ``data`` (error_check_data) into ``output``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9.0, 4.5))
+    attrs = data["attrs"]
+    ax.plot(data["t"], data["distance"], color="C0", lw=1.2,
+            label=f"distance from the second run ({attrs.get('second_run', '?')}): "
+                  f"the error check")
+    if data["true"] is not None:
+        ax.plot(data["t"], data["true"], color="C3", lw=1.2,
+                label=f"distance from the reference ({', '.join(data['nodes'])})")
+    values = np.concatenate([data["distance"]] +
+                            ([data["true"]] if data["true"] is not None else []))
+    if np.any(values > 0):
+        ax.set_yscale("log")
+    ax.grid(True, which="both", lw=0.3)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("largest nodal distance [m]")
+    ax.legend(fontsize=8, loc="best")
+    if title:
+        ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    try:
+        fig.savefig(output, dpi=dpi)
+    finally:
+        plt.close(fig)
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        prog=PROG,
+        description="Plot a run's error check (&dynamic error_check) over time, against the "
+                    "true error when a reference run is given.")
+    parser.add_argument("file", metavar="RUN.h5", help="result file of a run with error_check")
+    parser.add_argument("--reference", metavar="REF.h5", default=None,
+                        help="result file of a converged run of the same scene")
+    parser.add_argument("--node", action="append", default=None,
+                        help="output node of the true error, repeatable (default: every "
+                             "output node the files share)")
+    parser.add_argument("-o", "--output", default="error_check.png",
+                        help="image to write (default: error_check.png)")
+    parser.add_argument("--dpi", type=int, default=150, help="resolution (default: 150)")
+    args = parser.parse_args(argv)
+    if args.node and args.reference is None:
+        parser.error("--node needs --reference")
+    if args.dpi <= 0:
+        parser.error("--dpi must be positive")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    try:
+        run = read_result(args.file)
+        reference = read_result(args.reference) if args.reference else None
+        data = error_check_data(run, reference, args.node)
+    except ResultFileError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    out_dir = os.path.dirname(os.path.abspath(args.output))
+    if not os.path.isdir(out_dir):
+        print(f"{PROG}: error: {args.output}: the folder {out_dir} does not exist",
+              file=sys.stderr)
+        return 2
+    attrs = data["attrs"]
+    title = (f"{os.path.basename(args.file)}: error check ({attrs.get('kind', '?')}), up to "
+             f"{float(np.max(data['distance'])):.2g} m")
+    try:
+        plot_error_check(data, args.output, title, args.dpi)
+    except (OSError, ValueError) as exc:
+        print(f"{PROG}: error: cannot write {args.output}: {exc}", file=sys.stderr)
+        return 2
+    line = f"wrote {args.output}; check up to {float(np.max(data['distance'])):.3g} m"
+    if data["true"] is not None:
+        line += f", distance from the reference up to {float(np.max(data['true'])):.3g} m"
+    print(line)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,104 @@
+!> &dynamic error_check: the global error of a dynamic run, measured by a second run of the same
+!> scene that is more accurate in one respect (docs/theory.md section 6.2): its
+!> tolerances (or fixed step) divided by error_check_factor, or error_check_modes more modes in
+!> a reduced run. The distance of the two runs' nodes at each output time estimates the
+!> first run's error from that source, accumulated along the whole run (the integrators' and
+!> the reduction's own estimates are local).
+submodule (analysis_run) analysis_run_check
+  use model_scene, only: ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES, ERROR_CHECK_NAMES
+  implicit none
+
+contains
+
+  module procedure run_error_check
+    type(run_t) :: rerun
+    type(nml_file_t) :: file
+    integer :: i
+    real(wp) :: cpu0, cpu1
+    call cpu_time(cpu0)
+    file = this%file
+    call check_settings(this, file, this%check_rerun, err)
+    if (.not. err%ok()) return
+    if (this%verbose) then
+      write(*, '(a)') 'error check: a second run with ' // this%check_rerun
+      flush(output_unit)
+    end if
+    rerun%verbose = .false.
+    call rerun%load_parsed(file, err)
+    if (err%ok()) then
+      ! Only the dynamic run (from the same static state) is compared.
+      rerun%scene%modal%active = .false.
+      rerun%scene%buckling%active = .false.
+      rerun%scene%linear%active = .false.
+      call rerun%execute(err)
+    end if
+    if (.not. err%ok()) then
+      err%message = 'error check (the second run, with ' // this%check_rerun // '): ' // &
+        err%message
+      return
+    end if
+    if (size(rerun%time) /= size(this%time) .or. .not. allocated(rerun%dyn%x_hist)) then
+      call err%set(ERR_INPUT, 'error check: the second run has other output times')
+      return
+    end if
+    allocate(this%check_distance(size(this%time)))
+    do i = 1, size(this%time)
+      this%check_distance(i) = this%dyn%model%largest_translation(this%dyn%x_hist(:, i) - &
+        rerun%dyn%x_hist(:, i))
+    end do
+    this%check_steps = rerun%stats%n_steps
+    call cpu_time(cpu1)
+    this%check_cpu_s = cpu1 - cpu0
+    if (this%verbose) then
+      i = maxloc(this%check_distance, 1)
+      write(*, '(a)') 'error check: the nodes of the two runs are up to ' // &
+        approx_str(this%check_distance(i)) // ' m apart (t = ' // approx_str(this%time(i)) // &
+        ' s): about the error of this run from its ' // trim(merge('time steps', &
+        'modes     ', this%scene%dynamic%error_check == ERROR_CHECK_TOLERANCE)) // &
+        ' (the second run: ' // int_str(this%check_steps) // ' steps, ' // &
+        approx_str(this%check_cpu_s) // ' s)'
+    end if
+  end procedure run_error_check
+
+  !> The scene file of the second run (file, a copy of the run's) and its settings in words.
+  !> The integrator is the one the run took (an 'auto' choice depends on rtol).
+  subroutine check_settings(this, file, what, err)
+    type(run_t), intent(in) :: this
+    type(nml_file_t), intent(inout) :: file
+    character(len=:), allocatable, intent(out) :: what
+    type(error_t), intent(out) :: err
+    integer :: ig, ir, k
+    associate (d => this%scene%dynamic)
+      ig = file%group_index('dynamic', 1)
+      call file%groups(ig)%unset('error_check_factor')
+      call file%groups(ig)%unset('error_check_modes')
+      call file%groups(ig)%set_raw('error_check', '''none''', err)
+      if (err%ok()) call file%groups(ig)%set_raw('integrator', '''' // d%integrator // &
+        '''', err)
+      if (.not. err%ok()) return
+      select case (d%error_check)
+      case (ERROR_CHECK_TOLERANCE)
+        if (d%integrator == 'galpha') then
+          what = 'dt ' // approx_str(d%dt / d%error_check_factor)
+          call file%groups(ig)%set_raw('dt', real_str(d%dt / d%error_check_factor), err)
+        else
+          what = 'rtol ' // approx_str(d%rtol / d%error_check_factor) // ', atol ' // &
+            approx_str(d%atol / d%error_check_factor)
+          call file%groups(ig)%set_raw('rtol', real_str(d%rtol / d%error_check_factor), err)
+          if (err%ok()) call file%groups(ig)%set_raw('atol', &
+            real_str(d%atol / d%error_check_factor), err)
+        end if
+      case (ERROR_CHECK_MODES)
+        ir = file%group_index('reduction', 1)
+        k = this%initial_basis%k() + d%error_check_modes
+        what = int_str(k) // ' modes'
+        call file%groups(ir)%unset('cutoff_hz')
+        call file%groups(ir)%unset('auto_factor')
+        call file%groups(ir)%set_raw('n_modes', int_str(k), err)
+      case default
+        call err%set(ERR_INPUT, 'error check: unknown kind ' // &
+          trim(ERROR_CHECK_NAMES(d%error_check)))
+      end select
+    end associate
+  end subroutine check_settings
+end submodule analysis_run_check
