@@ -30,11 +30,12 @@ __version__ = _version()
 
 from flexmor.model import Mesh, Model  # noqa: E402
 from flexmor.results import (Buckling, Modal, NodePath, Result, ResultFileError, Static,  # noqa: E402
-                             load_node_path, node_labels, read_result, run_attributes)
+                             distance_from, load_node_path, node_labels, read_result,
+                             run_attributes)
 from flexmor.sweep import Sweep, SweepFileError, read_sweep  # noqa: E402
 from flexmor.control import Linear, LinearModelError, read_linear  # noqa: E402
 
 __all__ = ["Buckling", "Linear", "LinearModelError", "Mesh", "Modal", "Model", "NodePath",
            "Result", "ResultFileError", "Static", "Sweep", "SweepFileError", "__version__",
-           "load_node_path", "node_labels", "read_linear", "read_result", "read_sweep",
+           "distance_from", "load_node_path", "node_labels", "read_linear", "read_result", "read_sweep",
            "run_attributes"]
