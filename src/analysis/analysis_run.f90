@@ -269,7 +269,8 @@ contains
   end subroutine check_history_size
 
   !> Run the analyses the scene asks for.
-  subroutine run_execute(this, err)
+  !> Recursive: &dynamic error_check runs a second run_t from within (analysis_run_check).
+  recursive subroutine run_execute(this, err)
     class(run_t), intent(inout), target :: this
     type(error_t), intent(out) :: err
     integer(i8) :: c0, c1, rate
@@ -289,7 +290,7 @@ contains
     this%cpu_time_s = cpu1 - cpu0
   end subroutine run_execute
 
-  subroutine run_analyses(this, err)
+  recursive subroutine run_analyses(this, err)
     type(run_t), intent(inout), target :: this
     type(error_t), intent(out) :: err
     if (this%scene%static%active) then

@@ -46,7 +46,7 @@ contains
       this%check_distance(i) = this%dyn%model%largest_translation(this%dyn%x_hist(:, i) - &
         rerun%dyn%x_hist(:, i))
     end do
-    this%check_steps = rerun%stats%n_steps
+    this%check_steps = int(min(rerun%stats%n_steps, int(huge(1), i8)))
     call cpu_time(cpu1)
     this%check_cpu_s = cpu1 - cpu0
     if (this%verbose) then
