@@ -1,6 +1,7 @@
 """Plot a run's error check (``&dynamic error_check``): the largest distance of its nodes from
-the second, more accurate run at every output time, and with ``--reference`` the true error
-(the largest distance of the output nodes both files share from a reference run's).
+the second, more accurate run at every output time, a reduced run's local error estimate
+beside it, and with ``--reference`` the true error (the largest distance of the output nodes
+both files share from a reference run's).
 
     flexmor-plot-error-check RUN.h5 [--reference REF.h5] [--node tip ...] \\
         [-o error_check.png] [--dpi 150]
@@ -25,14 +26,17 @@ PROG = "flexmor-plot-error-check"
 
 def error_check_data(run: Result, reference: Result | None = None,
                      nodes: list[str] | None = None) -> dict[str, Any]:
-    """``t``, ``distance`` (the check's, per output), ``attrs`` of /error_check and, with a
-    reference, ``true`` (distance_from) and its ``nodes``."""
+    """``t``, ``distance`` (the check's, per output), ``attrs`` of /error_check, ``estimate``
+    (a reduced run's local error estimate per output, else None) and, with a reference,
+    ``true`` (distance_from) and its ``nodes``."""
     check = run.error_check
     if check is None:
         raise ResultFileError(f"{run.path}: no error check (no /error_check group; &dynamic "
                               f"error_check = 'tolerance' or 'modes' writes it)")
+    estimate = run.reduction.get("error_estimate") if run.reduction is not None else None
     data: dict[str, Any] = {"t": run.time, "distance": check["distance"],
-                            "attrs": check["attrs"], "true": None, "nodes": []}
+                            "attrs": check["attrs"], "true": None, "nodes": [],
+                            "estimate": estimate}
     if reference is not None:
         data["true"], data["nodes"] = distance_from(run, reference, nodes)
     return data
@@ -54,8 +58,12 @@ def plot_error_check(data: dict[str, Any], output: str, title: str = "",
     if data["true"] is not None:
         ax.plot(data["t"], data["true"], color="C3", lw=1.2,
                 label=f"distance from the reference ({', '.join(data['nodes'])})")
+    if data["estimate"] is not None:
+        ax.plot(data["t"], data["estimate"], color="C2", lw=1.0, ls="--",
+                drawstyle="steps-post",
+                label="the reduction's local error estimate (/reduction/error_estimate)")
     values = np.concatenate([data["distance"]] +
-                            ([data["true"]] if data["true"] is not None else []))
+                            [data[k] for k in ("true", "estimate") if data[k] is not None])
     if np.any(values > 0):
         ax.set_yscale("log")
     ax.grid(True, which="both", lw=0.3)
