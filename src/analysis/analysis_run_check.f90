@@ -6,6 +6,7 @@
 !> the reduction's own estimates are local).
 submodule (analysis_run) analysis_run_check
   use model_scene, only: ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES, ERROR_CHECK_NAMES
+  use integrators_system, only: bdf_order
   implicit none
 
 contains
@@ -87,6 +88,10 @@ contains
           call file%groups(ig)%set_raw('rtol', real_str(d%rtol / d%error_check_factor), err)
           if (err%ok()) call file%groups(ig)%set_raw('atol', &
             real_str(d%atol / d%error_check_factor), err)
+          ! BDF's order limit follows rtol when not given: keep this run's, or the second run
+          ! would differ in order as well (2 and 5 about rtol 1e-5: 3 times this run's error).
+          if (err%ok() .and. d%integrator == 'bdf') call file%groups(ig)%set_raw('max_order', &
+            int_str(bdf_order(d%max_order, d%rtol)), err)
         end if
       case (ERROR_CHECK_MODES)
         ir = file%group_index('reduction', 1)
