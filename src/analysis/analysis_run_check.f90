@@ -88,8 +88,8 @@ contains
           call file%groups(ig)%set_raw('rtol', real_str(d%rtol / d%error_check_factor), err)
           if (err%ok()) call file%groups(ig)%set_raw('atol', &
             real_str(d%atol / d%error_check_factor), err)
-          ! BDF's order limit follows rtol when not given: keep this run's, or the second run
-          ! would differ in order as well (2 and 5 about rtol 1e-5: 3 times this run's error).
+          ! BDF's order limit follows rtol when not given: keep this run's, so that only the
+          ! tolerance differs (2 and 5 on either side of rtol 1e-5).
           if (err%ok() .and. d%integrator == 'bdf') call file%groups(ig)%set_raw('max_order', &
             int_str(bdf_order(d%max_order, d%rtol)), err)
         end if
