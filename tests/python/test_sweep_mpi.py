@@ -287,3 +287,28 @@ def test_sweep_of_controller_gains(tmp_path):
     assert list(res["status"]) == [0, 0]
     assert np.allclose(res["metrics"]["max_control_error"], 1.0e-3, rtol=1e-12)
     assert np.all(res["metrics"]["final_control_error"] < 1e-6)
+
+
+def test_sweep_metric_error_check(tmp_path):
+    """A base scene with &dynamic error_check = 'tolerance' swept over rtol (serial): each
+    case's error_check metric is its own check (positive, and smaller at the tighter rtol:
+    the global error of galpha_adaptive falls like rtol^(2/3), 4.6 times per decade; required
+    more than 2 times), and NaN without the check (the metric of the base scene's cases)."""
+    base = (ROOT / "input" / "two_link.nml").read_text().replace("&modal n_modes = 12 /", "")
+    base = base.replace("rtol = 1.0e-6, atol = 1.0e-8 /",
+                        "rtol = 1.0e-6, atol = 1.0e-8, error_check = 'tolerance' /")
+    assert "error_check = 'tolerance'" in base
+    sweep = """&sweep base = 'base.nml', mode = 'product', node = 'tip' /
+&parameter name = 'dynamic.rtol', values = 1.0e-3, 1.0e-4 /
+"""
+    write_inputs(tmp_path, sweep, base)
+    proc = run_sweep(tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    res = read(tmp_path / "out.h5")
+    assert list(res["status"]) == [0, 0]
+    check = res["metrics"]["error_check"]
+    assert np.all(check > 0) and check[0] > 2 * check[1], check
+    write_inputs(tmp_path, sweep, base.replace(", error_check = 'tolerance'", ""))
+    proc = run_sweep(tmp_path, out="plain.h5")
+    assert proc.returncode == 0, proc.stderr
+    assert np.all(np.isnan(read(tmp_path / "plain.h5")["metrics"]["error_check"]))
