@@ -86,6 +86,7 @@ program test_user_control
   call same_as_pid(0.0_wp)
   call same_as_pid(0.01_wp)
   call misuse()
+  call with_error_check()
   call t%finish()
 
 contains
@@ -192,6 +193,36 @@ contains
     call t%close_array(reshape(p_mixed, [size(p_mixed)]), reshape(p_pid, [size(p_pid)]), &
       0.0_wp, PATH_BOUND, trim(what) // ': PID + user law = two PIDs')
   end subroutine same_as_pid
+
+  !> &dynamic error_check: the second run calls the same user law (a copy). The PID law as a
+  !> user law against itself at rtol 1e-10: the runs differ by the integrator's global error,
+  !> ~1e-9 m at rtol 1e-9 (see same_as_pid); bound 1e-6 m, and above 0 (it was measured).
+  !> Without the law the second run would stop with 'needs a control law'.
+  subroutine with_error_check()
+    type(run_t) :: run
+    type(error_t) :: err
+    character(len=:), allocatable :: scene
+    integer :: at
+    scene = ARM // user_group('ext', [1, 2], 0.0_wp)
+    at = index(scene, 'atol = 1e-12 /')
+    scene = scene(:at + 12) // ", error_check = 'tolerance' /" // scene(at + 14:)
+    call run_scene(scene, 'check.nml', ['ext'], reshape([1, 2], [2, 1]), 0.0_wp, run, err)
+    call t%check(err%ok(), 'error_check with a user law runs ' // msg(err))
+    if (.not. err%ok()) return
+    call t%check(allocated(run%check_distance), 'the check ran')
+    if (.not. allocated(run%check_distance)) return
+    call t%check(maxval(run%check_distance) > 0.0_wp .and. maxval(run%check_distance) < &
+      1.0e-6_wp, 'the second run follows the same law (distance ' // &
+      real_text(maxval(run%check_distance)) // ' m)')
+  end subroutine with_error_check
+
+  function real_text(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=:), allocatable :: s
+    character(len=16) :: buf
+    write(buf, '(es10.3)') x
+    s = trim(adjustl(buf))
+  end function real_text
 
   subroutine misuse()
     type(run_t) :: run, run_pid

@@ -7,6 +7,7 @@
 submodule (analysis_run) analysis_run_check
   use model_scene, only: ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES, ERROR_CHECK_NAMES
   use integrators_system, only: bdf_order
+  use core_error, only: ERR_INTERNAL
   implicit none
 
 contains
@@ -26,6 +27,7 @@ contains
     end if
     rerun%verbose = .false.
     call rerun%load_parsed(file, err)
+    if (err%ok()) call copy_user_laws(this, rerun, err)
     if (err%ok()) then
       ! Only the dynamic run (from the same static state) is compared.
       rerun%scene%modal%active = .false.
@@ -61,6 +63,23 @@ contains
     end if
   end procedure run_error_check
 
+  !> The control laws a program gave (&controller law = 'user') go to the second run as
+  !> they are after the first (docs/input.md: a law with state between calls should restart
+  !> itself at t = 0).
+  subroutine copy_user_laws(this, rerun, err)
+    type(run_t), intent(in) :: this
+    type(run_t), intent(inout) :: rerun
+    type(error_t), intent(inout) :: err
+    integer :: k
+    if (.not. allocated(this%dyn%model%controllers)) return
+    do k = 1, size(this%dyn%model%controllers)
+      associate (c => this%dyn%model%controllers(k))
+        if (allocated(c%user_law)) call rerun%set_control_law(c%label, c%user_law, err)
+        if (.not. err%ok()) return
+      end associate
+    end do
+  end subroutine copy_user_laws
+
   !> The scene file of the second run (file, a copy of the run's) and its settings in words.
   !> The integrator is the one the run took (an 'auto' choice depends on rtol).
   subroutine check_settings(this, file, what, err)
@@ -95,13 +114,17 @@ contains
         end if
       case (ERROR_CHECK_MODES)
         ir = file%group_index('reduction', 1)
-        k = this%initial_basis%k() + d%error_check_modes
+        ! n_modes as given (with joints = 'held' the basis holds the joints' unit motions too),
+        ! else the count cutoff_hz or auto_factor chose.
+        k = this%initial_basis%k()
+        if (this%scene%reduction%selection == 'count') k = this%scene%reduction%n_modes
+        k = k + d%error_check_modes
         what = int_str(k) // ' modes'
         call file%groups(ir)%unset('cutoff_hz')
         call file%groups(ir)%unset('auto_factor')
         call file%groups(ir)%set_raw('n_modes', int_str(k), err)
       case default
-        call err%set(ERR_INPUT, 'error check: unknown kind ' // &
+        call err%set(ERR_INTERNAL, 'error check: unknown kind ' // &
           trim(ERROR_CHECK_NAMES(d%error_check)))
       end select
     end associate
