@@ -1,11 +1,13 @@
 !> &dynamic error_check: the global error of a dynamic run, measured by a second run of the same
 !> scene that is more accurate in one respect (docs/theory.md section 6.2): its
-!> tolerances (or fixed step) divided by error_check_factor, or error_check_modes more modes in
-!> a reduced run. The distance of the two runs' nodes at each output time estimates the
-!> first run's error from that source, accumulated along the whole run (the integrators' and
-!> the reduction's own estimates are local).
+!> tolerances (or fixed step) divided by error_check_factor, error_check_modes more modes in a
+!> reduced run, or every link's beam elements halved. The distance of the two runs' nodes at
+!> each output time (with 'mesh' the &node points, which both meshes have) estimates the first
+!> run's error from that source, accumulated along the whole run (the integrators' and the
+!> reduction's own estimates are local).
 submodule (analysis_run) analysis_run_check
-  use model_scene, only: ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES, ERROR_CHECK_NAMES
+  use model_scene, only: ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES, ERROR_CHECK_MESH, &
+    ERROR_CHECK_NAMES
   use integrators_system, only: bdf_order
   use core_error, only: ERR_INTERNAL
   implicit none
@@ -13,6 +15,8 @@ submodule (analysis_run) analysis_run_check
 contains
 
   module procedure run_error_check
+    character(len=10), parameter :: SOURCE(4) = [character(len=10) :: '', 'time steps', &
+      'modes', 'mesh']
     type(run_t) :: rerun
     type(nml_file_t) :: file
     integer :: i
@@ -46,8 +50,12 @@ contains
     end if
     allocate(this%check_distance(size(this%time)))
     do i = 1, size(this%time)
-      this%check_distance(i) = this%dyn%model%largest_translation(this%dyn%x_hist(:, i) - &
-        rerun%dyn%x_hist(:, i))
+      if (this%scene%dynamic%error_check == ERROR_CHECK_MESH) then
+        this%check_distance(i) = named_distance(this, rerun, i)
+      else
+        this%check_distance(i) = this%dyn%model%largest_translation(this%dyn%x_hist(:, i) - &
+          rerun%dyn%x_hist(:, i))
+      end if
     end do
     this%check_steps = int(min(rerun%stats%n_steps, int(huge(1), i8)))
     call cpu_time(cpu1)
@@ -56,8 +64,8 @@ contains
       i = maxloc(this%check_distance, 1)
       write(*, '(a)') 'error check: the nodes of the two runs are up to ' // &
         approx_str(this%check_distance(i)) // ' m apart (t = ' // approx_str(this%time(i)) // &
-        ' s): about the error of this run from its ' // trim(merge('time steps', &
-        'modes     ', this%scene%dynamic%error_check == ERROR_CHECK_TOLERANCE)) // &
+        ' s): about the error of this run from its ' // &
+        trim(SOURCE(this%scene%dynamic%error_check)) // &
         ' (the second run: ' // int_str(this%check_steps) // ' steps, ' // &
         approx_str(this%check_cpu_s) // ' s)'
     end if
@@ -123,10 +131,74 @@ contains
         call file%groups(ir)%unset('cutoff_hz')
         call file%groups(ir)%unset('auto_factor')
         call file%groups(ir)%set_raw('n_modes', int_str(k), err)
+      case (ERROR_CHECK_MESH)
+        call refine_links(this, file, what, err)
       case default
         call err%set(ERR_INTERNAL, 'error check: unknown kind ' // &
           trim(ERROR_CHECK_NAMES(d%error_check)))
       end select
     end associate
   end subroutine check_settings
+  !> Every &link with twice its elements: the &node points are where they were, every
+  !> element is split at its middle. Refused where the scene names a link's own points
+  !> ('link1.2' moves to where 'link1.4' was) or lists classes per element.
+  subroutine refine_links(this, file, what, err)
+    type(run_t), intent(in) :: this
+    type(nml_file_t), intent(inout) :: file
+    character(len=:), allocatable, intent(inout) :: what
+    type(error_t), intent(inout) :: err
+    character(len=*), parameter :: WHERE = 'group &dynamic: variable ''error_check'': ''mesh'' '
+    integer :: i, ig, total
+    if (file%count('link') == 0) then
+      call err%set(ERR_INPUT, WHERE // 'refines the links, and the scene has no &link')
+      return
+    end if
+    total = 0
+    do i = 1, size(this%scene%links)
+      associate (r => this%scene%links(i))
+        if (index(file%text, '''' // r%label // '.') > 0 .or. &
+            index(file%text, '"' // r%label // '.') > 0) then
+          call err%set(ERR_INPUT, WHERE // 'halves every element, which moves the points ' // &
+            'of link ''' // r%label // ''' that the scene names (''' // r%label // '.k''): ' // &
+            'refer to &node points only, or refine the mesh by hand')
+        else if (many(r%elongation) .or. many(r%bending)) then
+          call err%set(ERR_INPUT, WHERE // 'halves every element, and link ''' // r%label // &
+            ''' lists its classes per element: give one class per link, or refine by hand')
+        end if
+        if (.not. err%ok()) return
+        ig = file%group_index('link', i)
+        call file%groups(ig)%set_raw('n_elements', int_str(2 * r%n_elements), err)
+        if (.not. err%ok()) return
+        total = total + 2 * r%n_elements
+      end associate
+    end do
+    what = int_str(total) // ' beam elements (twice as many)'
+  end subroutine refine_links
+
+  logical function many(classes)
+    type(label_t), allocatable, intent(in) :: classes(:)
+    many = .false.
+    if (allocated(classes)) many = size(classes) > 1
+  end function many
+
+  !> The largest distance of the &node points of this run and the refined one at output t.
+  real(wp) function named_distance(this, rerun, t) result(d)
+    type(run_t), intent(in) :: this, rerun
+    integer, intent(in) :: t
+    integer, parameter :: SLOT(3) = [1, 2, 4]
+    integer :: i, k, a, b, ra, rb
+    real(wp) :: s
+    d = 0.0_wp
+    do i = 1, size(this%scene%nodes)
+      a = this%dyn%model%find_node(this%scene%nodes(i)%label)
+      b = rerun%dyn%model%find_node(this%scene%nodes(i)%label)
+      s = 0.0_wp
+      do k = 1, 3
+        ra = this%dyn%model%node_coord(SLOT(k), a)
+        rb = rerun%dyn%model%node_coord(SLOT(k), b)
+        if (ra > 0 .and. rb > 0) s = s + (this%dyn%x_hist(ra, t) - rerun%dyn%x_hist(rb, t))**2
+      end do
+      d = max(d, sqrt(s))
+    end do
+  end function named_distance
 end submodule analysis_run_check

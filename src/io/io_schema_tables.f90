@@ -458,7 +458,7 @@ module io_schema_tables
       '', 'spectral radius at infinite frequency'), &
     var_spec_t('dynamic', 'error_check', VK_CHOICE, '', 'none', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      'none|tolerance|modes', 'second run that measures the global error'), &
+      'none|tolerance|modes|mesh', 'second run that measures the global error'), &
     var_spec_t('dynamic', 'error_check_factor', VK_REAL, '', '10', .false., &
       1.0_wp, .true., huge(1.0_wp), .false., &
       '', 'tolerances (and dt) divided by this'), &

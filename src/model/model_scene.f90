@@ -190,9 +190,9 @@ module model_scene
 
   !> &dynamic error_check as an enum (read with io_fields' rd_enum).
   integer, parameter, public :: ERROR_CHECK_NONE = 1, ERROR_CHECK_TOLERANCE = 2, &
-    ERROR_CHECK_MODES = 3
-  character(len=*), parameter, public :: ERROR_CHECK_NAMES(3) = [character(len=9) :: 'none', &
-    'tolerance', 'modes']
+    ERROR_CHECK_MODES = 3, ERROR_CHECK_MESH = 4
+  character(len=*), parameter, public :: ERROR_CHECK_NAMES(4) = [character(len=9) :: 'none', &
+    'tolerance', 'modes', 'mesh']
 
   type :: dynamic_rec_t
     logical :: active = .false.
@@ -202,7 +202,8 @@ module model_scene
     integer :: max_order = 0, erk_order = 5
     real(wp) :: dt = 1.0e-3_wp, rho_inf = 0.8_wp
     !> A second run that measures the first one's global error (ERROR_CHECK_*): tolerances
-    !> (and a fixed step) divided by error_check_factor, or error_check_modes more modes.
+    !> (and a fixed step) divided by error_check_factor, error_check_modes more modes, or
+    !> every link's elements halved.
     integer :: error_check = ERROR_CHECK_NONE
     real(wp) :: error_check_factor = 10.0_wp
     integer :: error_check_modes = 2

@@ -92,6 +92,40 @@ def test_modes_check_tracks_the_true_error(tmp_path):
     assert png.stat().st_size > 10_000
 
 
+def test_mesh_check_tracks_the_true_error(tmp_path):
+    """error_check = 'mesh': the 3-element arm against its own 6-element run, at rtol 1e-7
+    (time error ~5e-7 m, below the mesh's): with a mesh error ~h^p, p >= 2, the check is
+    1 - 2^-p = 0.75 to 1 of the true error (observed 0.94 against 24 elements per link, which
+    are 1.2e-8 m from 32)."""
+    text = TWO_LINK + "&dynamic t_end = 0.7, rtol = 1e-7, atol = 1e-9, error_check = 'mesh' /\n"
+    proc, out = run_scene(tmp_path, text, "coarse")
+    assert proc.returncode == 0, proc.stderr
+    distance, attrs, _, _ = check_of(out)
+    assert attrs["kind"] == "mesh" and attrs["second_run"] == "12 beam elements (twice as many)"
+    fine = text.replace("n_elements = 3", "n_elements = 24").replace(", error_check = 'mesh'", "")
+    ref_proc, ref = run_scene(tmp_path, fine, "fine")
+    assert ref_proc.returncode == 0, ref_proc.stderr
+    true, _ = distance_from(read_result(out), read_result(ref))
+    assert 1 / 3 < distance.max() / true.max() < 3, (distance.max(), true.max())
+
+
+@pytest.mark.parametrize("case, fragment", [
+    ("output", "points of link 'link2' that the scene names"),
+    ("classes", "lists its classes per element"),
+])
+def test_mesh_check_refusals(tmp_path, case, fragment):
+    text = TWO_LINK + "&dynamic t_end = 0.01, error_check = 'mesh' /\n"
+    if case == "output":
+        text = text.replace("nodes = 'tip', 'elbow'", "nodes = 'tip', 'link2.2'")
+        assert "'link2.2'" in text
+    else:
+        text = text.replace("I = 3.33e-9, rho = 2700 /",
+                            "I = 3.33e-9, rho = 2700, elongation = 'rigid', 'rigid', 'dynamic' /")
+        assert "'rigid', 'rigid', 'dynamic'" in text
+    proc, out = run_scene(tmp_path, text)
+    assert_clean_error(proc, out, "'error_check': 'mesh'", fragment)
+
+
 def test_whip_example(tmp_path):
     """input/whip.nml: the 4-mode path of the whipping arm is 0.51 m from the full model's and
     its check says 0.50 m (docs/examples.md); required: more than 1 cm, where the reduction's
