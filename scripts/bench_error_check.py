@@ -12,12 +12,15 @@ error ~ rtol^p the ratio tends to 1 - 10^-p, 0.78 for galpha_adaptive (p = 2/3).
 Modes check: reduced runs with n_modes = --modes and error_check = 'modes' (2 more modes)
 against the full model at rtol 1e-6, beside the reduction's local error estimate.
 
+Mesh check: --meshes elements per link with error_check = 'mesh' (twice the elements) at
+rtol 1e-7, against 24 elements per link; distances at the &node points (elbow, tip).
+
 Usage (the flexmor Python package installed, or PYTHONPATH=python):
 
     python3 scripts/bench_error_check.py [--bin build/bin/flexmor] [--out-dir docs/bench] \\
-        [--rtols 1e-3,1e-4,1e-5,1e-6] [--modes 1,2,4] [--quick]
+        [--rtols 1e-3,1e-4,1e-5,1e-6] [--modes 1,2,4] [--meshes 2,3,4] [--quick]
 
---quick: 0.1 s of motion, rtol 1e-3 and 1 mode (for the tests). Writes error_check.md and
+--quick: 0.1 s of motion, rtol 1e-3, 1 mode and 2 elements per link (for the tests). Writes error_check.md and
 error_check.csv into --out-dir with the command, date, machine, flexmor version and commit.
 Bad arguments exit with 2, a failed run with 1.
 """
@@ -41,14 +44,16 @@ PROG = "bench_error_check.py"
 DYNAMIC = "&dynamic t_end = 0.7, output_dt = 1.0e-3, rtol = 1.0e-6, atol = 1.0e-8 /"
 
 
-def scene(dynamic: str, reduction: str = "", t_end: float = 0.7) -> str:
-    """input/two_link.nml without &modal, with the &dynamic line `dynamic` (its t_end
-    replaced) and an optional &reduction line."""
+def scene(dynamic: str, reduction: str = "", t_end: float = 0.7, n: int = 3) -> str:
+    """input/two_link.nml without &modal, with n beam elements per link, the &dynamic line
+    `dynamic` (its T_END replaced) and an optional &reduction line."""
     text = (ROOT / "input" / "two_link.nml").read_text()
-    if DYNAMIC not in text or "&modal n_modes = 12 /" not in text:
-        raise RuntimeError("input/two_link.nml's &dynamic or &modal line changed: update "
-                           f"{PROG}")
-    text = text.replace("&modal n_modes = 12 /", "")
+    if DYNAMIC not in text or "&modal n_modes = 12 /" not in text or \
+            text.count("n_elements = 3") != 2:
+        raise RuntimeError("input/two_link.nml's &dynamic, &modal or n_elements changed: "
+                           f"update {PROG}")
+    text = text.replace("&modal n_modes = 12 /", "").replace("n_elements = 3",
+                                                              f"n_elements = {n}")
     return text.replace(DYNAMIC, reduction + "\n" + dynamic.replace("T_END", repr(t_end)))
 
 
@@ -107,6 +112,17 @@ def bench(args, work: Path) -> list[dict]:
         rows.append(row)
         print(f"{row['setting']}: true {row['true_m']:.2e} m, check {row['check_m']:.2e} m, "
               f"ratio {row['ratio']:.2f}, local estimate {row['estimate_m']:.2e} m", flush=True)
+    fine = run(args.bin, work, "mesh_reference", scene(
+        "&dynamic t_end = T_END, rtol = 1e-7, atol = 1e-9 /", t_end=t_end, n=24))
+    for n in args.meshes:
+        result = run(args.bin, work, f"mesh{n}", scene(
+            "&dynamic t_end = T_END, rtol = 1e-7, atol = 1e-9, error_check = 'mesh' /",
+            t_end=t_end, n=n))
+        row = {"kind": "mesh", "setting": f"{n} elements per link (check: {2 * n})"}
+        row.update(check_row(result, fine))
+        rows.append(row)
+        print(f"{row['setting']}: true {row['true_m']:.2e} m, check {row['check_m']:.2e} m, "
+              f"ratio {row['ratio']:.2f}", flush=True)
     return rows
 
 
@@ -123,8 +139,9 @@ def write_tables(args, argv, rows):
              f"{0.1 if args.quick else 0.7} s. True error: largest distance of the output "
              "nodes (tip, elbow) from a reference (tolerance: bdf at rtol 1e-11, "
              f"{args.reference_m:.1e} m from galpha_adaptive at rtol 1e-10; modes: the full "
-             "model at rtol 1e-6). Check: largest distance of all nodes from "
-             "the second run (tolerance: rtol and atol / 10; modes: 2 more). Times: processor "
+             "model at rtol 1e-6; mesh: 24 elements per link at rtol 1e-7, at the &node points). "
+             "Check: largest distance of all nodes (mesh: the &node points) from the second run "
+             "(tolerance: rtol and atol / 10; modes: 2 more; mesh: twice the elements). Times: processor "
              "time of the run and of its check.", "",
              "| check | run | true error [m] | check [m] | check / true | local estimate [m] | "
              "run [s] | check [s] | steps | check's steps |",
@@ -144,22 +161,26 @@ def parse_args(argv):
     p.add_argument("--out-dir", type=Path, default=ROOT / "docs" / "bench")
     p.add_argument("--rtols", default="1e-3,1e-4,1e-5,1e-6")
     p.add_argument("--modes", default="1,2,4")
+    p.add_argument("--meshes", default="2,3,4")
     p.add_argument("--quick", action="store_true")
     args = p.parse_args(argv)
     try:
         args.rtols = [float(x) for x in args.rtols.split(",")]
         args.modes = [int(x) for x in args.modes.split(",")]
+        args.meshes = [int(x) for x in args.meshes.split(",")]
     except ValueError:
-        p.exit(2, f"{PROG}: --rtols and --modes must be numbers separated by commas, got "
-                  f"'{args.rtols}', '{args.modes}'\n")
-    if not all(0 < r < 1 for r in args.rtols) or not all(k >= 1 for k in args.modes):
-        p.exit(2, f"{PROG}: --rtols must lie in (0, 1) and --modes be >= 1\n")
+        p.exit(2, f"{PROG}: --rtols, --modes and --meshes must be numbers separated by commas, "
+                  f"got '{args.rtols}', '{args.modes}', '{args.meshes}'\n")
+    if not all(0 < r < 1 for r in args.rtols) or not all(k >= 1 for k in args.modes) or \
+            not all(1 <= n <= 12 for n in args.meshes):
+        p.exit(2, f"{PROG}: --rtols must lie in (0, 1), --modes be >= 1 and --meshes 1 to 12 "
+                  f"(the reference has 24)\n")
     if not args.bin.is_file():
         p.exit(2, f"{PROG}: no flexmor executable at {args.bin} (--bin)\n")
     if not args.out_dir.is_dir():
         p.exit(2, f"{PROG}: --out-dir {args.out_dir} is not a folder\n")
     if args.quick:
-        args.rtols, args.modes = [1e-3], [1]
+        args.rtols, args.modes, args.meshes = [1e-3], [1], [2]
     args.reference_m = math.nan
     return args
 

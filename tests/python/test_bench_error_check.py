@@ -16,7 +16,7 @@ def run_script(*args, timeout=900):
 
 
 def test_bad_arguments_exit_2(tmp_path):
-    for args in (["--rtols", "1e-3,x"], ["--rtols", "2"], ["--modes", "0"],
+    for args in (["--rtols", "1e-3,x"], ["--rtols", "2"], ["--modes", "0"], ["--meshes", "13"],
                  ["--bin", tmp_path / "none"], ["--out-dir", tmp_path / "none"]):
         proc = run_script(*args, *(["--out-dir", tmp_path] if "--out-dir" not in args else []))
         assert proc.returncode == 2 and "bench_error_check.py" in proc.stderr, proc.stderr
@@ -29,7 +29,7 @@ def test_quick_run_writes_tables(tmp_path):
         rows = list(csv.DictReader(f))
     assert [(r["kind"], r["setting"]) for r in rows] == [
         ("tolerance", "galpha_adaptive, rtol 0.001"), ("tolerance", "bdf, rtol 0.001"),
-        ("modes", "1 mode (check: 3)")]
+        ("modes", "1 mode (check: 3)"), ("mesh", "2 elements per link (check: 4)")]
     for r in rows:
         assert 1 / 3 < float(r["ratio"]) < 3, r
         assert int(r["check_steps"]) > int(r["steps"]), r
