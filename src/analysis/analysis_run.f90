@@ -74,6 +74,10 @@ module analysis_run
     !> a failure stays one line), a sweep's cases keep them to themselves.
     type(string_t), allocatable :: warnings(:)
     type(progress_t) :: progress
+    !> Progress lines without the summary lines (verbose = .false.), under their own name:
+    !> the error check's second run reports as 'check'.
+    logical :: progress_lines = .false.
+    character(len=8) :: progress_kind = ''
     !> &dynamic error_check: the second run's settings in words, its steps and processor
     !> time [s], and the largest distance [m] of the two runs' nodes at each output time.
     character(len=:), allocatable :: check_rerun
@@ -275,7 +279,7 @@ contains
     type(error_t), intent(out) :: err
     integer(i8) :: c0, c1, rate
     real(wp) :: cpu0, cpu1
-    this%progress%enabled = this%verbose
+    this%progress%enabled = this%verbose .or. this%progress_lines
     call system_clock(c0, rate)
     call cpu_time(cpu0)
     call check_control_laws(this, err)

@@ -30,6 +30,9 @@ contains
       flush(output_unit)
     end if
     rerun%verbose = .false.
+    rerun%progress_lines = this%verbose
+    rerun%progress_kind = 'check'
+    rerun%progress%interval = this%progress%interval
     call rerun%load_parsed(file, err)
     if (err%ok()) call copy_user_laws(this, rerun, err)
     if (err%ok()) then

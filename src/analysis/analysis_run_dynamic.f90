@@ -13,8 +13,12 @@ contains
     this%time = output_times(this%scene%dynamic)
     opts = integrator_options(this%scene%dynamic)
     opts%progress => this%progress
-    call this%progress%start(merge('reduced', 'dynamic', this%scene%reduction%active), &
-      this%time(1), this%time(size(this%time)))
+    if (len_trim(this%progress_kind) > 0) then
+      call this%progress%start(trim(this%progress_kind), this%time(1), this%time(size(this%time)))
+    else
+      call this%progress%start(merge('reduced', 'dynamic', this%scene%reduction%active), &
+        this%time(1), this%time(size(this%time)))
+    end if
     this%dyn%jacobian_kind = this%scene%dynamic%jacobian
     allocate(breaks(0))
     do i = 1, this%dyn%model%n_motions

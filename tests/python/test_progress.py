@@ -72,7 +72,7 @@ DURATION = r"(\d+\.\d) (s|min|h)"
 # apart here) it says so instead.
 ETA = r"(?:, ETA " + DURATION + r"|, ETA unknown: no progress since the last line)?$"
 TIME_LINE = re.compile(
-    r"^flexmor: (dynamic|reduced)  t = (\d+\.\d+) of (\d+\.\d+) s \((\d+\.\d) %\), (\d+) steps, "
+    r"^flexmor: (dynamic|reduced|check) +t = (\d+\.\d+) of (\d+\.\d+) s \((\d+\.\d) %\), (\d+) steps, "
     r"(?:(\d+) basis updates, )?" + DURATION + r" elapsed" + ETA)
 LOAD_LINE = re.compile(
     r"^flexmor: static   load step (\d+) of (\d+) \(load factor (\d\.\d{4})\), " + DURATION +
@@ -128,6 +128,24 @@ def test_progress_lines(tmp_path, name):
     last = (LOAD_LINE if kind == "static" else TIME_LINE).match(lines[-1])
     key = 1 if kind == "static" else 2
     assert float(last[key]) > float(first[key]), "progress does not advance: " + proc.stderr
+
+
+def test_error_check_reports_its_second_run(tmp_path):
+    """&dynamic error_check: the second run reports as 'check', after the run's own lines,
+    from t = 0 again; -q silences both."""
+    text = SCENES["galpha"][2].replace("dt = 1.0e-4 /", "dt = 1.0e-4, error_check = 'tolerance' /")
+    assert "error_check" in text
+    proc = run(tmp_path, text)
+    kinds = [TIME_LINE.match(line) for line in proc.stderr.splitlines()]
+    assert all(kinds), proc.stderr
+    names = [m[1] for m in kinds]
+    assert "dynamic" in names and "check" in names, names
+    first_check = names.index("check")
+    assert set(names[:first_check]) == {"dynamic"} and set(names[first_check:]) == {"check"}
+    assert float(kinds[first_check][2]) <= float(kinds[-1][2])
+    assert "error check: a second run with dt 1.00E-05" in proc.stdout
+    quiet = run(tmp_path, text, args=["-q"])
+    assert quiet.stderr == "" and quiet.stdout == ""
 
 
 def test_quiet_prints_no_progress(tmp_path):
