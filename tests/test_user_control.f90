@@ -63,6 +63,7 @@ program test_user_control
   use flexmor, only: wp, run_t, results_t, error_t, ERR_INPUT
   use user_control_laws, only: pid_law_t, failing_law_t
   use testing, only: suite_t
+  use test_scenes, only: rtxt
   implicit none
 
   character(len=*), parameter :: NL = new_line('a')
@@ -213,16 +214,8 @@ contains
     if (.not. allocated(run%check_distance)) return
     call t%check(maxval(run%check_distance) > 0.0_wp .and. maxval(run%check_distance) < &
       1.0e-6_wp, 'the second run follows the same law (distance ' // &
-      real_text(maxval(run%check_distance)) // ' m)')
+      rtxt(maxval(run%check_distance)) // ' m)')
   end subroutine with_error_check
-
-  function real_text(x) result(s)
-    real(wp), intent(in) :: x
-    character(len=:), allocatable :: s
-    character(len=16) :: buf
-    write(buf, '(es10.3)') x
-    s = trim(adjustl(buf))
-  end function real_text
 
   subroutine misuse()
     type(run_t) :: run, run_pid

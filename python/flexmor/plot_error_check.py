@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from flexmor.cli import missing_output_folder, reference_plot_args
 from flexmor.results import Result, ResultFileError, distance_from, read_result
 
 PROG = "flexmor-plot-error-check"
@@ -80,25 +81,11 @@ def plot_error_check(data: dict[str, Any], output: str, title: str = "",
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
-        prog=PROG,
-        description="Plot a run's error check (&dynamic error_check) over time, against the "
-                    "true error when a reference run is given.")
-    parser.add_argument("file", metavar="RUN.h5", help="result file of a run with error_check")
-    parser.add_argument("--reference", metavar="REF.h5", default=None,
-                        help="result file of a converged run of the same scene")
-    parser.add_argument("--node", action="append", default=None,
-                        help="output node of the true error, repeatable (default: every "
-                             "output node the files share)")
-    parser.add_argument("-o", "--output", default="error_check.png",
-                        help="image to write (default: error_check.png)")
-    parser.add_argument("--dpi", type=int, default=150, help="resolution (default: 150)")
-    args = parser.parse_args(argv)
-    if args.node and args.reference is None:
-        parser.error("--node needs --reference")
-    if args.dpi <= 0:
-        parser.error("--dpi must be positive")
-    return args
+    return reference_plot_args(
+        PROG, "Plot a run's error check (&dynamic error_check) over time, against the "
+        "true error when a reference run is given.",
+        "RUN.h5", "result file of a run with error_check", "REF.h5",
+        "result file of a converged run of the same scene", "error_check.png", argv)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -110,10 +97,7 @@ def main(argv: list[str] | None = None) -> int:
     except ResultFileError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
-    out_dir = os.path.dirname(os.path.abspath(args.output))
-    if not os.path.isdir(out_dir):
-        print(f"{PROG}: error: {args.output}: the folder {out_dir} does not exist",
-              file=sys.stderr)
+    if missing_output_folder(PROG, args.output):
         return 2
     attrs = data["attrs"]
     title = (f"{os.path.basename(args.file)}: error check ({attrs.get('kind', '?')}), up to "

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from flexmor.cli import missing_output_folder, reference_plot_args
 from flexmor.results import Result, ResultFileError, distance_from, read_result
 
 PROG = "flexmor-plot-reduction"
@@ -127,25 +128,11 @@ def title_of(path: str, attrs: dict[str, Any]) -> str:
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
-        prog=PROG,
-        description="Plot a reduced run's error estimate, residual and exact measurements over "
-                    "time, against the true error when a reference run is given.")
-    parser.add_argument("file", metavar="REDUCED.h5", help="result file of a reduced run")
-    parser.add_argument("--reference", metavar="FULL.h5", default=None,
-                        help="result file of a reference run of the same scene (full model)")
-    parser.add_argument("--node", action="append", default=None,
-                        help="output node of the true error, repeatable (default: every "
-                             "output node the files share)")
-    parser.add_argument("-o", "--output", default="reduction.png",
-                        help="image to write (default: reduction.png)")
-    parser.add_argument("--dpi", type=int, default=150, help="resolution (default: 150)")
-    args = parser.parse_args(argv)
-    if args.node and args.reference is None:
-        parser.error("--node needs --reference")
-    if args.dpi <= 0:
-        parser.error("--dpi must be positive")
-    return args
+    return reference_plot_args(
+        PROG, "Plot a reduced run's error estimate, residual and exact measurements over "
+        "time, against the true error when a reference run is given.",
+        "REDUCED.h5", "result file of a reduced run", "FULL.h5",
+        "result file of a reference run of the same scene (full model)", "reduction.png", argv)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -157,10 +144,7 @@ def main(argv: list[str] | None = None) -> int:
     except ResultFileError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
-    out_dir = os.path.dirname(os.path.abspath(args.output))
-    if not os.path.isdir(out_dir):
-        print(f"{PROG}: error: {args.output}: the folder {out_dir} does not exist",
-              file=sys.stderr)
+    if missing_output_folder(PROG, args.output):
         return 2
     try:
         plot_reduction(data, args.output, title_of(args.file, data["attrs"]), args.dpi)

@@ -21,6 +21,24 @@ ARM = """&node label = 'base', x = 0, y = 0, fixed = .true. /
 """
 
 
+#: The two-link benchmark arm (input/two_link.nml without its analyses) with {n} beam elements
+#: per link: format(n=...) and add the analyses.
+TWO_LINK = """
+&node label = 'base',  x = 0.0,   y = 0.0, fixed = .true. /
+&node label = 'elbow', x = 0.545, y = 0.0 /
+&node label = 'tip',   x = 1.220, y = 0.0 /
+&link label = 'link1', from = 'base', to = 'elbow', n_elements = {n},
+      E = 7.3e10, A = 9.0e-4, I = 1.69e-8, rho = 2700 /
+&link label = 'link2', from = 'elbow', to = 'tip', n_elements = {n},
+      E = 7.3e10, A = 4.0e-4, I = 3.33e-9, rho = 2700 /
+&hinge label = 'joint1', node = 'base',  link = 'link1', mode = 'prescribed', motion = 'phi1' /
+&hinge label = 'joint2', node = 'elbow', link = 'link2', mode = 'prescribed', motion = 'phi2' /
+&motion label = 'phi1', law = 'cubic', start = 0.0, end = 1.5707963267948966, duration = 0.5 /
+&motion label = 'phi2', law = 'cubic', start = 0.0, end = 1.5707963267948966, duration = 0.5 /
+&mass node = 'elbow', m = 1.0 /
+&mass node = 'tip',   m = 3.0 /
+"""
+
 def load_driver(path):
     """A benchmark driver of scripts/ as a module (the drivers are scripts, not part of the
     flexmor package; they import it)."""

@@ -18,23 +18,9 @@ import pytest
 from flexmor.plot_error_check import main as plot_main
 from flexmor.results import distance_from, read_result
 from helpers import ARM, BIN, ROOT, assert_clean_error, run_scene
+from helpers import TWO_LINK as TWO_LINK_N
 
-TWO_LINK = """
-&node label = 'base',  x = 0.0,   y = 0.0, fixed = .true. /
-&node label = 'elbow', x = 0.545, y = 0.0 /
-&node label = 'tip',   x = 1.220, y = 0.0 /
-&link label = 'link1', from = 'base', to = 'elbow', n_elements = 3,
-      E = 7.3e10, A = 9.0e-4, I = 1.69e-8, rho = 2700 /
-&link label = 'link2', from = 'elbow', to = 'tip', n_elements = 3,
-      E = 7.3e10, A = 4.0e-4, I = 3.33e-9, rho = 2700 /
-&hinge label = 'joint1', node = 'base',  link = 'link1', mode = 'prescribed', motion = 'phi1' /
-&hinge label = 'joint2', node = 'elbow', link = 'link2', mode = 'prescribed', motion = 'phi2' /
-&motion label = 'phi1', law = 'cubic', start = 0.0, end = 1.5707963267948966, duration = 0.5 /
-&motion label = 'phi2', law = 'cubic', start = 0.0, end = 1.5707963267948966, duration = 0.5 /
-&mass node = 'elbow', m = 1.0 /
-&mass node = 'tip',   m = 3.0 /
-&output nodes = 'tip', 'elbow' /
-"""
+TWO_LINK = TWO_LINK_N.format(n=3) + "&output nodes = 'tip', 'elbow' /\n"
 
 
 def check_of(path):
