@@ -1,11 +1,14 @@
 """What the plotting commands that compare a run with a reference share: their arguments
-(a result file, ``--reference``, ``--node``, ``-o``, ``--dpi``) and the check of the output
-folder before anything is drawn."""
+(a result file, ``--reference``, ``--node``, ``-o``, ``--dpi``), reading both files and the
+check of the output folder before anything is drawn."""
 from __future__ import annotations
 
 import argparse
 import os
 import sys
+from typing import Any, Callable
+
+from flexmor.results import Result, ResultFileError, read_result
 
 
 def reference_plot_args(prog: str, description: str, file_metavar: str, file_help: str,
@@ -39,3 +42,18 @@ def missing_output_folder(prog: str, output: str) -> bool:
         return False
     print(f"{prog}: error: {output}: the folder {out_dir} does not exist", file=sys.stderr)
     return True
+
+
+def read_with_reference(prog: str, args: argparse.Namespace,
+                        data: Callable[[Result, Result | None, list[str] | None], Any]) -> Any:
+    """``data(run, reference or None, args.node)`` from the files of ``args``, and that the
+    output folder exists; None, with a one-line message on stderr, when a file cannot be read,
+    ``data`` refuses them (ResultFileError) or the folder is missing."""
+    try:
+        run = read_result(args.file)
+        reference = read_result(args.reference) if args.reference else None
+        result = data(run, reference, args.node)
+    except ResultFileError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return None
+    return None if missing_output_folder(prog, args.output) else result

@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from flexmor.cli import missing_output_folder, reference_plot_args
-from flexmor.results import Result, ResultFileError, distance_from, read_result
+from flexmor.cli import read_with_reference, reference_plot_args
+from flexmor.results import Result, ResultFileError, distance_from
 
 PROG = "flexmor-plot-reduction"
 
@@ -137,14 +137,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    try:
-        reduced = read_result(args.file)
-        reference = read_result(args.reference) if args.reference else None
-        data = reduction_errors(reduced, reference, args.node)
-    except ResultFileError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
-    if missing_output_folder(PROG, args.output):
+    data = read_with_reference(PROG, args, reduction_errors)
+    if data is None:
         return 2
     try:
         plot_reduction(data, args.output, title_of(args.file, data["attrs"]), args.dpi)
