@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Iterable
 
 import h5py
@@ -114,6 +115,24 @@ class Sweep:
         raise SweepFileError(
             f"{self.path}: no metric '{name}'; available: "
             f"{_names([*self.metrics, WALL_TIME])}")
+
+    def case_file(self, index: int) -> Path:
+        """The result file of the case at array index ``index`` (from 0), written with
+        ``&sweep case_files = .true.`` into the folder beside the sweep file (read it with
+        :func:`flexmor.read_result`). :class:`SweepFileError` when the sweep wrote none, the
+        index is out of range, or that case has not run or failed (it has no file)."""
+        folder = self.attrs.get("case_files", "")
+        if not folder:
+            raise SweepFileError(f"{self.path}: the sweep wrote no result file per case "
+                                 f"(&sweep case_files = .true. does)")
+        if not 0 <= index < self.n_cases:
+            raise SweepFileError(f"{self.path}: no case at index {index} (0 to "
+                                 f"{self.n_cases - 1})")
+        if self.status[index] != 0:
+            raise SweepFileError(f"{self.path}: case {case_number(index)} has no result file "
+                                 f"(status: {status_text(int(self.status[index]))})")
+        width = len(str(self.n_cases))
+        return Path(self.path).parent / folder / f"case_{case_number(index):0{width}d}.h5"
 
 
 def _names(names: Iterable[str]) -> str:

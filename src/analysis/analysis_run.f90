@@ -74,6 +74,9 @@ module analysis_run
     !> a failure stays one line), a sweep's cases keep them to themselves.
     type(string_t), allocatable :: warnings(:)
     type(progress_t) :: progress
+    !> Scene variables set over the file's text by the caller (a sweep case's parameters, as
+    !> 'group.variable = value, ...'): the result file's root attribute input_overrides.
+    character(len=:), allocatable :: input_overrides
     !> Progress lines without the summary lines (verbose = .false.), under their own name:
     !> the error check's second run reports as 'check'.
     logical :: progress_lines = .false.

@@ -34,6 +34,8 @@ contains
     call h5%write_string_attr('/', 'flexmor_version', FLEXMOR_VERSION, err)
     if (err%ok()) call h5%write_string_attr('/', 'input', this%file%text, err)
     if (err%ok()) call h5%write_string_attr('/', 'input_file', this%file%path, err)
+    if (err%ok() .and. allocated(this%input_overrides)) call h5%write_string_attr('/', &
+      'input_overrides', this%input_overrides, err)
     if (err%ok()) call h5%write_string_attr('/', 'title', this%scene%title, err)
     if (err%ok()) call h5%write_string_attr('/', 'status', 'ok', err)
     if (err%ok()) call h5%write_real_attr('/', 'wall_time_s', this%wall_time_s, err)

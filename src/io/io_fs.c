@@ -49,6 +49,17 @@ int flexmor_fsync_path(const char *path)
     return rc;
 }
 
+/* mkdir(2) with mode 0777 (less the umask); a folder that exists already is not an error,
+ * anything else there is (ENOTDIR). */
+int flexmor_mkdir(const char *path)
+{
+    if (mkdir(path, 0777) == 0) return 0;
+    int rc = errno;
+    struct stat st;
+    if (rc == EEXIST) return stat(path, &st) == 0 && S_ISDIR(st.st_mode) ? 0 : ENOTDIR;
+    return rc;
+}
+
 /* Text of an errno value, NUL-terminated, truncated to `len` bytes. */
 void flexmor_strerror(int code, char *buf, size_t len)
 {

@@ -14,7 +14,7 @@ module io_fs
   implicit none
   private
   public :: rename_file, delete_file, sync_file, check_output_path, install_interrupt_guard, &
-    guard_result_file, clear_result_guard
+    guard_result_file, clear_result_guard, make_folder
 
   integer(c_int), parameter :: ENOENT = 2   !< errno "No such file or directory" (Linux)
   integer(c_int), parameter :: EISDIR = 21  !< errno "Is a directory" (Linux)
@@ -25,6 +25,10 @@ module io_fs
       character(kind=c_char), intent(in) :: from(*), to(*)
     end function c_rename
 
+    integer(c_int) function c_mkdir(path) bind(C, name='flexmor_mkdir')
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+    end function c_mkdir
     integer(c_int) function c_unlink(path) bind(C, name='flexmor_unlink')
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: path(*)
@@ -76,6 +80,16 @@ contains
     if (rc /= 0) call err%set(ERR_IO, "cannot rename '" // from // "' to '" // to // "': " &
                               // errno_text(rc))
   end subroutine rename_file
+
+  !> Create the folder `path` (its parent must exist); one that exists already is fine.
+  subroutine make_folder(path, err)
+    character(len=*), intent(in) :: path
+    type(error_t), intent(out) :: err
+    integer(c_int) :: rc
+    rc = c_mkdir(to_c(path))
+    if (rc /= 0) call err%set(ERR_IO, "cannot create the folder '" // path // "': " // &
+      errno_text(rc))
+  end subroutine make_folder
 
   !> Delete a file. A file that does not exist is not an error; other failures are reported in
   !> `err` when it is present and ignored otherwise (for removing leftovers on error paths).

@@ -91,6 +91,8 @@ module io_sweep_file
     integer :: seed = 1
     character(len=:), allocatable :: node
     character(len=:), allocatable :: title
+    !> The folder of the cases' own result files ('' when they are not written).
+    character(len=:), allocatable :: case_files
   end type sweep_attrs_t
 
   !> One open sweep result file. Components are private; use the type-bound procedures.
@@ -271,6 +273,8 @@ contains
       call h5_put_int_attr(path, this%file_id, '/', 'seed', attrs%seed, err)
       call put_root_text(this, 'node', attrs%node, err)
       call put_root_text(this, 'title', attrs%title, err)
+      if (allocated(attrs%case_files)) call put_root_text(this, 'case_files', &
+        attrs%case_files, err)
 
       ! Groups: the named datasets keep their creation order.
       call h5_create_group(path, this%file_id, '/cases', .false., err)

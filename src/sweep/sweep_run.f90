@@ -7,7 +7,9 @@
 !> before its rank gets the next one, and a rerun skips every case already in the file.
 !> Why one writer: a per-case flush is collective in parallel HDF5, which would make every rank
 !> wait for the slowest case; writing one row costs rank 0 well under a millisecond.
-!> With one rank, rank 0 runs the cases itself.
+!> With one rank, rank 0 runs the cases itself. With &sweep case_files each rank also writes
+!> the result file of every case it runs (the flexmor program's, docs/output.md) into one
+!> folder that rank 0 creates first.
 module sweep_run
   use, intrinsic :: iso_c_binding, only: c_int
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
@@ -16,9 +18,10 @@ module sweep_run
     MPI_ANY_TAG, MPI_Wtime
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
-  use core_strings, only: int_str, approx_str
+  use core_strings, only: int_str, approx_str, real_str
   use io_namelist, only: nml_file_t
   use io_sweep_file, only: sweep_file_t, sweep_attrs_t
+  use io_fs, only: make_folder
   use core_version, only: FLEXMOR_VERSION
   use analysis_run, only: run_t
   use sweep_spec, only: sweep_spec_t, apply_case
@@ -73,15 +76,18 @@ contains
     type(progress_t) :: progress
     integer, allocatable :: pending(:)
     integer :: rank, n_ranks, flag(1)
+    character(len=:), allocatable :: folder
 
     call MPI_Comm_rank(comm, rank)
     call MPI_Comm_size(comm, n_ranks)
     call base%load(spec%base_path, err)
     if (err%ok()) call validate(spec, base, err)
     if (.not. err%ok()) return
+    folder = case_folder(spec, out_path)
     flag = 0
     if (rank == 0) then
-      call open_results(spec, base, out_path, file, pending, err)
+      if (len(folder) > 0) call make_folder(folder, err)
+      if (err%ok()) call open_results(spec, base, out_path, folder, file, pending, err)
       if (.not. err%ok()) flag = 1
     end if
     call MPI_Bcast(flag, 1, MPI_INTEGER, 0, comm)
@@ -99,19 +105,58 @@ contains
         int_str(progress%skipped) // ' already in ' // out_path // ', ' // &
         int_str(n_ranks) // ' rank(s)'
       if (n_ranks == 1) then
-        call run_serial(spec, base, pending, file, progress, err)
+        call run_serial(spec, base, folder, pending, file, progress, err)
       else
         call run_master(comm, n_ranks, pending, file, progress, err)
       end if
       call report(progress, .true.)
       call file%close()
     else
-      call run_worker(spec, base, comm, rank)
+      call run_worker(spec, base, folder, comm, rank)
     end if
     flag = merge(0, 1, err%ok())
     call MPI_Bcast(flag, 1, MPI_INTEGER, 0, comm)
     if (flag(1) /= 0 .and. rank /= 0) call err%set(ERR_INPUT, 'the sweep failed on rank 0')
   end subroutine run_sweep
+
+  !> The folder of the cases' result files: the result file's path without its extension and
+  !> with '_cases' ('' without &sweep case_files).
+  function case_folder(spec, out_path) result(folder)
+    type(sweep_spec_t), intent(in) :: spec
+    character(len=*), intent(in) :: out_path
+    character(len=:), allocatable :: folder
+    integer :: dot
+    folder = ''
+    if (.not. spec%case_files) return
+    dot = index(out_path, '.', back=.true.)
+    if (dot <= index(out_path, '/', back=.true.) + 1) dot = len(out_path) + 1
+    folder = out_path(:dot - 1) // '_cases'
+  end function case_folder
+
+  !> 'motion.phi1.end = 0.5, link.link1.n_elements = 4': the case's parameters, for its file.
+  function case_overrides(spec, icase) result(text)
+    type(sweep_spec_t), intent(in) :: spec
+    integer, intent(in) :: icase
+    character(len=:), allocatable :: text
+    integer :: j
+    text = ''
+    do j = 1, spec%n_parameters()
+      if (j > 1) text = text // ', '
+      text = text // spec%names(j)%s // ' = ' // real_str(spec%values(icase, j))
+    end do
+  end function case_overrides
+
+  !> folder/case_0007.h5: case icase of n, numbered from 1 with as many digits as n has.
+  function case_file(folder, icase, n) result(path)
+    character(len=*), intent(in) :: folder
+    integer, intent(in) :: icase, n
+    character(len=:), allocatable :: path
+    character(len=16) :: fmt
+    character(len=24) :: num
+    write(fmt, '(a,i0,a,i0,a)') '(i', len(int_str(n)), '.', len(int_str(n)), ')'
+    write(num, fmt) icase
+    path = folder // '/case_' // trim(num) // '.h5'
+  end function case_file
 
   !> The sweep's own input errors, without running anything (flexmor-sweep --check).
   subroutine check_sweep(spec, err)
@@ -146,10 +191,10 @@ contains
     if (.not. err%ok()) call err%prefix(spec%path // ': ')
   end subroutine validate
 
-  subroutine open_results(spec, base, out_path, file, pending, err)
+  subroutine open_results(spec, base, out_path, folder, file, pending, err)
     type(sweep_spec_t), intent(in) :: spec
     type(nml_file_t), intent(in) :: base
-    character(len=*), intent(in) :: out_path
+    character(len=*), intent(in) :: out_path, folder
     type(sweep_file_t), intent(inout) :: file
     integer, allocatable, intent(out) :: pending(:)
     type(error_t), intent(inout) :: err
@@ -174,6 +219,8 @@ contains
       attrs%seed = spec%seed
       attrs%node = spec%node
       attrs%title = spec%title
+      ! Beside the result file: its name is enough for a reader.
+      attrs%case_files = folder(index(folder, '/', back=.true.) + 1:)
       call file%create(out_path, attrs, spec%names, spec%values, METRIC_NAMES, err, &
         metric_units=METRIC_UNITS)
       if (.not. err%ok()) return
@@ -184,9 +231,10 @@ contains
   end subroutine open_results
 
   !> One case from start to metrics; never fails itself: a failure is the case's outcome.
-  subroutine run_case(spec, base, icase, rank, out)
+  subroutine run_case(spec, base, folder, icase, rank, out)
     type(sweep_spec_t), intent(in) :: spec
     type(nml_file_t), intent(in) :: base
+    character(len=*), intent(in) :: folder
     integer, intent(in) :: icase, rank
     type(outcome_t), intent(out) :: out
     type(nml_file_t) :: scene_file
@@ -201,6 +249,10 @@ contains
     if (err%ok()) call run%load_parsed(scene_file, err)
     if (err%ok()) call run%execute(err)
     if (err%ok()) call case_metrics(run, spec%node, out%metrics, err)
+    if (err%ok() .and. len(folder) > 0) then
+      run%input_overrides = case_overrides(spec, icase)
+      call run%write(case_file(folder, icase, spec%n_cases()), err)
+    end if
     if (err%ok()) then
       out%status = 0
       out%wall_time_s = run%wall_time_s
@@ -210,9 +262,10 @@ contains
     end if
   end subroutine run_case
 
-  subroutine run_serial(spec, base, pending, file, progress, err)
+  subroutine run_serial(spec, base, folder, pending, file, progress, err)
     type(sweep_spec_t), intent(in) :: spec
     type(nml_file_t), intent(in) :: base
+    character(len=*), intent(in) :: folder
     integer, intent(in) :: pending(:)
     type(sweep_file_t), intent(inout) :: file
     type(progress_t), intent(inout) :: progress
@@ -220,7 +273,7 @@ contains
     type(outcome_t) :: out
     integer :: i
     do i = 1, size(pending)
-      call run_case(spec, base, pending(i), 0, out)
+      call run_case(spec, base, folder, pending(i), 0, out)
       call record(file, out, progress, err)
       if (.not. err%ok()) return
     end do
@@ -290,9 +343,10 @@ contains
   end subroutine receive_outcome
 
   !> Ranks 1..N-1: run the cases rank 0 sends until it says stop.
-  subroutine run_worker(spec, base, comm, rank)
+  subroutine run_worker(spec, base, folder, comm, rank)
     type(sweep_spec_t), intent(in) :: spec
     type(nml_file_t), intent(in) :: base
+    character(len=*), intent(in) :: folder
     type(MPI_Comm), intent(in) :: comm
     integer, intent(in) :: rank
     type(outcome_t) :: out
@@ -301,7 +355,7 @@ contains
     do
       call MPI_Recv(icase, 1, MPI_INTEGER, 0, MPI_ANY_TAG, comm, st)
       if (st%MPI_TAG == TAG_STOP) exit
-      call run_case(spec, base, icase(1), rank, out)
+      call run_case(spec, base, folder, icase(1), rank, out)
       call MPI_Send([real(out%icase, wp), real(out%status, wp), out%wall_time_s, out%metrics], &
         HEAD + size(METRIC_NAMES), MPI_DOUBLE_PRECISION, 0, TAG_RESULT, comm)
       call MPI_Send(out%message, MESSAGE_LEN, MPI_CHARACTER, 0, TAG_MESSAGE, comm)

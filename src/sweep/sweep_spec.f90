@@ -38,6 +38,8 @@ module sweep_spec
     character(len=:), allocatable :: mode          ! product|zip|random|lhs
     character(len=:), allocatable :: node, title
     integer :: n_samples = 0, seed = 1
+    !> Each case's own result file too, in the folder <result file without extension>_cases
+    logical :: case_files = .false.
     type(string_t), allocatable :: names(:)        ! parameter names as given
     real(wp), allocatable :: values(:, :)          ! (n_cases, n_parameters)
     type(param_t), allocatable, private :: params(:)
@@ -163,6 +165,7 @@ contains
     this%title = ''
     this%n_samples = 0
     this%seed = 1
+    this%case_files = .false.
   end subroutine reset
 
   subroutine read_sweep_group(this, g, err)
@@ -178,6 +181,7 @@ contains
     if (e%ok()) call g%get_int('seed', this%seed, e, default=1)
     if (e%ok()) call g%get_string('node', this%node, e, default='tip')
     if (e%ok()) call g%get_string('title', this%title, e, default='')
+    if (e%ok()) call g%get_logical('case_files', this%case_files, e, default=.false.)
     if (.not. e%ok()) then
       err = e
       return

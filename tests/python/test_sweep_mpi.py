@@ -312,3 +312,35 @@ def test_sweep_metric_error_check(tmp_path):
     proc = run_sweep(tmp_path, out="plain.h5")
     assert proc.returncode == 0, proc.stderr
     assert np.all(np.isnan(read(tmp_path / "plain.h5")["metrics"]["error_check"]))
+
+
+@pytest.mark.parametrize("ranks", [None, 2])
+def test_case_files(tmp_path, ranks):
+    """&sweep case_files = .true.: every case that ran ok has the result file a flexmor run of
+    it writes, beside the sweep file (out_cases/case_k.h5, k from 1); its steps are the case's
+    metric and its attribute input_overrides names the case's parameters (the input attribute
+    is the base scene's text); failed cases have none; flexmor.Sweep.case_file finds them, and says why not."""
+    import flexmor
+    write_inputs(tmp_path, SWEEP.replace("mode = 'product' /",
+                                         "mode = 'product', case_files = .true. /"))
+    proc = run_sweep(tmp_path, ranks)
+    assert proc.returncode == 0, proc.stderr
+    sweep = flexmor.read_sweep(tmp_path / "out.h5")
+    assert sweep.attrs["case_files"] == "out_cases"
+    ok = np.flatnonzero(sweep.ok)
+    assert len(ok) == 3 and np.all(sweep.failed[np.flatnonzero(~sweep.ok)])
+    files = sorted(p.name for p in (tmp_path / "out_cases").iterdir())
+    assert files == sorted(f"case_{i + 1}.h5" for i in ok)
+    for i in ok:
+        result = flexmor.read_result(sweep.case_file(i))
+        assert result.attrs["n_steps"] == sweep.metric("n_steps")[i]
+        overrides = result.attrs["input_overrides"]
+        assert overrides.startswith("motion.m1.end = ") and ", link.arm.E = " in overrides
+        assert float(overrides.split(",")[0].split("=")[1]) == pytest.approx(
+            sweep.parameter("motion.m1.end")[i], rel=1e-9)
+    with pytest.raises(flexmor.SweepFileError, match="has no result file"):
+        sweep.case_file(int(np.flatnonzero(~sweep.ok)[0]))
+    write_inputs(tmp_path)
+    assert run_sweep(tmp_path, out="plain.h5").returncode == 0
+    with pytest.raises(flexmor.SweepFileError, match="case_files = .true."):
+        flexmor.read_sweep(tmp_path / "plain.h5").case_file(0)
