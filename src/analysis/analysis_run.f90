@@ -9,7 +9,7 @@ module analysis_run
   use io_namelist, only: nml_file_t, string_t
   use io_scene, only: read_scene
   use model_scene, only: scene_t, dynamic_rec_t, label_t, auto_by_stiffness, &
-    ERROR_CHECK_NONE, ERROR_CHECK_MODES
+    ERROR_CHECK_NONE, ERROR_CHECK_MODES, ERROR_CHECK_MESH
   use io_hdf5, only: h5_writer_t
   use model_system, only: model_t, NODE_SLOTS
   use elements_base, only: MODE_DYNAMIC
@@ -140,6 +140,12 @@ module analysis_run
       type(run_t), intent(inout) :: this
       type(error_t), intent(out) :: err
     end subroutine run_error_check
+    !> Why error_check = 'mesh' cannot refine the scene's links ('' when it can;
+    !> analysis_run_check).
+    module function mesh_check_problem(scene) result(why)
+      type(scene_t), intent(in) :: scene
+      character(len=:), allocatable :: why
+    end function mesh_check_problem
     !> &dynamic: the full or reduced model integrated (analysis_run_dynamic).
     module subroutine run_dynamic(this, err)
       type(run_t), intent(inout), target :: this
@@ -188,6 +194,10 @@ contains
       this%scene%reduction%active) call err%set(ERR_INPUT, 'group &dynamic: variable ' // &
       '''error_check'': ''modes'' checks a reduced run (&reduction); ''tolerance'' checks ' // &
       'the time integration of any run')
+    if (err%ok() .and. this%scene%dynamic%error_check == ERROR_CHECK_MESH) then
+      if (len(mesh_check_problem(this%scene)) > 0) call err%set(ERR_INPUT, &
+        mesh_check_problem(this%scene))
+    end if
     if (err%ok()) then
       allocate(this%q_static(model%n_dy))
       this%q_static = 0.0_wp

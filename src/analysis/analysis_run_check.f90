@@ -143,40 +143,92 @@ contains
     end associate
   end subroutine check_settings
   !> Every &link with twice its elements: the &node points are where they were, every
-  !> element is split at its middle. Refused where the scene names a link's own points
-  !> ('link1.2' moves to where 'link1.4' was) or lists classes per element.
+  !> element is split at its middle (mesh_check_problem has refused the scenes where that
+  !> changes the problem).
   subroutine refine_links(this, file, what, err)
     type(run_t), intent(in) :: this
     type(nml_file_t), intent(inout) :: file
     character(len=:), allocatable, intent(inout) :: what
     type(error_t), intent(inout) :: err
-    character(len=*), parameter :: WHERE = 'group &dynamic: variable ''error_check'': ''mesh'' '
-    integer :: i, ig, total
-    if (file%count('link') == 0) then
-      call err%set(ERR_INPUT, WHERE // 'refines the links, and the scene has no &link')
-      return
-    end if
+    integer :: i, total
     total = 0
     do i = 1, size(this%scene%links)
       associate (r => this%scene%links(i))
-        if (index(file%text, '''' // r%label // '.') > 0 .or. &
-            index(file%text, '"' // r%label // '.') > 0) then
-          call err%set(ERR_INPUT, WHERE // 'halves every element, which moves the points ' // &
-            'of link ''' // r%label // ''' that the scene names (''' // r%label // '.k''): ' // &
-            'refer to &node points only, or refine the mesh by hand')
-        else if (many(r%elongation) .or. many(r%bending)) then
-          call err%set(ERR_INPUT, WHERE // 'halves every element, and link ''' // r%label // &
-            ''' lists its classes per element: give one class per link, or refine by hand')
-        end if
-        if (.not. err%ok()) return
-        ig = file%group_index('link', i)
-        call file%groups(ig)%set_raw('n_elements', int_str(2 * r%n_elements), err)
+        call file%groups(file%group_index('link', i))%set_raw('n_elements', &
+          int_str(2 * r%n_elements), err)
         if (.not. err%ok()) return
         total = total + 2 * r%n_elements
       end associate
     end do
     what = int_str(total) // ' beam elements (twice as many)'
   end subroutine refine_links
+
+  !> Why the links of `scene` cannot be refined by error_check = 'mesh' ('' when they can):
+  !> there are none, a controller measures or drives a link's own point ('link1.2' moves to
+  !> where 'link1.4' was; masses, forces and joints sit at &node points, and the second run's
+  !> output nodes are not compared), or a link lists its classes per element.
+  module procedure mesh_check_problem
+    character(len=*), parameter :: WHERE = 'group &dynamic: variable ''error_check'': ''mesh'' '
+    integer :: i
+    why = ''
+    if (.not. allocated(scene%links)) then
+      why = WHERE // 'refines the links, and the scene has no &link'
+      return
+    end if
+    if (size(scene%links) == 0) then
+      why = WHERE // 'refines the links, and the scene has no &link'
+      return
+    end if
+    do i = 1, size(scene%links)
+      associate (r => scene%links(i))
+        if (len(controlled_point(scene, r%label)) > 0) then
+          why = WHERE // 'halves every element, which moves the point ''' // &
+            controlled_point(scene, r%label) // ''' of link ''' // r%label // &
+            ''' that a &controller measures or drives: refine the mesh by hand'
+        else if (many(r%elongation) .or. many(r%bending)) then
+          why = WHERE // 'halves every element, and link ''' // r%label // &
+            ''' lists its classes per element: give one class per link, or refine by hand'
+        end if
+        if (len(why) > 0) return
+      end associate
+    end do
+  end procedure mesh_check_problem
+
+  !> The first point of link `link` ('link.k') a controller measures or drives, or ''.
+  function controlled_point(scene, link) result(point)
+    type(scene_t), intent(in) :: scene
+    character(len=*), intent(in) :: link
+    character(len=:), allocatable :: point
+    integer :: i, j
+    point = ''
+    if (.not. allocated(scene%controllers)) return
+    do i = 1, size(scene%controllers)
+      associate (c => scene%controllers(i))
+        do j = 1, size(c%measure)
+          if (on_link(c%measure(j)%s)) point = owner(c%measure(j)%s)
+        end do
+        do j = 1, size(c%actuator)
+          if (on_link(c%actuator(j)%s)) point = owner(c%actuator(j)%s)
+        end do
+      end associate
+      if (len(point) > 0) return
+    end do
+  contains
+    logical function on_link(label)
+      character(len=*), intent(in) :: label
+      integer :: n
+      n = len(link) + 1
+      on_link = .false.
+      if (len(label) > n) on_link = label(:n) == link // '.' .and. &
+        verify(label(n + 1:n + 1), '0123456789') == 0
+    end function on_link
+    !> 'link.2' of 'link.2.y'.
+    function owner(label) result(o)
+      character(len=*), intent(in) :: label
+      character(len=:), allocatable :: o
+      o = label(:index(label, '.', back=.true.) - 1)
+    end function owner
+  end function controlled_point
 
   logical function many(classes)
     type(label_t), allocatable, intent(in) :: classes(:)

@@ -9,6 +9,7 @@ hold what the first run misses, so the check is the true error (1.00 measured). 
 required within a factor 3 (0.33 to 3), well outside what an error check that measured the
 wrong thing (the local error, or nothing) would give: the reduction's local estimate is 0.42
 of the true error in the modes case, the step errors far below."""
+import re
 import subprocess
 
 import h5py
@@ -96,20 +97,38 @@ def test_mesh_check_tracks_the_true_error(tmp_path):
 
 
 @pytest.mark.parametrize("case, fragment", [
-    ("output", "points of link 'link2' that the scene names"),
+    ("controller", "moves the point 'link2.2' of link 'link2' that a &controller measures"),
     ("classes", "lists its classes per element"),
 ])
 def test_mesh_check_refusals(tmp_path, case, fragment):
-    text = TWO_LINK + "&dynamic t_end = 0.01, error_check = 'mesh' /\n"
-    if case == "output":
-        text = text.replace("nodes = 'tip', 'elbow'", "nodes = 'tip', 'link2.2'")
-        assert "'link2.2'" in text
+    """Refused at load, before the first run: a controller's point on a link would move, per-
+    element classes would not fit the new count. Output nodes on a link are fine (the second
+    run's outputs are not compared): input/four_bar.nml outputs 'coupler.2'."""
+    if case == "controller":
+        text = re.sub(r",\s*kp = [0-9.]+, kd = [0-9.]+, reference = '(phi[12])' /", " /",
+                      (ROOT / "input" / "two_link_pd.nml").read_text())
+        text = text.replace("atol = 1.0e-8 /", "atol = 1.0e-8, error_check = 'mesh' /")
+        text += ("&controller label = 'c', actuator = 'joint1.torque', measure = 'link2.2.y', "
+                 "reference = 'phi1', kp = 1.0 /\n")
+        assert text.count("error_check") == 1 and "kd = 140.0" not in text
     else:
-        text = text.replace("I = 3.33e-9, rho = 2700 /",
-                            "I = 3.33e-9, rho = 2700, elongation = 'rigid', 'rigid', 'dynamic' /")
+        text = TWO_LINK.replace("I = 3.33e-9, rho = 2700 /",
+                                "I = 3.33e-9, rho = 2700, elongation = 'rigid', 'rigid', 'dynamic' /")
+        text += "&dynamic t_end = 0.01, error_check = 'mesh' /\n"
         assert "'rigid', 'rigid', 'dynamic'" in text
     proc, out = run_scene(tmp_path, text)
     assert_clean_error(proc, out, "'error_check': 'mesh'", fragment)
+    assert "dynamic:" not in proc.stdout
+
+
+def test_mesh_check_with_output_nodes_on_links(tmp_path):
+    text = (ROOT / "input" / "four_bar.nml").read_text()
+    assert "'coupler.2'" in text
+    text = re.sub(r"(&dynamic[^/]*)/", r"\1, error_check = 'mesh' /", text)
+    proc, out = run_scene(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    distance, attrs, _, _ = check_of(out)
+    assert attrs["kind"] == "mesh" and np.all(np.isfinite(distance))
 
 
 def test_whip_example(tmp_path):
