@@ -4,8 +4,9 @@ two-link arm (input/two_link.nml: 3 beam elements per link, quarter turns in 0.5
 
 Tolerance check: for each integrator (galpha_adaptive, bdf) and rtol (--rtols; atol = rtol /
 100), a run with error_check = 'tolerance' (the second run at rtol / 10) against a reference
-(bdf at rtol 1e-11; galpha_adaptive at rtol 1e-10 bounds its error): the true error (the largest distance of the output nodes, tip
-and elbow, from the reference's), the check's largest distance (over all nodes), their ratio,
+(bdf at rtol 1e-11; galpha_adaptive at rtol 1e-10 bounds its error): the true error (the
+largest distance of the output nodes, tip and elbow, from the reference's), the check's largest
+distance (over all nodes), their ratio,
 and the processor time of the run and of its check. Theory (docs/theory.md 6.2): with a global
 error ~ rtol^p the ratio tends to 1 - 10^-p, 0.78 for galpha_adaptive (p = 2/3).
 
@@ -20,9 +21,9 @@ Usage (the flexmor Python package installed, or PYTHONPATH=python):
     python3 scripts/bench_error_check.py [--bin build/bin/flexmor] [--out-dir docs/bench] \\
         [--rtols 1e-3,1e-4,1e-5,1e-6] [--modes 1,2,4] [--meshes 2,3,4] [--quick]
 
---quick: 0.1 s of motion, rtol 1e-3, 1 mode and 2 elements per link (for the tests). Writes error_check.md and
-error_check.csv into --out-dir with the command, date, machine, flexmor version and commit.
-Bad arguments exit with 2, a failed run with 1.
+--quick: 0.1 s of motion, rtol 1e-3, 1 mode and 2 elements per link (for the tests). Writes
+error_check.md and error_check.csv into --out-dir with the command, date, machine, flexmor
+version and commit. Bad arguments exit with 2, a failed run with 1.
 """
 from __future__ import annotations
 
@@ -141,8 +142,8 @@ def write_tables(args, argv, rows):
              f"{args.reference_m:.1e} m from galpha_adaptive at rtol 1e-10; modes: the full "
              "model at rtol 1e-6; mesh: 24 elements per link at rtol 1e-7, at the &node points). "
              "Check: largest distance of all nodes (mesh: the &node points) from the second run "
-             "(tolerance: rtol and atol / 10; modes: 2 more; mesh: twice the elements). Times: processor "
-             "time of the run and of its check.", "",
+             "(tolerance: rtol and atol / 10; modes: 2 more; mesh: twice the elements). Times: "
+             "processor time of the run and of its check.", "",
              "| check | run | true error [m] | check [m] | check / true | local estimate [m] | "
              "run [s] | check [s] | steps | check's steps |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]

@@ -37,5 +37,5 @@ from flexmor.control import Linear, LinearModelError, read_linear  # noqa: E402
 
 __all__ = ["Buckling", "Linear", "LinearModelError", "Mesh", "Modal", "Model", "NodePath",
            "Result", "ResultFileError", "Static", "Sweep", "SweepFileError", "__version__",
-           "distance_from", "load_node_path", "node_labels", "read_linear", "read_result", "read_sweep",
-           "run_attributes"]
+           "distance_from", "load_node_path", "node_labels", "read_linear", "read_result",
+           "read_sweep", "run_attributes"]

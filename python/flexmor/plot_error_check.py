@@ -33,7 +33,7 @@ def error_check_data(run: Result, reference: Result | None = None,
     check = run.error_check
     if check is None:
         raise ResultFileError(f"{run.path}: no error check (no /error_check group; &dynamic "
-                              f"error_check = 'tolerance' or 'modes' writes it)")
+                              f"error_check = 'tolerance', 'modes' or 'mesh' writes it)")
     estimate = run.reduction.get("error_estimate") if run.reduction is not None else None
     data: dict[str, Any] = {"t": run.time, "distance": check["distance"],
                             "attrs": check["attrs"], "true": None, "nodes": [],

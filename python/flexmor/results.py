@@ -174,7 +174,8 @@ class Result:
     empty dicts): ``time``, ``nodes``, ``q``, ``qd``, ``energy`` and ``x`` come from
     ``&dynamic``, ``static`` from ``&static``, ``modal`` from ``&modal``, ``buckling`` from
     ``&buckling``, ``linear`` (:class:`flexmor.control.Linear`) from ``&linear``, ``reduction``
-    from ``&reduction``, ``error_check`` from ``&dynamic error_check``, ``model`` from files that store the ``/model`` group, ``controllers``
+    from ``&reduction``, ``error_check`` from ``&dynamic error_check``, ``model`` from files
+    that store the ``/model`` group, ``controllers``
     (label -> {"error": (n_t,), "input": ..., "measure": ...}) from ``&controller`` in a
     dynamic run."""
 

@@ -112,8 +112,8 @@ def test_mesh_check_refusals(tmp_path, case, fragment):
                  "reference = 'phi1', kp = 1.0 /\n")
         assert text.count("error_check") == 1 and "kd = 140.0" not in text
     else:
-        text = TWO_LINK.replace("I = 3.33e-9, rho = 2700 /",
-                                "I = 3.33e-9, rho = 2700, elongation = 'rigid', 'rigid', 'dynamic' /")
+        classes = "I = 3.33e-9, rho = 2700, elongation = 'rigid', 'rigid', 'dynamic' /"
+        text = TWO_LINK.replace("I = 3.33e-9, rho = 2700 /", classes)
         text += "&dynamic t_end = 0.01, error_check = 'mesh' /\n"
         assert "'rigid', 'rigid', 'dynamic'" in text
     proc, out = run_scene(tmp_path, text)

@@ -319,7 +319,8 @@ def test_case_files(tmp_path, ranks):
     """&sweep case_files = .true.: every case that ran ok has the result file a flexmor run of
     it writes, beside the sweep file (out_cases/case_k.h5, k from 1); its steps are the case's
     metric and its attribute input_overrides names the case's parameters (the input attribute
-    is the base scene's text); failed cases have none; flexmor.Sweep.case_file finds them, and says why not."""
+    is the base scene's text); failed cases have none; flexmor.Sweep.case_file finds them, and
+    says why not."""
     import flexmor
     write_inputs(tmp_path, SWEEP.replace("mode = 'product' /",
                                          "mode = 'product', case_files = .true. /"))
