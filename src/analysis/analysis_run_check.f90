@@ -1,7 +1,7 @@
 !> &dynamic error_check: the global error of a dynamic run, measured by a second run of the same
 !> scene that is more accurate in one respect (docs/theory.md section 6.2): its
 !> tolerances (or fixed step) divided by error_check_factor, error_check_modes more modes in a
-!> reduced run, or every link's beam elements halved. The distance of the two runs' nodes at
+!> reduced run, or every link's elements split in two. The distance of the two runs' nodes at
 !> each output time (with 'mesh' the &node points, which both meshes have) estimates the first
 !> run's error from that source, accumulated along the whole run (the integrators' and the
 !> reduction's own estimates are local).
@@ -48,7 +48,7 @@ contains
       return
     end if
     if (size(rerun%time) /= size(this%time) .or. .not. allocated(rerun%dyn%x_hist)) then
-      call err%set(ERR_INPUT, 'error check: the second run has other output times')
+      call err%set(ERR_INTERNAL, 'error check: the second run has other output times')
       return
     end if
     allocate(this%check_distance(size(this%time)))
@@ -75,8 +75,8 @@ contains
   end procedure run_error_check
 
   !> The control laws a program gave (&controller law = 'user') go to the second run as
-  !> they are after the first (docs/input.md: a law with state between calls should restart
-  !> itself at t = 0).
+  !> they are after the first (docs/input.md: a law's own data beyond its states x must not
+  !> carry over between runs).
   subroutine copy_user_laws(this, rerun, err)
     type(run_t), intent(in) :: this
     type(run_t), intent(inout) :: rerun
