@@ -95,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     attrs = data["attrs"]
     title = (f"{os.path.basename(args.file)}: error check ({attrs.get('kind', '?')}), up to "
-             f"{float(np.max(data['distance'])):.2g} m")
+             f"{float(np.max(data['distance'])):.2g} m at {attrs.get('node_max', '?')}")
     try:
         plot_error_check(data, args.output, title, args.dpi)
     except (OSError, ValueError) as exc:

@@ -82,8 +82,9 @@ module analysis_run
     logical :: progress_lines = .false.
     character(len=8) :: progress_kind = ''
     !> &dynamic error_check: the second run's settings in words, its steps and processor
-    !> time [s], and the largest distance [m] of the two runs' nodes at each output time.
-    character(len=:), allocatable :: check_rerun
+    !> time [s], the largest distance [m] of the two runs' nodes at each output time and the
+    !> node of the largest of all.
+    character(len=:), allocatable :: check_rerun, check_node
     integer :: check_steps = 0
     real(wp) :: check_cpu_s = 0.0_wp
     real(wp), allocatable :: check_distance(:)

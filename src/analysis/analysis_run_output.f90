@@ -352,6 +352,7 @@ contains
       trim(ERROR_CHECK_NAMES(this%scene%dynamic%error_check)), err)
     if (err%ok()) call h5%write_string_attr(g, 'second_run', this%check_rerun, err)
     if (err%ok()) call h5%write_real_attr(g, 'distance_max', maxval(this%check_distance), err)
+    if (err%ok()) call h5%write_string_attr(g, 'node_max', this%check_node, err)
     if (err%ok()) call h5%write_int_attr(g, 'n_steps', this%check_steps, err)
     if (err%ok()) call h5%write_real_attr(g, 'cpu_time_s', this%check_cpu_s, err)
   end subroutine write_error_check

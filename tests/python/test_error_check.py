@@ -37,7 +37,9 @@ def test_tolerance_check_tracks_the_true_error(tmp_path):
     assert "error check: a second run with rtol 1.00E-05, atol 1.00E-09" in proc.stdout
     assert "about the error of this run from its time steps" in proc.stdout
     distance, attrs, steps, nt = check_of(out)
+    # The tip, with its 3 kg, swings farthest and is farthest off.
     assert distance.shape == (nt,) and attrs["kind"] == "tolerance"
+    assert attrs["node_max"] == "tip"
     assert attrs["distance_max"] == pytest.approx(distance.max(), rel=1e-14)
     # rtol / 10 takes about 10^(1/3) = 2.2 times the steps (2.9 measured).
     assert 1.5 * steps < attrs["n_steps"] < 6 * steps, (steps, attrs["n_steps"])
