@@ -197,7 +197,7 @@ _EULER_ONLY = ("euler", "rotvec", "hinge3d")
 
 def _check_spatial(model: Model) -> None:
     """Consistency that the drawing of a spatial model relies on: x, y, z of every node, four
-    consecutive Euler parameters where a node has them, elements on their nodes' coordinates;
+    consecutive Euler parameters where a node has them, elements on their nodes' positions;
     ValueError naming the element or node."""
     kind = model.kind
     if kind.size and not np.isin(kind, (KIND_X, KIND_Y, KIND_Z, KIND_EULER)).all():
@@ -233,10 +233,11 @@ def _check_spatial(model: Model) -> None:
         ends = _SPATIAL_ENDS[etype]
         if ends and (model.element_nodes[e] < 0).any():
             raise ValueError(f"/model/elements/nodes: element '{label}' lacks nodes")
+        # An end hinged at its node has Euler parameters of its own: only x, y, z are shared.
         for end, node in zip(ends, model.element_nodes[e]):
-            if not np.array_equal(coords[end], nodes[node]):
+            if not np.array_equal(coords[end[:3]], nodes[node][:3]):
                 raise ValueError(f"/model/elements/coordinates: {etype} '{label}' does not "
-                                 f"use the x, y, z and Euler parameters of its node "
+                                 f"use the x, y and z of its node "
                                  f"'{model.node_labels[node]}'")
 
 

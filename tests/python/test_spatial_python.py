@@ -302,3 +302,26 @@ def test_malformed_spatial_model(static_result, tmp_path, edit, fragments):
     assert "\n" not in message and str(path) in message
     for fragment in fragments:
         assert fragment in message, message
+
+
+def test_hinged_spatial_model_is_read_and_drawn(tmp_path):
+    """A link hinged at a node (input/two_link_spatial.nml: revolute joints at the base and the
+    elbow) has Euler parameters of its own at that end, not the node's: the reader accepts it
+    (it refused every such file before) and the drawing's first points are the nodes, at the
+    positions of the result file."""
+    text = (ROOT / "input" / "two_link_spatial.nml").read_text()
+    text = text.replace("t_end = 0.7", "t_end = 0.05")
+    assert "t_end = 0.05" in text
+    proc, out = run_scene(tmp_path, text, name="hinged")
+    assert proc.returncode == 0, proc.stderr
+    result = flexmor.read_result(out)
+    model = result.require_model()
+    base = model.node_labels.index("base")
+    hinged = [e for e in range(len(model.element_labels))
+              if model.element_types[e] == "beam3d" and model.element_nodes[e][0] == base]
+    assert hinged, "link1's first beam starts at the base"
+    own = model.element_coordinates[hinged[0]][3:7]
+    assert not np.array_equal(own, model.node_coordinates[base, 4] + np.arange(4))
+    points = model.mesh(SEGMENTS).points(result.x)
+    tip = model.node_labels.index("tip")
+    np.testing.assert_allclose(points[:, tip], result.nodes["tip"].position, rtol=0, atol=1e-14)
