@@ -31,11 +31,11 @@ __version__ = _version()
 from flexmor.model import Mesh, Model  # noqa: E402
 from flexmor.results import (Buckling, Modal, NodePath, Result, ResultFileError, Static,  # noqa: E402
                              distance_from, load_node_path, node_labels, read_result,
-                             run_attributes)
+                             relative_angle, rotation_from, run_attributes)
 from flexmor.sweep import Sweep, SweepFileError, read_sweep  # noqa: E402
 from flexmor.control import Linear, LinearModelError, read_linear  # noqa: E402
 
 __all__ = ["Buckling", "Linear", "LinearModelError", "Mesh", "Modal", "Model", "NodePath",
            "Result", "ResultFileError", "Static", "Sweep", "SweepFileError", "__version__",
            "distance_from", "load_node_path", "node_labels", "read_linear", "read_result",
-           "read_sweep", "run_attributes"]
+           "read_sweep", "relative_angle", "rotation_from", "run_attributes"]

@@ -1,7 +1,8 @@
 """Plot a run's error check (``&dynamic error_check``): the largest distance of its nodes from
 the second, more accurate run at every output time, a reduced run's local error estimate
 beside it, and with ``--reference`` the true error (the largest distance of the output nodes
-both files share from a reference run's).
+both files share from a reference run's). Where the check compared rotations
+(``/error_check/rotation``) a second panel shows them, with the reference's likewise.
 
     flexmor-plot-error-check RUN.h5 [--reference REF.h5] [--node tip ...] \\
         [-o error_check.png] [--dpi 150]
@@ -20,26 +21,35 @@ from typing import Any
 import numpy as np
 
 from flexmor.cli import read_with_reference, reference_plot_args
-from flexmor.results import Result, ResultFileError, distance_from
+from flexmor.results import Result, ResultFileError, distance_from, rotation_from
 
 PROG = "flexmor-plot-error-check"
 
 
 def error_check_data(run: Result, reference: Result | None = None,
                      nodes: list[str] | None = None) -> dict[str, Any]:
-    """``t``, ``distance`` (the check's, per output), ``attrs`` of /error_check, ``estimate``
-    (a reduced run's local error estimate per output, else None) and, with a reference,
-    ``true`` (distance_from) and its ``nodes``."""
+    """``t``, ``distance`` (the check's, per output), ``rotation`` (the check's, or None where
+    it compared none), ``attrs`` of /error_check, ``estimate`` (a reduced run's local error
+    estimate per output, else None) and, with a reference, ``true`` (distance_from) and its
+    ``nodes``, and ``true_rotation`` (rotation_from; None where the output nodes have no
+    rotations)."""
     check = run.error_check
     if check is None:
         raise ResultFileError(f"{run.path}: no error check (no /error_check group; &dynamic "
                               f"error_check = 'tolerance', 'modes' or 'mesh' writes it)")
     estimate = run.reduction.get("error_estimate") if run.reduction is not None else None
     data: dict[str, Any] = {"t": run.time, "distance": check["distance"],
-                            "attrs": check["attrs"], "true": None, "nodes": [],
-                            "estimate": estimate}
+                            "rotation": check.get("rotation"), "attrs": check["attrs"],
+                            "true": None, "nodes": [], "true_rotation": None,
+                            "turned_nodes": [], "estimate": estimate}
     if reference is not None:
         data["true"], data["nodes"] = distance_from(run, reference, nodes)
+        if data["rotation"] is not None:
+            try:
+                data["true_rotation"], data["turned_nodes"] = rotation_from(run, reference,
+                                                                            nodes)
+            except ResultFileError:
+                pass  # the output nodes have no rotations: the panel shows the check alone
     return data
 
 
@@ -51,7 +61,10 @@ def plot_error_check(data: dict[str, Any], output: str, title: str = "",
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(9.0, 4.5))
+    turned = data.get("rotation") is not None
+    fig, axes = plt.subplots(2 if turned else 1, 1, figsize=(9.0, 7.5 if turned else 4.5),
+                             sharex=True, squeeze=False)
+    ax = axes[0, 0]
     attrs = data["attrs"]
     ax.plot(data["t"], data["distance"], color="C0", lw=1.2,
             label=f"distance from the second run ({attrs.get('second_run', '?')}): "
@@ -63,21 +76,35 @@ def plot_error_check(data: dict[str, Any], output: str, title: str = "",
         ax.plot(data["t"], data["estimate"], color="C2", lw=1.0, ls="--",
                 drawstyle="steps-post",
                 label="the reduction's local error estimate (/reduction/error_estimate)")
-    values = np.concatenate([data["distance"]] +
-                            [data[k] for k in ("true", "estimate") if data[k] is not None])
-    if np.any(values > 0):
-        ax.set_yscale("log")
-    ax.grid(True, which="both", lw=0.3)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("largest nodal distance [m]")
-    ax.legend(fontsize=8, loc="best")
+    _finish_axes(ax, [data[k] for k in ("distance", "true", "estimate")],
+                 "largest nodal distance [m]")
     if title:
         ax.set_title(title, fontsize=10)
+    if turned:
+        ax = axes[1, 0]
+        ax.plot(data["t"], data["rotation"], color="C0", lw=1.2,
+                label="rotation from the second run's: the error check")
+        if data.get("true_rotation") is not None:
+            ax.plot(data["t"], data["true_rotation"], color="C3", lw=1.2,
+                    label=f"rotation from the reference's ({', '.join(data['turned_nodes'])})")
+        _finish_axes(ax, [data["rotation"], data.get("true_rotation")],
+                     "largest nodal rotation [rad]")
+    axes[-1, 0].set_xlabel("time [s]")
     fig.tight_layout()
     try:
         fig.savefig(output, dpi=dpi)
     finally:
         plt.close(fig)
+
+
+def _finish_axes(ax: Any, series: list[np.ndarray | None], ylabel: str) -> None:
+    """Log scale where anything is above 0, grid, label and legend."""
+    values = np.concatenate([v for v in series if v is not None])
+    if np.any(values > 0):
+        ax.set_yscale("log")
+    ax.grid(True, which="both", lw=0.3)
+    ax.set_ylabel(ylabel)
+    ax.legend(fontsize=8, loc="best")
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -104,6 +131,10 @@ def main(argv: list[str] | None = None) -> int:
     line = f"wrote {args.output}; check up to {float(np.max(data['distance'])):.3g} m"
     if data["true"] is not None:
         line += f", distance from the reference up to {float(np.max(data['true'])):.3g} m"
+    if data["rotation"] is not None:
+        line += f"; rotations up to {float(np.max(data['rotation'])):.3g} rad"
+        if data["true_rotation"] is not None:
+            line += f", from the reference up to {float(np.max(data['true_rotation'])):.3g} rad"
     print(line)
     return 0
 

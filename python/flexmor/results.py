@@ -443,6 +443,52 @@ def distance_from(run: Result, reference: Result,
     distance = np.zeros_like(t)
     for label in shared:
         xyz, xyz_ref = run.nodes[label].position, reference.nodes[label].position
-        at = np.column_stack([np.interp(t, t_ref, xyz_ref[:, c]) for c in range(3)])
-        distance = np.maximum(distance, np.linalg.norm(xyz - at, axis=1))
+        distance = np.maximum(distance, np.linalg.norm(xyz - _interp(t, t_ref, xyz_ref), axis=1))
     return distance, shared
+
+
+def rotation_from(run: Result, reference: Result,
+                  nodes: list[str] | None = None) -> tuple[np.ndarray, list[str]]:
+    """The largest angle [rad] between the orientations of ``nodes`` (default: every output
+    node both files have, those with a rotation of their own) in ``run`` and in the reference
+    at each of ``run``'s output times, and those nodes: the difference of the planar angles, or
+    the angle of the relative rotation of spatial Euler parameters (the reference's
+    interpolated linearly and normalised, which is exact to second order in its output step).
+    Errors as :func:`distance_from`, and for nodes without a rotation."""
+    _, shared = distance_from(run, reference, nodes)
+    turned = [label for label in shared if _has_rotation(run.nodes[label])
+              and _has_rotation(reference.nodes[label])]
+    if nodes and len(turned) < len(shared):
+        raise ResultFileError(f"node(s) {', '.join(sorted(set(shared) - set(turned)))} have no "
+                              f"rotation of their own in both files")
+    if not turned:
+        raise ResultFileError(f"{run.path} and {reference.path} share no output node with a "
+                              f"rotation of its own")
+    t, t_ref = run.time, reference.time
+    angle = np.zeros_like(t)
+    for label in turned:
+        node, ref = run.nodes[label], reference.nodes[label]
+        if node.orientation is None:
+            apart = np.abs(node.rotation - np.interp(t, t_ref, ref.rotation))
+        else:
+            at = _interp(t, t_ref, ref.orientation)
+            apart = relative_angle(node.orientation, at / np.linalg.norm(at, axis=1)[:, None])
+        angle = np.maximum(angle, apart)
+    return angle, turned
+
+
+def relative_angle(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The angle [rad, 0..pi] of the rotation between Euler parameters p and q (rows, scalar
+    first), from the vector and scalar parts of their relative rotation (an atan2: accurate for
+    small angles, where an arccos of the scalar part is not)."""
+    v = p[:, :1] * q[:, 1:] - q[:, :1] * p[:, 1:] - np.cross(p[:, 1:], q[:, 1:])
+    return 2.0 * np.arctan2(np.linalg.norm(v, axis=1), np.abs(np.sum(p * q, axis=1)))
+
+
+def _has_rotation(node: NodePath) -> bool:
+    return node.rotation is not None or node.orientation is not None
+
+
+def _interp(t: np.ndarray, t_ref: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Each column of values (at t_ref) at the times t, linearly."""
+    return np.column_stack([np.interp(t, t_ref, values[:, c]) for c in range(values.shape[1])])

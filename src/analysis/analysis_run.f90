@@ -82,12 +82,13 @@ module analysis_run
     logical :: progress_lines = .false.
     character(len=8) :: progress_kind = ''
     !> &dynamic error_check: the second run's settings in words, its steps and processor
-    !> time [s], the largest distance [m] of the two runs' nodes at each output time and the
-    !> node of the largest of all.
-    character(len=:), allocatable :: check_rerun, check_node
+    !> time [s], the largest distance [m] of the two runs' nodes and the largest angle [rad]
+    !> between their orientations at each output time (check_rotation not allocated where no
+    !> node has a rotation of its own), and the nodes of the largest of all.
+    character(len=:), allocatable :: check_rerun, check_node, check_rotation_node
     integer :: check_steps = 0
     real(wp) :: check_cpu_s = 0.0_wp
-    real(wp), allocatable :: check_distance(:)
+    real(wp), allocatable :: check_distance(:), check_rotation(:)
   contains
     procedure :: load => run_load
     procedure :: load_text => run_load_text

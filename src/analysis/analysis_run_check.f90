@@ -19,8 +19,8 @@ contains
       'modes', 'mesh']
     type(run_t) :: rerun
     type(nml_file_t) :: file
-    integer :: i, node
-    real(wp) :: cpu0, cpu1, far
+    integer :: i, node, rotated
+    real(wp) :: cpu0, cpu1, far, turned
     call cpu_time(cpu0)
     file = this%file
     call check_settings(this, file, this%check_rerun, err)
@@ -51,15 +51,24 @@ contains
       call err%set(ERR_INTERNAL, 'error check: the second run has other output times')
       return
     end if
-    allocate(this%check_distance(size(this%time)))
+    allocate(this%check_distance(size(this%time)), this%check_rotation(size(this%time)))
     far = -1.0_wp
+    turned = -1.0_wp
+    this%check_rotation_node = ''
     do i = 1, size(this%time)
-      call farthest_node(this, rerun, i, this%check_distance(i), node)
+      call compare_nodes(this, rerun, i, this%check_distance(i), node, &
+        this%check_rotation(i), rotated)
       if (this%check_distance(i) > far) then
         far = this%check_distance(i)
         this%check_node = trim(this%dyn%model%node_label(node))
       end if
+      if (rotated > 0 .and. this%check_rotation(i) > turned) then
+        turned = this%check_rotation(i)
+        this%check_rotation_node = trim(this%dyn%model%node_label(rotated))
+      end if
     end do
+    ! No node with a rotation of its own in both runs: nothing to report.
+    if (len(this%check_rotation_node) == 0) deallocate(this%check_rotation)
     this%check_steps = int(min(rerun%stats%n_steps, int(huge(1), i8)))
     call cpu_time(cpu1)
     this%check_cpu_s = cpu1 - cpu0
@@ -71,6 +80,12 @@ contains
         trim(SOURCE(this%scene%dynamic%error_check)) // &
         ' (the second run: ' // int_str(this%check_steps) // ' steps, ' // &
         approx_str(this%check_cpu_s) // ' s)'
+      if (allocated(this%check_rotation)) then
+        i = maxloc(this%check_rotation, 1)
+        write(*, '(a)') 'error check: their rotations differ by up to ' // &
+          approx_str(this%check_rotation(i)) // ' rad (node ''' // this%check_rotation_node // &
+          ''', t = ' // approx_str(this%time(i)) // ' s)'
+      end if
     end if
   end procedure run_error_check
 
@@ -236,44 +251,87 @@ contains
     if (allocated(classes)) many = size(classes) > 1
   end function many
 
-  !> The largest distance d of a node of this run from the second run's at output t, and that
-  !> node (an index of this run's model): every node, or with 'mesh' the &node points (the
-  !> links' own points are elsewhere in the refined mesh).
-  subroutine farthest_node(this, rerun, t, d, node)
+  !> At output t: the largest distance d of a node of this run from the second run's, and the
+  !> largest angle between a node's orientations in the two runs (-1 and rotated = 0 where no
+  !> node has a rotation of its own in both), with those nodes (indices of this run's model):
+  !> every node, or with 'mesh' the &node points (the links' own points are elsewhere in the
+  !> refined mesh).
+  subroutine compare_nodes(this, rerun, t, d, node, angle, rotated)
     type(run_t), intent(in) :: this, rerun
     integer, intent(in) :: t
-    real(wp), intent(out) :: d
-    integer, intent(out) :: node
-    integer, parameter :: SLOT(3) = [1, 2, 4]
-    real(wp), allocatable :: dx(:)
-    integer :: i, k, a, b, ra, rb
+    real(wp), intent(out) :: d, angle
+    integer, intent(out) :: node, rotated
+    integer :: i, a, b
     real(wp) :: s
     d = -1.0_wp
     node = 1
-    if (this%scene%dynamic%error_check /= ERROR_CHECK_MESH) then
-      dx = this%dyn%x_hist(:, t) - rerun%dyn%x_hist(:, t)
-      do i = 1, size(this%dyn%model%node_coord, 2)
-        s = this%dyn%model%translation(i, dx)
-        if (s > d) then
-          d = s
-          node = i
-        end if
-      end do
-      return
-    end if
-    do i = 1, size(this%scene%nodes)
-      a = this%dyn%model%find_node(this%scene%nodes(i)%label)
-      b = rerun%dyn%model%find_node(this%scene%nodes(i)%label)
-      s = 0.0_wp
-      do k = 1, 3
-        ra = this%dyn%model%node_coord(SLOT(k), a)
-        rb = rerun%dyn%model%node_coord(SLOT(k), b)
-        if (ra > 0 .and. rb > 0) s = s + (this%dyn%x_hist(ra, t) - rerun%dyn%x_hist(rb, t))**2
-      end do
-      if (sqrt(s) > d) then
-        d = sqrt(s)
+    angle = -1.0_wp
+    rotated = 0
+    do i = 1, n_compared(this)
+      if (this%scene%dynamic%error_check == ERROR_CHECK_MESH) then
+        a = this%dyn%model%find_node(this%scene%nodes(i)%label)
+        b = rerun%dyn%model%find_node(this%scene%nodes(i)%label)
+      else
+        a = i
+        b = i
+      end if
+      s = distance_apart(this%dyn%model%node_coord(:, a), this%dyn%x_hist(:, t), &
+        rerun%dyn%model%node_coord(:, b), rerun%dyn%x_hist(:, t))
+      if (s > d) then
+        d = s
         node = a
       end if
+      s = angle_apart(this%dyn%model%node_coord(:, a), this%dyn%x_hist(:, t), &
+        rerun%dyn%model%node_coord(:, b), rerun%dyn%x_hist(:, t))
+      if (s > angle) then
+        angle = s
+        rotated = a
+      end if
     end do
-  end subroutine farthest_node
+  end subroutine compare_nodes
+
+  !> How many nodes compare_nodes visits: every node, or with 'mesh' the &node points.
+  integer function n_compared(this)
+    type(run_t), intent(in) :: this
+    if (this%scene%dynamic%error_check == ERROR_CHECK_MESH) then
+      n_compared = size(this%scene%nodes)
+    else
+      n_compared = size(this%dyn%model%node_coord, 2)
+    end if
+  end function n_compared
+
+  !> The distance of a node at x_a (its coordinate slots ca, model_t%node_coord) from one at
+  !> x_b (slots cb).
+  pure real(wp) function distance_apart(ca, xa, cb, xb) result(d)
+    integer, intent(in) :: ca(:), cb(:)
+    real(wp), intent(in) :: xa(:), xb(:)
+    integer, parameter :: SLOT(3) = [1, 2, 4]
+    integer :: k
+    d = 0.0_wp
+    do k = 1, 3
+      if (ca(SLOT(k)) > 0 .and. cb(SLOT(k)) > 0) d = d + (xa(ca(SLOT(k))) - xb(cb(SLOT(k))))**2
+    end do
+    d = sqrt(d)
+  end function distance_apart
+
+  !> The angle of the rotation that takes a node's orientation at x_a to the one at x_b (slots
+  !> as distance_apart), -1 where either has no rotation of its own. Planar: the difference of
+  !> the angles (a whole turn counts: the runs' angles are continuous in time); spatial: the
+  !> angle of the relative rotation of the Euler parameters, in [0, pi], as an atan2 of the
+  !> product's vector and scalar parts (accurate for small angles, where an acos is not).
+  pure real(wp) function angle_apart(ca, xa, cb, xb) result(angle)
+    integer, intent(in) :: ca(:), cb(:)
+    real(wp), intent(in) :: xa(:), xb(:)
+    real(wp) :: p(4), q(4), v(3)
+    angle = -1.0_wp
+    if (ca(3) > 0 .and. cb(3) > 0) then
+      angle = abs(xa(ca(3)) - xb(cb(3)))
+    else if (ca(5) > 0 .and. cb(5) > 0) then
+      p = xa(ca(5):ca(5) + 3)
+      q = xb(cb(5):cb(5) + 3)
+      v = p(1) * q(2:4) - q(1) * p(2:4) - [p(3) * q(4) - p(4) * q(3), &
+        p(4) * q(2) - p(2) * q(4), p(2) * q(3) - p(3) * q(2)]
+      angle = 2.0_wp * atan2(norm2(v), abs(dot_product(p, q)))
+    end if
+  end function angle_apart
 end submodule analysis_run_check

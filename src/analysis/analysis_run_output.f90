@@ -341,7 +341,7 @@ contains
     end associate
   end subroutine write_reduction
 
-  !> &dynamic error_check: the distance of the second run's nodes (/error_check).
+  !> &dynamic error_check: the distance and rotation of the second run's nodes (/error_check).
   subroutine write_error_check(this, h5, err)
     type(run_t), intent(in) :: this
     type(h5_writer_t), intent(inout) :: h5
@@ -355,6 +355,11 @@ contains
     if (err%ok()) call h5%write_string_attr(g, 'node_max', this%check_node, err)
     if (err%ok()) call h5%write_int_attr(g, 'n_steps', this%check_steps, err)
     if (err%ok()) call h5%write_real_attr(g, 'cpu_time_s', this%check_cpu_s, err)
+    if (.not. allocated(this%check_rotation)) return
+    if (err%ok()) call h5%write_real_1d(g // '/rotation', this%check_rotation, err, units='rad')
+    if (err%ok()) call h5%write_real_attr(g, 'rotation_max', maxval(this%check_rotation), err)
+    if (err%ok()) call h5%write_string_attr(g, 'rotation_node_max', this%check_rotation_node, &
+      err)
   end subroutine write_error_check
 
   !> The exact measurements of an expanded run's error indicators (/reduction/measured).

@@ -12,13 +12,14 @@ module sweep_metrics
 
   !> The control errors are in the measured outputs' units (m or rad), the largest over all
   !> controllers: NaN without &controller.
-  !> error_check: the largest distance from the second run of &dynamic error_check (NaN
-  !> without it).
-  character(len=19), parameter :: METRIC_NAMES(9) = [character(len=19) :: &
+  !> error_check, error_check_rotation: the largest distance and rotation from the second run
+  !> of &dynamic error_check (NaN without it, and the rotation without nodes that have one).
+  character(len=20), parameter :: METRIC_NAMES(10) = [character(len=20) :: &
     'max_tip_deflection', 'residual_vibration', 'n_steps', 'n_model_evals', 'error_estimate', &
-    'n_modes', 'max_control_error', 'final_control_error', 'error_check']
-  character(len=1), parameter :: METRIC_UNITS(9) = [character(len=1) :: 'm', 'm', '', '', &
-    'm', '', '', '', 'm']
+    'n_modes', 'max_control_error', 'final_control_error', 'error_check', &
+    'error_check_rotation']
+  character(len=3), parameter :: METRIC_UNITS(10) = [character(len=3) :: 'm', 'm', '', '', &
+    'm', '', '', '', 'm', 'rad']
 
 contains
 
@@ -79,6 +80,7 @@ contains
         if (run%red%has_estimate) metrics(5) = run%red%estimate_max()
       end if
       if (allocated(run%check_distance)) metrics(9) = maxval(run%check_distance)
+      if (allocated(run%check_rotation)) metrics(10) = maxval(run%check_rotation)
       if (allocated(run%control%error_hist)) then
         if (size(run%control%error_hist, 1) > 0) then
           metrics(7) = maxval(abs(run%control%error_hist))

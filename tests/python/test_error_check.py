@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from flexmor.plot_error_check import main as plot_main
-from flexmor.results import distance_from, read_result
+from flexmor.results import distance_from, read_result, rotation_from
 from helpers import ARM, BIN, ROOT, assert_clean_error, run_scene
 from helpers import TWO_LINK as TWO_LINK_N
 
@@ -52,6 +52,12 @@ def test_tolerance_check_tracks_the_true_error(tmp_path):
     # Along the run too, once the error is established (after the motion's first 0.1 s).
     late = read_result(out).time > 0.1
     assert np.all(distance[late] < 3 * np.maximum.accumulate(true)[late] + 1e-7)
+    # Rotations alike (0.93 observed): the tip's own, since it swings farthest.
+    rotation, _ = rotation_from(read_result(out), read_result(ref))
+    check = read_result(out).error_check["rotation"]
+    assert attrs["rotation_node_max"] == "tip" and "their rotations differ by up to" in proc.stdout
+    assert attrs["rotation_max"] == pytest.approx(check.max(), rel=1e-14)
+    assert 1 / 3 < check.max() / rotation.max() < 3, (check.max(), rotation.max())
 
 
 def test_fixed_step_divides_dt(tmp_path):
@@ -96,6 +102,50 @@ def test_mesh_check_tracks_the_true_error(tmp_path):
     assert ref_proc.returncode == 0, ref_proc.stderr
     true, _ = distance_from(read_result(out), read_result(ref))
     assert 1 / 3 < distance.max() / true.max() < 3, (distance.max(), true.max())
+    # The &node points' own rotations (the tip's; base and elbow are hinged).
+    rotation, _ = rotation_from(read_result(out), read_result(ref))
+    check = read_result(out).error_check["rotation"]
+    assert 1 / 3 < check.max() / rotation.max() < 3, (check.max(), rotation.max())
+
+
+def test_spatial_rotation_check(tmp_path):
+    """A spatial body's orientation (input/torque_free_body.nml, 2 s of its torque pulse and
+    tumbling, rtol 1e-5): the check's angle between the Euler parameters of the two runs
+    against the angle from a run at rtol 1e-10 is 0.76 (theory 0.78); required 1/3 to 3. The
+    plot draws the rotation panel beside the distances."""
+    text = (ROOT / "input" / "torque_free_body.nml").read_text()
+    text = re.sub(r"&dynamic[^/]*/", "&dynamic t_end = 2.0, output_dt = 0.001, integrator = "
+                  "'galpha_adaptive', rtol = 1e-5, atol = 1e-7, error_check = 'tolerance' /", text)
+    proc, out = run_scene(tmp_path, text, "run")
+    assert proc.returncode == 0, proc.stderr
+    ref_text = text.replace("rtol = 1e-5, atol = 1e-7, error_check = 'tolerance'",
+                            "rtol = 1e-10, atol = 1e-12")
+    ref_proc, ref = run_scene(tmp_path, ref_text, "reference")
+    assert ref_proc.returncode == 0, ref_proc.stderr
+    check = read_result(out).error_check
+    true, nodes = rotation_from(read_result(out), read_result(ref))
+    assert nodes == ["body"] and check["attrs"]["rotation_node_max"] == "body"
+    assert 1 / 3 < check["rotation"].max() / true.max() < 3, (check["rotation"].max(), true.max())
+    png = tmp_path / "check.png"
+    assert plot_main([str(out), "--reference", str(ref), "-o", str(png)]) == 0
+    assert png.stat().st_size > 10_000
+
+
+def test_no_rotation_no_rotation_check(tmp_path):
+    """Trusses only (no node has a rotation of its own): /error_check has no rotation."""
+    bar = "E = 2e11, A = 1e-4, rho = 7800, mode = 'dynamic' /\n"
+    text = ("&node label = 'a', x = 0, y = 0, fixed = .true. /\n"
+            "&node label = 'b', x = 1, y = 0 /\n"
+            "&node label = 'c', x = 1, y = 1, fixed = .true. /\n"
+            f"&truss label = 't1', from = 'a', to = 'b', {bar}"
+            f"&truss label = 't2', from = 'c', to = 'b', {bar}"
+            "&mass node = 'b', m = 1.0 /\n&force node = 'b', fx = 100.0 /\n"
+            "&dynamic t_end = 0.01, error_check = 'tolerance' /\n")
+    proc, out = run_scene(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        assert "distance" in f["error_check"] and "rotation" not in f["error_check"]
+        assert "rotation_max" not in f["error_check"].attrs
 
 
 @pytest.mark.parametrize("case, fragment", [

@@ -308,10 +308,13 @@ def test_sweep_metric_error_check(tmp_path):
     assert list(res["status"]) == [0, 0]
     check = res["metrics"]["error_check"]
     assert np.all(check > 0) and check[0] > 2 * check[1], check
+    turned = res["metrics"]["error_check_rotation"]
+    assert np.all(turned > 0) and turned[0] > 2 * turned[1], turned
     write_inputs(tmp_path, sweep, base.replace(", error_check = 'tolerance'", ""))
     proc = run_sweep(tmp_path, out="plain.h5")
     assert proc.returncode == 0, proc.stderr
-    assert np.all(np.isnan(read(tmp_path / "plain.h5")["metrics"]["error_check"]))
+    plain = read(tmp_path / "plain.h5")["metrics"]
+    assert np.all(np.isnan(plain["error_check"])) and np.all(np.isnan(plain["error_check_rotation"]))
 
 
 @pytest.mark.parametrize("ranks", [None, 2])
