@@ -138,17 +138,23 @@ def _axes_3d(plt, points, reference, mesh, colors, view):
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_zlabel("z (m)")
-    ax.add_collection3d(Line3DCollection(reference[mesh.lines], colors="0.6", linewidths=1.0,
-                                         alpha=0.35))
-    lines = Line3DCollection(points[0][mesh.lines], colors=colors, linewidths=2.0)
-    ax.add_collection3d(lines)
+    # Without lines (bodies on nodes only) there is no collection: matplotlib's 3D projection
+    # of an empty one fails.
+    lines = None
+    if len(mesh.lines):
+        ax.add_collection3d(Line3DCollection(reference[mesh.lines], colors="0.6",
+                                             linewidths=1.0, alpha=0.35))
+        lines = Line3DCollection(points[0][mesh.lines], colors=colors, linewidths=2.0)
+        ax.add_collection3d(lines)
     n = mesh.model.n_nodes
     nodes = ax.plot(points[0, :n, 0], points[0, :n, 1], points[0, :n, 2], "o", color="0.2",
                     ms=2.5)[0]
 
     def draw(frame):
-        lines.set_segments(frame[mesh.lines])
         nodes.set_data_3d(frame[:n, 0], frame[:n, 1], frame[:n, 2])
+        if lines is None:
+            return (nodes,)
+        lines.set_segments(frame[mesh.lines])
         return lines, nodes
 
     return fig, ax, draw

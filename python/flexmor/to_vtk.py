@@ -11,7 +11,8 @@ Each .vtu holds the mechanism at that time: every beam as a polyline of --segmen
 along the element's cubic interpolation (docs/python.md), every truss as a line, every hinge
 as a vertex; point data ``displacement`` (m, 3 components: position minus reference position
 of the same point) and cell data ``element_type`` (1 beam, 2 truss, 3 hinge, 5 spatial beam)
-and ``element`` (the element's row in /model/elements, from 1). Points of a planar model have
+and ``element`` (the element's row in /model/elements, from 1); without any of these (bodies
+on nodes only) the nodes are vertex cells of type and element 0. Points of a planar model have
 z = 0; those of a spatial one (/model dimension 3) their z, spatial beams drawn along the cubic
 whose end tangents follow the nodes' Euler parameters (docs/python.md).
 
@@ -59,6 +60,13 @@ def meshio_mesh(mesh: Mesh, x: np.ndarray, reference: np.ndarray):
         cells.append(("vertex", mesh.vertices[:, None]))
         types.append(vertex_types)
         numbers.append(mesh.vertex_element + 1)
+    if not cells:
+        # Point masses or rigid bodies on nodes only (input/free_body.nml): the nodes as vertex
+        # cells of no element (VTK needs a cell to show a point).
+        n = mesh.model.n_nodes
+        cells.append(("vertex", np.arange(n)[:, None]))
+        types.append(np.zeros(n, dtype=np.int64))
+        numbers.append(np.zeros(n, dtype=np.int64))
     return meshio.Mesh(points, cells, point_data={"displacement": points - reference},
                        cell_data={"element_type": types, "element": numbers})
 
