@@ -13,7 +13,7 @@
 !> MAX_HALVINGS times) and grows back after easy steps.
 module dynamics_continuation
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_NUMERIC
+  use core_error, only: error_t, ERR_NUMERIC, ERR_INPUT
   use core_linalg, only: lu_factor, lu_solve
   use core_strings, only: int_str, real_str
   use core_progress, only: progress_t
@@ -58,6 +58,14 @@ contains
     scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
     ! The scale of q: the linear response to the full load at the start.
     call tangent_and_load(dyn, t, q_dy, lambda, k, p, err)
+    ! Without a load there is no path to follow: the tangent would be 0/0.
+    if (err%ok() .and. .not. any(p /= 0)) then
+      call err%set(ERR_INPUT, 'group &static: variable ''method'': arc-length continuation ' // &
+        'follows the load factor, and the loads it scales are zero on every degree of ' // &
+        'freedom (no &force, gravity or other load acts on them)')
+      call finish(dyn)
+      return
+    end if
     if (err%ok()) call solve_tangent(k, p, v, err)
     if (.not. err%ok()) then
       call err%prefix('arc-length start: ')
