@@ -10,7 +10,8 @@ program test_agalpha_benchmark
   use io_namelist, only: nml_file_t
   use model_scene, only: scene_t
   use dynamics_system, only: dynamics_t
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_BDF, INTEGRATOR_GALPHA_ADAPTIVE, INTEGRATOR_NAMES
   use integrators_driver, only: integrate
   use testing, only: suite_t
   use test_scenes, only: source_dir, make_dynamics_from
@@ -47,7 +48,7 @@ contains
   function bdf(tol) result(opts)
     real(wp), intent(in) :: tol
     type(integrator_options_t) :: opts
-    opts = integrator_options_t(method='bdf', max_order=5, rtol=tol, atol=tol)
+    opts = integrator_options_t(method=INTEGRATOR_BDF, max_order=5, rtol=tol, atol=tol)
   end function bdf
 
   !> Integrate from (ta, q, v) to tb; q and v become the state at tb.
@@ -60,8 +61,8 @@ contains
     real(wp) :: no_breakpoints(0)
     call dyn%allocate_history(2)
     call integrate(dyn, opts, [ta, tb], q, v, no_breakpoints, stats, err)
-    call suite%check(err%ok(), trim(opts%method) // ' to t = ' // real_str(tb) // ' ' // &
-      err%message)
+    call suite%check(err%ok(), trim(INTEGRATOR_NAMES(opts%method)) // ' to t = ' // &
+      real_str(tb) // ' ' // err%message)
     q = dyn%q_hist(:, 2)
     v = dyn%v_hist(:, 2)
   end subroutine advance
@@ -75,7 +76,7 @@ contains
     integer :: status
     character(len=120) :: line
     rho = 0.8_wp
-    opts = integrator_options_t(method='galpha_adaptive', dt=h, rho_inf=rho, rtol=1.0_wp, &
+    opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, dt=h, rho_inf=rho, rtol=1.0_wp, &
       atol=1.0_wp)
     q1 = q0
     v1 = v0

@@ -19,7 +19,9 @@ program test_dynamics
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: static_solve
   use reduction_modal, only: modal_result_t, modal_analysis
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_BDF, INTEGRATOR_GALPHA, JACOBIAN_LINEARISED, JACOBIAN_FD, JACOBIAN_INTERNAL, &
+    JACOBIAN_NAMES
   use integrators_driver, only: integrate
   use testing, only: suite_t
   use test_scenes, only: rtxt, source_dir, make_dynamics
@@ -229,7 +231,7 @@ contains
     t = linspace(0.0_wp, 0.3_wp, 31)
 
     ! BDF, tight tolerances.
-    opts%method = 'bdf'
+    opts%method = INTEGRATOR_BDF
     opts%rtol = 1.0e-8_wp
     opts%atol = 1.0e-10_wp
     call run(dyn, opts, t, q0, stats, err)
@@ -249,7 +251,7 @@ contains
     call suite%check(drift < 1.0e-6_wp, 'free vibration: BDF rtol 1e-8 conserves E to 1e-6')
 
     ! Generalized-alpha without numerical damping: trapezoidal rule, conserves for linear.
-    opts%method = 'galpha'
+    opts%method = INTEGRATOR_GALPHA
     opts%dt = 1.0e-3_wp
     opts%rho_inf = 1.0_wp
     opts%rtol = 1.0e-10_wp
@@ -293,7 +295,7 @@ contains
     allocate(q0(dyn%model%n_dy))
     q0 = 0.0_wp
     t = linspace(0.0_wp, 0.6_wp, 31)
-    opts%method = 'bdf'
+    opts%method = INTEGRATOR_BDF
     opts%rtol = 1.0e-8_wp
     opts%atol = 1.0e-10_wp
     call run(dyn, opts, t, q0, stats, err)
@@ -316,7 +318,7 @@ contains
     call suite%check(drift < 1.0e-6_wp, 'pendulum: BDF rtol 1e-8 conserves E (with gravity) ' &
       // 'to 1e-6 of the largest kinetic energy')
 
-    opts%method = 'galpha'
+    opts%method = INTEGRATOR_GALPHA
     opts%dt = 1.0e-3_wp
     opts%rho_inf = 1.0_wp
     opts%rtol = 1.0e-10_wp
@@ -357,7 +359,7 @@ contains
 
     ! Energy decreases monotonically from the static deflection (all modes excited).
     t = linspace(0.0_wp, 0.2_wp, 41)
-    opts%method = 'bdf'
+    opts%method = INTEGRATOR_BDF
     opts%rtol = 1.0e-8_wp
     opts%atol = 1.0e-10_wp
     call run(dyn, opts, t, q0, stats, err)
@@ -417,7 +419,7 @@ contains
 
   subroutine jacobian_options(text)
     character(len=*), intent(in) :: text
-    character(len=*), parameter :: LABEL(3) = [character(len=10) :: 'linearised', 'fd', 'internal']
+    integer, parameter :: KINDS(3) = [JACOBIAN_LINEARISED, JACOBIAN_FD, JACOBIAN_INTERNAL]
     type(dynamics_t) :: dyn
     type(integrator_options_t) :: opts
     type(integrator_stats_t) :: stats(3)
@@ -427,7 +429,7 @@ contains
     integer :: j
 
     allocate(t, source=linspace(0.0_wp, 0.2_wp, 21))
-    opts%method = 'bdf'
+    opts%method = INTEGRATOR_BDF
     opts%rtol = 1.0e-8_wp
     opts%atol = 1.0e-9_wp
     do j = 1, 3
@@ -435,22 +437,19 @@ contains
       if (.not. err%ok()) exit
       allocate(q0(dyn%model%n_dy))
       q0 = 0.0_wp
-      if (j == 3) then
-        opts%jacobian = 'internal'
-      else
-        opts%jacobian = 'system'
-        dyn%jacobian_kind = LABEL(j)
-      end if
+      ! As a run sets them from &dynamic jacobian.
+      opts%jacobian = KINDS(j)
+      dyn%jacobian_kind = KINDS(j)
       call run(dyn, opts, t, q0, stats(j), err)
       call expect_ok(err, 'jacobians: benchmark 0..0.2 s, BDF rtol 1e-8, jacobian ' // &
-        trim(LABEL(j)))
+        trim(JACOBIAN_NAMES(KINDS(j))))
       if (.not. err%ok()) return
       if (.not. allocated(tip)) allocate(tip(2, size(t), 3))
       tip(:, :, j) = tip_history(dyn)
       evals(j) = dyn%n_evals
-      write(*, '(a,a10,a,i6,a,i7,a,i5,a,i7)') '    ', LABEL(j), ': steps ', stats(j)%n_steps, &
-        ', rhs evals ', stats(j)%n_rhs_evals, ', Jacobians ', stats(j)%n_jac_evals, &
-        ', model evals ', evals(j)
+      write(*, '(a,a10,a,i6,a,i7,a,i5,a,i7)') '    ', JACOBIAN_NAMES(KINDS(j)), ': steps ', &
+        stats(j)%n_steps, ', rhs evals ', stats(j)%n_rhs_evals, ', Jacobians ', &
+        stats(j)%n_jac_evals, ', model evals ', evals(j)
       deallocate(q0)
     end do
     call expect_ok(err, 'jacobians: benchmark builds')
@@ -493,7 +492,7 @@ contains
     allocate(q0(dyn%model%n_dy))
     q0 = 0.0_wp
     t = linspace(0.0_wp, 0.6_wp, 61)
-    opts%method = 'bdf'
+    opts%method = INTEGRATOR_BDF
     opts%rtol = 1.0e-9_wp
     opts%atol = 1.0e-9_wp
     call run(dyn, opts, t, q0, stats, err)
@@ -513,7 +512,7 @@ contains
     call suite%check(maxval(abs(e(:k_stop) - e_stop)) > 1.0e3_wp * drift * e_stop, &
       'benchmark: the joints do work while they move')
 
-    opts%method = 'galpha'
+    opts%method = INTEGRATOR_GALPHA
     opts%dt = 5.0e-4_wp
     opts%rho_inf = 0.8_wp
     opts%rtol = 1.0e-8_wp

@@ -6,7 +6,8 @@
 program test_integrators_agalpha
   use core_kinds, only: wp
   use core_error, only: error_t
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_GALPHA_ADAPTIVE
   use integrators_driver, only: integrate
   use test_oscillators, only: oscillator_t, run_oscillator, switched_oscillator_t, &
     stiff_follower_t
@@ -52,8 +53,8 @@ contains
       beta = 0.25_wp * (gamma + 0.5_wp)**2
       do i = 1, 3
         h = 0.02_wp / 2**i
-        opts = integrator_options_t(method='galpha_adaptive', dt=h, rho_inf=rho, rtol=1.0_wp, &
-          atol=1.0_wp)
+        opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, dt=h, rho_inf=rho, &
+          rtol=1.0_wp, atol=1.0_wp)
         sys = oscillator_t()
         q0 = cos(phase)
         call integrate(sys, opts, [0.0_wp, h], [q0], [-sys%omega * sin(phase)], &
@@ -84,7 +85,7 @@ contains
     character(len=120) :: line
     rtols = [1.0e-5_wp, 1.0e-7_wp, 1.0e-9_wp]
     do i = 1, 3
-      opts = integrator_options_t(method='galpha_adaptive', dt=1.0e-3_wp, rho_inf=0.8_wp, &
+      opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, dt=1.0e-3_wp, rho_inf=0.8_wp, &
         rtol=rtols(i), atol=rtols(i))
       call run_oscillator(sys, opts, t_out, stats, err)
       errors(i) = sys%max_error
@@ -122,7 +123,7 @@ contains
     type(oscillator_t) :: coarse, fine
     type(integrator_stats_t) :: s_coarse, s_fine
     type(error_t) :: err
-    opts = integrator_options_t(method='galpha_adaptive', dt=1.0e-3_wp, rtol=1.0e-8_wp, &
+    opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, dt=1.0e-3_wp, rtol=1.0e-8_wp, &
       atol=1.0e-8_wp)
     call run_oscillator(coarse, opts, [0.0_wp, 2.0_wp], s_coarse, err)
     call run_oscillator(fine, opts, [(2.0_wp * i / 1000, i = 0, 1000)], s_fine, err)
@@ -142,7 +143,7 @@ contains
     type(integrator_stats_t) :: stats
     type(error_t) :: err
     ! Observed error 6e-5 (about 15 tol^(2/3), as without the breakpoint); bound 1e-3.
-    opts = integrator_options_t(method='galpha_adaptive', dt=1.0e-3_wp, rtol=1.0e-8_wp, &
+    opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, dt=1.0e-3_wp, rtol=1.0e-8_wp, &
       atol=1.0e-8_wp)
     call integrate(sys, opts, t_out, [0.0_wp], [0.0_wp], [sys%t_b], stats, err)
     call suite%check(err%ok() .and. stats%n_restarts == 1, 'restarted once at the breakpoint')
@@ -157,7 +158,7 @@ contains
     type(integrator_stats_t) :: stats
     type(error_t) :: err
     real(wp) :: no_breakpoints(0)
-    opts = integrator_options_t(method='galpha_adaptive', dt=1.0e-3_wp, rtol=1.0e-6_wp, &
+    opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, dt=1.0e-3_wp, rtol=1.0e-6_wp, &
       atol=1.0e-8_wp, rho_inf=0.5_wp)
     call integrate(sys, opts, [(0.5_wp * i, i = 0, 20)], [1.0_wp, 1.0_wp], [0.0_wp, 0.0_wp], &
       no_breakpoints, stats, err)
@@ -175,16 +176,16 @@ contains
     type(oscillator_t) :: sys
     type(integrator_stats_t) :: stats
     type(error_t) :: err
-    opts = integrator_options_t(method='galpha_adaptive', dt=0.0_wp)
+    opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, dt=0.0_wp)
     call run_oscillator(sys, opts, t_out, stats, err)
     call suite%check(index(err%message, 'dt must be > 0') > 0, 'dt = 0 refused: ' // err%message)
-    opts = integrator_options_t(method='galpha_adaptive', rtol=-1.0_wp)
+    opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, rtol=-1.0_wp)
     call run_oscillator(sys, opts, t_out, stats, err)
     call suite%check(index(err%message, 'rtol must be > 0') > 0, 'rtol < 0 refused')
-    opts = integrator_options_t(method='galpha_adaptive', max_step=-1.0_wp)
+    opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, max_step=-1.0_wp)
     call run_oscillator(sys, opts, t_out, stats, err)
     call suite%check(index(err%message, 'max_step') > 0, 'max_step < 0 refused')
-    opts = integrator_options_t(method='galpha_adaptive', rho_inf=1.5_wp)
+    opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, rho_inf=1.5_wp)
     call run_oscillator(sys, opts, t_out, stats, err)
     call suite%check(index(err%message, 'rho_inf') > 0, 'rho_inf > 1 refused')
   end subroutine bad_options

@@ -4,7 +4,8 @@
 program test_integrators_breakpoint
   use core_kinds, only: wp
   use core_error, only: error_t
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_BDF, INTEGRATOR_GALPHA, INTEGRATOR_NAMES
   use integrators_driver, only: integrate
   use test_oscillators, only: switched_oscillator_t
   use testing, only: suite_t
@@ -16,8 +17,8 @@ program test_integrators_breakpoint
 
   call suite%init('integrators: breakpoints')
   t_out = [(0.1_wp * i, i = 0, 10)]
-  bdf = integrator_options_t(method='bdf', rtol=1.0e-7_wp, atol=1.0e-9_wp)
-  galpha = integrator_options_t(method='galpha', dt=0.008_wp, rho_inf=0.8_wp)
+  bdf = integrator_options_t(method=INTEGRATOR_BDF, rtol=1.0e-7_wp, atol=1.0e-9_wp)
+  galpha = integrator_options_t(method=INTEGRATOR_GALPHA, dt=0.008_wp, rho_inf=0.8_wp)
 
   call check_bdf(0.37_wp, .false.)
   call check_bdf(0.37_wp, .true.)
@@ -42,9 +43,9 @@ contains
     sys%t_b = t_b
     sys%force_at_t_b = force_at_t_b
     call integrate(sys, opts, t_out, [0.0_wp], [0.0_wp], breakpoints, stats, err)
-    write(line, '(a,a,f5.2,a,i0,a,l1,a,es9.2,a,i0,a,i0,a,i0,a,i0)') trim(opts%method), &
-      ' t_b', t_b, ' breakpoints ', size(breakpoints), ' F(t_b) on ', force_at_t_b, &
-      ': error', sys%max_error, ', steps ', stats%n_steps, ', accel ', stats%n_rhs_evals, &
+    write(line, '(a,a,f5.2,a,i0,a,l1,a,es9.2,a,i0,a,i0,a,i0,a,i0)') &
+      trim(INTEGRATOR_NAMES(opts%method)), ' t_b', t_b, ' breakpoints ', size(breakpoints), &
+      ' F(t_b) on ', force_at_t_b, ': error', sys%max_error, ', steps ', stats%n_steps, ', accel ', stats%n_rhs_evals, &
       ', err test fails ', stats%n_err_test_fails, ', restarts ', stats%n_restarts
     write(*, '(4x,a)') trim(line)
   end subroutine run

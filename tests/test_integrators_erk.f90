@@ -6,7 +6,8 @@ program test_integrators_erk
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use core_strings, only: int_str
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_ERK, INTEGRATOR_AUTO
   use integrators_driver, only: integrate
   use test_oscillators, only: oscillator_t, run_oscillator, switched_oscillator_t, &
     failing_oscillator_t
@@ -52,7 +53,7 @@ contains
     type(oscillator_t) :: sys
     type(integrator_stats_t) :: stats
     type(error_t) :: err
-    opts = integrator_options_t(method='erk', rtol=1.0e-6_wp, atol=1.0e-8_wp)
+    opts = integrator_options_t(method=INTEGRATOR_ERK, rtol=1.0e-6_wp, atol=1.0e-8_wp)
     call run(opts, [(1.0e-3_wp * i, i = 0, 2000)], sys, stats, err)
     call suite%check(err%ok() .and. sys%n_records == 2001 .and. sys%times_exact, &
       'erk records 2001 output times')
@@ -71,7 +72,7 @@ contains
     integer :: i
 
     do i = 1, size(orders)
-      opts = integrator_options_t(method='erk', rtol=1.0e-8_wp, atol=1.0e-10_wp, &
+      opts = integrator_options_t(method=INTEGRATOR_ERK, rtol=1.0e-8_wp, atol=1.0e-10_wp, &
         erk_order=orders(i))
       call run(opts, [0.0_wp, 2.0_wp], sys, stats, err)
       ! Two periods at unit amplitude: up to 5 rtol (orders 2, 3); 100 rtol still fails a wrong
@@ -89,7 +90,7 @@ contains
     type(switched_oscillator_t) :: sys, sys_blind
     type(integrator_stats_t) :: stats, stats_blind
     type(error_t) :: err
-    opts = integrator_options_t(method='erk', rtol=1.0e-7_wp, atol=1.0e-9_wp)
+    opts = integrator_options_t(method=INTEGRATOR_ERK, rtol=1.0e-7_wp, atol=1.0e-9_wp)
     call integrate(sys, opts, t_out, [0.0_wp], [0.0_wp], [sys%t_b], stats, err)
     write(*, '(4x,a,es9.2,a,i0,a,i0,a,i0)') 'erk with breakpoint: error', sys%max_error, &
       ', steps ', stats%n_steps, ', err test fails ', stats%n_err_test_fails, ', restarts ', &
@@ -113,16 +114,18 @@ contains
   end subroutine check_breakpoint
 
   subroutine check_bad_options()
-    call expect_input_error(integrator_options_t(method='erk', erk_order=7), 'erk_order', &
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_ERK, erk_order=7), 'erk_order', &
       'erk_order 7')
-    call expect_input_error(integrator_options_t(method='erk', erk_order=1), 'erk_order', &
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_ERK, erk_order=1), 'erk_order', &
       'erk_order 1')
-    call expect_input_error(integrator_options_t(method='erk', rtol=0.0_wp), 'rtol', 'rtol = 0')
-    call expect_input_error(integrator_options_t(method='erk', atol=-1.0_wp), 'atol', 'atol < 0')
-    call expect_input_error(integrator_options_t(method='erk', max_step=-1.0_wp), 'max_step', &
-      'max_step < 0')
-    call expect_input_error(integrator_options_t(method='rk45'), "'erk'", &
-      'unknown method (the message lists erk)')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_ERK, rtol=0.0_wp), 'rtol', &
+      'rtol = 0')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_ERK, atol=-1.0_wp), 'atol', &
+      'atol < 0')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_ERK, max_step=-1.0_wp), &
+      'max_step', 'max_step < 0')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_AUTO), "'erk'", &
+      'method auto, which the caller resolves (the message lists erk)')
   end subroutine check_bad_options
 
   subroutine expect_input_error(opts, word, what)
@@ -145,7 +148,7 @@ contains
     type(error_t) :: err
     sys%status_code = 1
     sys%n_failures = 1
-    call integrate(sys, integrator_options_t(method='erk'), t_out, [1.0_wp], [0.0_wp], &
+    call integrate(sys, integrator_options_t(method=INTEGRATOR_ERK), t_out, [1.0_wp], [0.0_wp], &
       no_breakpoints, stats, err)
     write(*, '(4x,a,i0,a,i0,a,es9.2)') 'erk after one recoverable status: steps ', &
       stats%n_steps, ', err test fails ', stats%n_err_test_fails, ', error ', sys%max_error
@@ -163,7 +166,7 @@ contains
     type(error_t) :: err
     sys%status_code = 1
     sys%n_failures = huge(1)
-    call integrate(sys, integrator_options_t(method='erk'), t_out, [1.0_wp], [0.0_wp], &
+    call integrate(sys, integrator_options_t(method=INTEGRATOR_ERK), t_out, [1.0_wp], [0.0_wp], &
       no_breakpoints, stats, err)
     call suite%check(err%code == ERR_NUMERIC .and. index(err%message, 'retries') > 0, &
       'erk gives up after repeated recoverable statuses')
@@ -177,7 +180,7 @@ contains
     type(error_t) :: err
     sys%status_code = -2
     sys%n_failures = 1
-    call integrate(sys, integrator_options_t(method='erk'), t_out, [1.0_wp], [0.0_wp], &
+    call integrate(sys, integrator_options_t(method=INTEGRATOR_ERK), t_out, [1.0_wp], [0.0_wp], &
       no_breakpoints, stats, err)
     call suite%check(err%code == ERR_NUMERIC, 'erk: a fatal status is an ERR_NUMERIC')
     if (.not. err%ok()) write(*, '(4x,a)') 'message: ' // err%message
@@ -192,7 +195,7 @@ contains
     type(oscillator_t) :: sys
     type(integrator_stats_t) :: stats
     type(error_t) :: err
-    opts = integrator_options_t(method='erk', max_steps=30_i8)
+    opts = integrator_options_t(method=INTEGRATOR_ERK, max_steps=30_i8)
     call integrate(sys, opts, t_out, [1.0_wp], [0.0_wp], no_breakpoints, stats, err)
     call suite%check(err%code == ERR_NUMERIC .and. stats%n_steps <= opts%max_steps, &
       'erk: max_steps limits the whole run')

@@ -43,7 +43,8 @@ end module pendulum_test_system
 program test_integrators_pendulum
   use core_kinds, only: wp
   use core_error, only: error_t
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_BDF, INTEGRATOR_GALPHA
   use integrators_driver, only: integrate
   use pendulum_test_system, only: pendulum_t
   use testing, only: suite_t
@@ -59,14 +60,14 @@ program test_integrators_pendulum
   ! BDF: the drift is global error, 200 to 400 rtol here; bound 1e4 rtol (an integrator
   ! ignoring rtol drifts by O(1)). galpha: second order, energy error C (omega dt)^2 with
   ! omega^2 = g / l and C about 0.2; bound 10 (omega dt)^2 (first order would give omega dt).
-  call check('bdf', integrator_options_t(method='bdf', rtol=1.0e-6_wp, atol=1.0e-8_wp), &
+  call check('bdf', integrator_options_t(method=INTEGRATOR_BDF, rtol=1.0e-6_wp, atol=1.0e-8_wp), &
     1.0e4_wp * 1.0e-6_wp)
-  call check('bdf', integrator_options_t(method='bdf', rtol=1.0e-9_wp, atol=1.0e-11_wp), &
+  call check('bdf', integrator_options_t(method=INTEGRATOR_BDF, rtol=1.0e-9_wp, atol=1.0e-11_wp), &
     1.0e4_wp * 1.0e-9_wp)
-  call check('galpha', integrator_options_t(method='galpha', dt=0.01_wp, rho_inf=1.0_wp), &
-    10 * 9.81_wp * 0.01_wp**2)
-  call check('galpha', integrator_options_t(method='galpha', dt=0.005_wp, rho_inf=0.9_wp), &
-    10 * 9.81_wp * 0.005_wp**2)
+  call check('galpha', integrator_options_t(method=INTEGRATOR_GALPHA, dt=0.01_wp, &
+    rho_inf=1.0_wp), 10 * 9.81_wp * 0.01_wp**2)
+  call check('galpha', integrator_options_t(method=INTEGRATOR_GALPHA, dt=0.005_wp, &
+    rho_inf=0.9_wp), 10 * 9.81_wp * 0.005_wp**2)
   call suite%finish()
 
 contains

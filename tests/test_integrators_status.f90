@@ -4,7 +4,8 @@
 program test_integrators_status
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_BDF, INTEGRATOR_GALPHA, JACOBIAN_INTERNAL
   use integrators_driver, only: integrate
   use test_oscillators, only: failing_oscillator_t
   use testing, only: suite_t
@@ -16,10 +17,10 @@ program test_integrators_status
 
   call suite%init('integrators: status codes and errors')
   t_out = [(0.1_wp * i, i = 0, 10)]
-  bdf = integrator_options_t(method='bdf', rtol=1.0e-6_wp, atol=1.0e-8_wp)
+  bdf = integrator_options_t(method=INTEGRATOR_BDF, rtol=1.0e-6_wp, atol=1.0e-8_wp)
   bdf_internal = bdf
-  bdf_internal%jacobian = 'internal'
-  galpha = integrator_options_t(method='galpha', dt=0.005_wp, rho_inf=0.8_wp)
+  bdf_internal%jacobian = JACOBIAN_INTERNAL
+  galpha = integrator_options_t(method=INTEGRATOR_GALPHA, dt=0.005_wp, rho_inf=0.8_wp)
 
   ! Unit oscillator, omega = 2 pi, T = 1 s. BDF: 1000 rtol (global error of an rtol-controlled
   ! run, about 14 rtol here). galpha: 2 omega T (omega dt)^2, twice the second-order phase
@@ -107,21 +108,25 @@ contains
 
   subroutine check_bad_options()
     type(integrator_options_t) :: opts
-    call expect_input_error(integrator_options_t(method='rk4'), t_out, 'unknown method')
-    call expect_input_error(integrator_options_t(method='bdf', rtol=0.0_wp), t_out, 'rtol = 0')
-    call expect_input_error(integrator_options_t(method='bdf', atol=-1.0_wp), t_out, 'atol < 0')
-    call expect_input_error(integrator_options_t(method='bdf', max_order=6), t_out, &
+    ! 0: no INTEGRATOR_* or JACOBIAN_* constant.
+    call expect_input_error(integrator_options_t(method=0), t_out, 'unknown method')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_BDF, rtol=0.0_wp), t_out, &
+      'rtol = 0')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_BDF, atol=-1.0_wp), t_out, &
+      'atol < 0')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_BDF, max_order=6), t_out, &
       'max_order 6')
-    call expect_input_error(integrator_options_t(method='bdf', jacobian='exact'), t_out, &
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_BDF, jacobian=0), t_out, &
       'unknown jacobian')
-    call expect_input_error(integrator_options_t(method='galpha', dt=0.0_wp), t_out, 'dt = 0')
-    call expect_input_error(integrator_options_t(method='galpha', rho_inf=1.5_wp), t_out, &
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_GALPHA, dt=0.0_wp), t_out, &
+      'dt = 0')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_GALPHA, rho_inf=1.5_wp), t_out, &
       'rho_inf > 1')
-    call expect_input_error(integrator_options_t(method='galpha', rho_inf=-0.1_wp), t_out, &
-      'rho_inf < 0')
-    call expect_input_error(integrator_options_t(method='galpha', max_steps=0_i8), t_out, &
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_GALPHA, rho_inf=-0.1_wp), &
+      t_out, 'rho_inf < 0')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_GALPHA, max_steps=0_i8), t_out, &
       'max_steps = 0')
-    opts = integrator_options_t(method='bdf')
+    opts = integrator_options_t(method=INTEGRATOR_BDF)
     call expect_input_error(opts, [0.0_wp, 0.2_wp, 0.1_wp], 'decreasing output times')
     call expect_input_error(opts, [0.0_wp, 0.1_wp, 0.1_wp], 'repeated output time')
   end subroutine check_bad_options

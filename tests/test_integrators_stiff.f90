@@ -62,7 +62,8 @@ end module stiff_test_system
 program test_integrators_stiff
   use core_kinds, only: wp
   use core_error, only: error_t
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_BDF, INTEGRATOR_GALPHA, JACOBIAN_INTERNAL
   use integrators_driver, only: integrate
   use stiff_test_system, only: stiff_pair_t
   use testing, only: suite_t
@@ -79,16 +80,16 @@ program test_integrators_stiff
   ! omega = 1, T = 10 s; first order would give omega T omega dt = 0.1). Steps: BDF below 3500,
   ! 0.7 of what explicit stability needs; galpha exactly T / dt.
   call check('bdf, system Jacobian', &
-    integrator_options_t(method='bdf', rtol=1.0e-6_wp, atol=1.0e-9_wp), 1.0e-3_wp, 3500)
+    integrator_options_t(method=INTEGRATOR_BDF, rtol=1.0e-6_wp, atol=1.0e-9_wp), 1.0e-3_wp, 3500)
   call check('bdf, internal Jacobian', &
-    integrator_options_t(method='bdf', rtol=1.0e-6_wp, atol=1.0e-9_wp, jacobian='internal'), &
-    1.0e-3_wp, 3500)
+    integrator_options_t(method=INTEGRATOR_BDF, rtol=1.0e-6_wp, atol=1.0e-9_wp, &
+    jacobian=JACOBIAN_INTERNAL), 1.0e-3_wp, 3500)
   call check('galpha rho_inf 0.5', &
-    integrator_options_t(method='galpha', dt=0.01_wp, rho_inf=0.5_wp), 10 * 10 * 0.01_wp**2, &
-    1000)
+    integrator_options_t(method=INTEGRATOR_GALPHA, dt=0.01_wp, rho_inf=0.5_wp), &
+    10 * 10 * 0.01_wp**2, 1000)
   call check('galpha rho_inf 0', &
-    integrator_options_t(method='galpha', dt=0.01_wp, rho_inf=0.0_wp), 10 * 10 * 0.01_wp**2, &
-    1000)
+    integrator_options_t(method=INTEGRATOR_GALPHA, dt=0.01_wp, rho_inf=0.0_wp), &
+    10 * 10 * 0.01_wp**2, 1000)
   call suite%finish()
 
 contains

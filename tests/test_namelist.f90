@@ -3,7 +3,9 @@ program test_namelist
   use core_error, only: error_t, ERR_INPUT, ERR_INTERNAL
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use io_fields, only: rd_enum
-  use model_scene, only: UPDATE_NAMES, UPDATE_MAC, UPDATE_NONE
+  use model_scene, only: UPDATE_NAMES, UPDATE_MAC, UPDATE_NONE, INTEGRATOR_NAMES, &
+    INTEGRATOR_AUTO, INTEGRATOR_GALPHA_ADAPTIVE, JACOBIAN_NAMES, JACOBIAN_LINEARISED, &
+    JACOBIAN_INTERNAL, STATIC_METHOD_NAMES, STATIC_LOAD, STATIC_ARC_LENGTH
   use testing, only: suite_t
   implicit none
   character(*), parameter :: NL = new_line('a')
@@ -447,5 +449,48 @@ contains
     call t%check(err%code == ERR_INTERNAL .and. index(err%message, 'update') > 0, &
       'names that are not the schema''s choices: an internal error')
     if (.not. err%ok()) write(*, '(a)') '        -> ' // err%message
+    call err%clear()
+
+    ! &dynamic integrator and jacobian, &static method: given and by default.
+    call parse_ok(f, '&dynamic t_end = 1, integrator = ''Galpha_Adaptive'', ' // &
+      'jacobian = ''internal'' /' // NL // '&dynamic t_end = 1 /' // NL // &
+      '&static method = ''arc_length'' /' // NL // '&static /')
+    call expect_enum(f%groups(1), 'integrator', INTEGRATOR_NAMES, INTEGRATOR_GALPHA_ADAPTIVE)
+    call expect_enum(f%groups(2), 'integrator', INTEGRATOR_NAMES, INTEGRATOR_AUTO)
+    call expect_enum(f%groups(1), 'jacobian', JACOBIAN_NAMES, JACOBIAN_INTERNAL)
+    call expect_enum(f%groups(2), 'jacobian', JACOBIAN_NAMES, JACOBIAN_LINEARISED)
+    call expect_enum(f%groups(3), 'method', STATIC_METHOD_NAMES, STATIC_ARC_LENGTH)
+    call expect_enum(f%groups(4), 'method', STATIC_METHOD_NAMES, STATIC_LOAD)
+    ! A name missing or misspelt in the program's list: reported, whatever the input says.
+    call expect_mismatch(f%groups(2), 'integrator', INTEGRATOR_NAMES(2:))
+    call expect_mismatch(f%groups(2), 'jacobian', [character(10) :: 'linearised', 'fd', &
+      'cvode'])
+    call expect_mismatch(f%groups(4), 'method', [character(10) :: 'load', 'arc_length', &
+      'riks'])
   end subroutine test_enum
+
+  subroutine expect_enum(g, var, names, expected)
+    type(nml_group_t), intent(inout) :: g
+    character(*), intent(in) :: var, names(:)
+    integer, intent(in) :: expected
+    type(error_t) :: err
+    integer :: value
+    value = 0
+    call rd_enum(g, var, names, value, err)
+    call t%check(err%ok() .and. value == expected, 'enum of &' // g%name // ' ' // var // &
+      ' = ''' // trim(names(max(expected, 1))) // '''')
+    if (.not. err%ok()) write(*, '(a)') '        -> ' // err%message
+  end subroutine expect_enum
+
+  subroutine expect_mismatch(g, var, names)
+    type(nml_group_t), intent(inout) :: g
+    character(*), intent(in) :: var, names(:)
+    type(error_t) :: err
+    integer :: value
+    value = 0
+    call rd_enum(g, var, names, value, err)
+    call t%check(err%code == ERR_INTERNAL .and. index(err%message, '''' // var // '''') > 0 &
+      .and. value == 0, '&' // g%name // ' ' // var // ': names that are not the ' // &
+      'schema''s choices: an internal error')
+  end subroutine expect_mismatch
 end program test_namelist

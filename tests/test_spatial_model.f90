@@ -22,7 +22,8 @@ program test_spatial_model
   use dynamics_static, only: static_solve
   use model_scene, only: scene_t
   use reduction_modal, only: modal_result_t, modal_analysis
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_GALPHA_ADAPTIVE
   use integrators_driver, only: integrate
   use testing, only: suite_t
   use test_scenes, only: rtxt, itxt, make_dynamics
@@ -282,7 +283,7 @@ contains
     call dyn%allocate_history(n_t)
     ! Generalized-alpha without numerical damping (rho_inf = 1): BDF's higher orders would
     ! be held to the fastest torsion and bending modes (stiff: see integrator 'auto').
-    opts%method = 'galpha_adaptive'
+    opts%method = INTEGRATOR_GALPHA_ADAPTIVE
     opts%rho_inf = 1.0_wp
     opts%dt = 1.0e-4_wp
     opts%rtol = 1.0e-6_wp

@@ -9,7 +9,7 @@ module analysis_run
   use io_namelist, only: nml_file_t, string_t
   use io_scene, only: read_scene
   use model_scene, only: scene_t, dynamic_rec_t, label_t, auto_by_stiffness, &
-    ERROR_CHECK_NONE, ERROR_CHECK_MODES, ERROR_CHECK_MESH
+    ERROR_CHECK_NONE, ERROR_CHECK_MODES, ERROR_CHECK_MESH, STATIC_ARC_LENGTH
   use io_hdf5, only: h5_writer_t
   use model_system, only: model_t, NODE_SLOTS
   use elements_base, only: MODE_DYNAMIC
@@ -21,7 +21,7 @@ module analysis_run
   use reduction_modal, only: modal_result_t, modal_analysis
   use dynamics_buckling, only: buckling_result_t, buckling_analysis
   use dynamics_linear, only: linear_model_t
-  use integrators_system, only: integrator_options_t, integrator_stats_t
+  use integrators_system, only: integrator_options_t, integrator_stats_t, INTEGRATOR_GALPHA
   use core_progress, only: progress_t
   use integrators_driver, only: integrate
   use core_strings, only: int_str, real_str, approx_str
@@ -281,7 +281,7 @@ contains
       call err%set(ERR_INPUT, 'group &dynamic: variable ''output_dt'': t_end / output_dt ' // &
         'gives ' // approx_str(n_out) // ' output times, whose histories would need ' // &
         approx_str(bytes / 1.0e9_wp) // ' GB (limit 4 GB): increase output_dt or shorten t_end')
-    else if (d%integrator == 'galpha' .and. d%t_end / d%dt > MAX_FIXED_STEPS) then
+    else if (d%integrator == INTEGRATOR_GALPHA .and. d%t_end / d%dt > MAX_FIXED_STEPS) then
       call err%set(ERR_INPUT, 'group &dynamic: variable ''dt'': t_end / dt gives ' // &
         approx_str(d%t_end / d%dt) // ' fixed steps (limit 1e9): increase dt')
     end if
@@ -362,7 +362,7 @@ contains
     logical :: arc
     products = 0
     associate (s => this%scene%static)
-      arc = s%method == 'arc_length'
+      arc = s%method == STATIC_ARC_LENGTH
       allocate(this%x_static(this%dyn%model%n_x, s%n_steps), this%static_stable(s%n_steps))
       allocate(q_steps(this%dyn%model%n_dy, s%n_steps), this%static_load_factor(s%n_steps))
       call this%progress%start('static', 0.0_wp, 1.0_wp)

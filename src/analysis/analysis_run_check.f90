@@ -8,7 +8,7 @@
 submodule (analysis_run) analysis_run_check
   use model_scene, only: ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES, ERROR_CHECK_MESH, &
     ERROR_CHECK_NAMES
-  use integrators_system, only: bdf_order
+  use integrators_system, only: bdf_order, INTEGRATOR_NAMES, INTEGRATOR_BDF, INTEGRATOR_GALPHA
   use core_error, only: ERR_INTERNAL
   implicit none
 
@@ -119,12 +119,12 @@ contains
       call file%groups(ig)%unset('error_check_factor')
       call file%groups(ig)%unset('error_check_modes')
       call file%groups(ig)%set_raw('error_check', '''none''', err)
-      if (err%ok()) call file%groups(ig)%set_raw('integrator', '''' // d%integrator // &
-        '''', err)
+      if (err%ok()) call file%groups(ig)%set_raw('integrator', '''' // &
+        trim(INTEGRATOR_NAMES(d%integrator)) // '''', err)
       if (.not. err%ok()) return
       select case (d%error_check)
       case (ERROR_CHECK_TOLERANCE)
-        if (d%integrator == 'galpha') then
+        if (d%integrator == INTEGRATOR_GALPHA) then
           what = 'dt ' // approx_str(d%dt / d%error_check_factor)
           call file%groups(ig)%set_raw('dt', real_str(d%dt / d%error_check_factor), err)
         else
@@ -135,8 +135,8 @@ contains
             real_str(d%atol / d%error_check_factor), err)
           ! BDF's order limit follows rtol when not given: keep this run's, so that only the
           ! tolerance differs (2 and 5 on either side of rtol 1e-5).
-          if (err%ok() .and. d%integrator == 'bdf') call file%groups(ig)%set_raw('max_order', &
-            int_str(bdf_order(d%max_order, d%rtol)), err)
+          if (err%ok() .and. d%integrator == INTEGRATOR_BDF) call file%groups(ig)%set_raw( &
+            'max_order', int_str(bdf_order(d%max_order, d%rtol)), err)
         end if
       case (ERROR_CHECK_MODES)
         ir = file%group_index('reduction', 1)

@@ -2,6 +2,7 @@
 !> the controllers' sampling times and feedforward.
 submodule (analysis_run) analysis_run_dynamic
   use model_scene, only: UPDATE_NONE, JOINTS_HELD, EVALUATION_EXPANDED
+  use integrators_system, only: INTEGRATOR_AUTO, INTEGRATOR_GALPHA_ADAPTIVE, INTEGRATOR_NAMES
   implicit none
 
 contains
@@ -29,7 +30,7 @@ contains
     if (this%scene%reduction%active) then
       call run_reduced(this, opts, breaks, err)
     else
-      if (opts%method == 'auto') call choose_integrator(this, opts, full_omega_max(this))
+      if (opts%method == INTEGRATOR_AUTO) call choose_integrator(this, opts, full_omega_max(this))
       call this%dyn%allocate_history(size(this%time))
       allocate(v0(this%dyn%model%n_dy))
       v0 = 0.0_wp
@@ -67,19 +68,19 @@ contains
     real(wp) :: span
     span = this%time(size(this%time)) - this%time(1)
     if (omega_max < 0.0_wp) then
-      opts%method = 'galpha_adaptive'
+      opts%method = INTEGRATOR_GALPHA_ADAPTIVE
       this%integrator_choice = 'auto: the fastest mode is not computed for models of more ' // &
         'than ' // int_str(AUTO_MODAL_MAX) // ' dynamic coordinates; taken as stiff'
     else
       opts%method = auto_by_stiffness(omega_max, span)
       this%integrator_choice = 'auto: the fastest mode (' // approx_str(omega_max / TWO_PI) // &
         ' Hz) turns through ' // approx_str(omega_max * span) // ' rad over the run, ' // &
-        trim(merge('stiff    ', 'not stiff', opts%method == 'galpha_adaptive')) // &
+        trim(merge('stiff    ', 'not stiff', opts%method == INTEGRATOR_GALPHA_ADAPTIVE)) // &
         ' (limit 1000 rad)'
     end if
-    this%scene%dynamic%integrator = trim(opts%method)
-    if (this%verbose) write(*, '(a)') 'integrator: ' // trim(opts%method) // ' (' // &
-      this%integrator_choice // ')'
+    this%scene%dynamic%integrator = opts%method
+    if (this%verbose) write(*, '(a)') 'integrator: ' // trim(INTEGRATOR_NAMES(opts%method)) // &
+      ' (' // this%integrator_choice // ')'
   end subroutine choose_integrator
 
   !> The fastest natural frequency [rad/s] of the full model at the start (joints locked), or
@@ -118,8 +119,7 @@ contains
     opts%max_step = d%max_step
     opts%max_order = d%max_order
     opts%erk_order = d%erk_order
-    opts%jacobian = 'system'
-    if (d%jacobian == 'internal') opts%jacobian = 'internal'
+    opts%jacobian = d%jacobian
     opts%dt = d%dt
     opts%rho_inf = d%rho_inf
   end function integrator_options
@@ -165,7 +165,7 @@ contains
     end associate
     this%initial_basis = this%red%basis
     run_opts = opts
-    if (run_opts%method == 'auto') call choose_integrator(this, run_opts, &
+    if (run_opts%method == INTEGRATOR_AUTO) call choose_integrator(this, run_opts, &
       TWO_PI * maxval(this%red%basis%frequency_hz))
     if (this%verbose) write(*, '(a,i0,a,*(f0.3,:,", "))') 'reduction: ', &
       this%red%basis%k(), ' modes (' // this%red%basis%reason // '), [Hz]: ', &

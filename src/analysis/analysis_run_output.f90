@@ -3,6 +3,7 @@ submodule (analysis_run) analysis_run_output
   use model_system, only: COORD_PHI, COORD_Y, COORD_Z, COORD_EULER, NODE_SLOTS
   use model_control, only: LAW_PID
   use model_scene, only: UPDATE_NAMES, EVALUATION_NAMES, ERROR_CHECK_NAMES
+  use integrators_system, only: INTEGRATOR_NAMES, JACOBIAN_NAMES
   implicit none
 
 contains
@@ -47,7 +48,8 @@ contains
       trim(merge('sparse', 'dense ', this%dyn%sparse)), err)
     if (.not. this%scene%dynamic%active) return
     associate (s => this%stats, d => this%scene%dynamic)
-      if (err%ok()) call h5%write_string_attr('/', 'integrator', d%integrator, err)
+      if (err%ok()) call h5%write_string_attr('/', 'integrator', &
+        trim(INTEGRATOR_NAMES(d%integrator)), err)
       if (err%ok() .and. allocated(this%integrator_choice)) call h5%write_string_attr('/', &
         'integrator_choice', this%integrator_choice, err)
       if (err%ok()) call h5%write_real_attr('/', 'rtol', d%rtol, err)
@@ -60,7 +62,8 @@ contains
       if (err%ok()) call h5%write_int_attr('/', 'n_nonlin_fails', s%n_nonlin_fails, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_restarts', s%n_restarts, err)
       if (err%ok()) call h5%write_int_attr('/', 'n_model_evals', this%dyn%n_evals, err)
-      if (err%ok()) call h5%write_string_attr('/', 'jacobian', d%jacobian, err)
+      if (err%ok()) call h5%write_string_attr('/', 'jacobian', trim(JACOBIAN_NAMES(d%jacobian)), &
+        err)
     end associate
   end subroutine write_attributes
 

@@ -16,7 +16,7 @@ module dynamics_system
   use model_kinematics, only: kinematics_t
   use dynamics_augmented, only: augmented_t, element_mass_t
   use elements_base, only: MODE_DYNAMIC, mode_has_stress
-  use integrators_system, only: ode2_system_t, system_fd_jacobian
+  use integrators_system, only: ode2_system_t, system_fd_jacobian, JACOBIAN_LINEARISED
   implicit none
   private
   public :: dynamics_t, check_finite
@@ -51,9 +51,10 @@ module dynamics_system
     !> Constant loads: nodal forces plus gravity on the lumped masses (consistent masses get
     !> their weight from the elements, as it depends on the configuration).
     real(wp), allocatable :: load(:)
-    !> Jacobian for implicit integrators: 'linearised' (-Mbar^-1 K0, -Mbar^-1 D0 at the current
-    !> state: the stiff structural part, exact enough for Newton) or 'fd' (forward differences).
-    character(len=16) :: jacobian_kind = 'linearised'
+    !> Jacobian for implicit integrators (integrators_system's JACOBIAN_*): JACOBIAN_LINEARISED
+    !> (-Mbar^-1 K0, -Mbar^-1 D0 at the current state: the stiff structural part, exact enough
+    !> for Newton) or JACOBIAN_FD (forward differences).
+    integer :: jacobian_kind = JACOBIAN_LINEARISED
     integer(i8) :: n_evals = 0                !< evaluations of the equations of motion
     ! History at the output times (filled by record):
     real(wp), allocatable :: x_hist(:, :), q_hist(:, :), v_hist(:, :), energy_hist(:, :)

@@ -1,6 +1,7 @@
 !> Newton support for the implicit integrators: the Jacobian, the sparse iteration solver
 !> and the error norm of the equations of motion (documented at their interfaces).
 submodule (dynamics_system) dynamics_system_newton
+  use integrators_system, only: JACOBIAN_FD
   implicit none
 
 contains
@@ -8,7 +9,7 @@ contains
   module procedure dyn_jacobian
     real(wp) :: a(size(q)), chol(size(q), size(q)), k0(size(q), size(q)), d0(size(q), size(q))
     integer :: j, info
-    if (this%jacobian_kind == 'fd') then
+    if (this%jacobian_kind == JACOBIAN_FD) then
       call system_fd_jacobian(this, t, q, v, dadq, dadv, status)
       return
     end if
@@ -31,7 +32,7 @@ contains
   end procedure dyn_jacobian
 
   module procedure dyn_has_iteration_solver
-    dyn_has_iteration_solver = this%sparse .and. this%jacobian_kind == 'linearised'
+    dyn_has_iteration_solver = this%sparse .and. this%jacobian_kind == JACOBIAN_LINEARISED
   end procedure dyn_has_iteration_solver
 
   module procedure dyn_iteration_factor

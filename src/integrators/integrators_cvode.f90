@@ -12,7 +12,7 @@ module integrators_cvode
   use core_strings, only: real_str
   use core_error, only: error_t, ERR_NUMERIC, ERR_INTERNAL
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t, &
-    bdf_order
+    bdf_order, JACOBIAN_INTERNAL
   use integrators_base, only: integrator_t
   use integrators_sundials, only: sundials_bridge_t, new_bridge, open_sundials, close_sundials, &
     sundials_rhs, sundials_error_handler, clamped, note_status, sundials_status, put_state, &
@@ -92,7 +92,7 @@ contains
     end if
     call check(solver, FCVodeSetStopTime(this%mem, t_stop), 'CVodeSetStopTime', err)
     if (.not. err%ok()) return
-    call attach_dense_solver(this, opts%jacobian == 'system', err)
+    call attach_dense_solver(this, opts%jacobian /= JACOBIAN_INTERNAL, err)
   end subroutine cvode_start
 
   subroutine attach_dense_solver(this, system_jacobian, err)

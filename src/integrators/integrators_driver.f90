@@ -4,7 +4,9 @@ module integrators_driver
   use core_kinds, only: wp
   use core_strings, only: int_str, real_str
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
-  use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_NAMES, INTEGRATOR_BDF, INTEGRATOR_GALPHA, INTEGRATOR_GALPHA_ADAPTIVE, &
+    INTEGRATOR_ERK, JACOBIAN_LINEARISED, JACOBIAN_FD, JACOBIAN_INTERNAL
   use integrators_base, only: integrator_t
   use integrators_cvode, only: cvode_solver_t
   use integrators_galpha, only: galpha_solver_t
@@ -50,15 +52,15 @@ contains
       stats%n_steps
   end subroutine integrate
 
-  !> The integrator for a method name (checked by check_options): the one place that knows
-  !> the methods.
+  !> The integrator of a method INTEGRATOR_* (checked by check_options): the one place that
+  !> knows the methods.
   subroutine new_integrator(method, integrator)
-    character(len=*), intent(in) :: method
+    integer, intent(in) :: method
     class(integrator_t), allocatable, intent(out) :: integrator
     select case (method)
-    case ('bdf')
+    case (INTEGRATOR_BDF)
       allocate(cvode_solver_t :: integrator)
-    case ('erk')
+    case (INTEGRATOR_ERK)
       allocate(erk_solver_t :: integrator)
     case default
       allocate(galpha_solver_t :: integrator)
@@ -230,28 +232,41 @@ contains
       real_str(opts%atol))
     if (opts%max_steps < 1) call err%set(ERR_INPUT, ctx // 'max_steps must be >= 1')
     select case (opts%method)
-    case ('bdf')
+    case (INTEGRATOR_BDF)
       if (opts%max_order < 0 .or. opts%max_order > 5) call err%set(ERR_INPUT, ctx // &
         'max_order must be in 0..5 (0: by rtol), got ' // int_str(opts%max_order))
       call check_max_step(opts, err)
-      if (opts%jacobian /= 'system' .and. opts%jacobian /= 'internal') call err%set(ERR_INPUT, &
-        ctx // "jacobian must be 'system' or 'internal', got '" // trim(opts%jacobian) // "'")
-    case ('erk')
+      if (all(opts%jacobian /= [JACOBIAN_LINEARISED, JACOBIAN_FD, JACOBIAN_INTERNAL])) &
+        call err%set(ERR_INPUT, ctx // 'jacobian must be JACOBIAN_LINEARISED, JACOBIAN_FD ' // &
+        'or JACOBIAN_INTERNAL, got ' // int_str(opts%jacobian))
+    case (INTEGRATOR_ERK)
       ! The orders for which ARKODE has a default embedded table.
       if (all(opts%erk_order /= [2, 3, 4, 5, 6, 8])) call err%set(ERR_INPUT, ctx // &
         'erk_order must be 2, 3, 4, 5, 6 or 8, got ' // int_str(opts%erk_order))
       call check_max_step(opts, err)
-    case ('galpha', 'galpha_adaptive')
+    case (INTEGRATOR_GALPHA, INTEGRATOR_GALPHA_ADAPTIVE)
       if (.not. opts%dt > 0) call err%set(ERR_INPUT, ctx // 'dt must be > 0, got ' // &
         real_str(opts%dt))
-      if (opts%method == 'galpha_adaptive') call check_max_step(opts, err)
+      if (opts%method == INTEGRATOR_GALPHA_ADAPTIVE) call check_max_step(opts, err)
       if (.not. (opts%rho_inf >= 0 .and. opts%rho_inf <= 1)) call err%set(ERR_INPUT, ctx // &
         'rho_inf must be in [0, 1], got ' // real_str(opts%rho_inf))
     case default
-      call err%set(ERR_INPUT, ctx // "unknown method '" // trim(opts%method) // &
-        "' (expected 'bdf', 'galpha', 'galpha_adaptive' or 'erk')")
+      ! INTEGRATOR_AUTO included: its choice is the caller's.
+      call err%set(ERR_INPUT, ctx // 'method ' // method_word(opts%method) // &
+        " is not an integrator (expected 'bdf', 'galpha', 'galpha_adaptive' or 'erk')")
     end select
   end subroutine check_options
+
+  !> A method's name in messages, its number if it has none.
+  pure function method_word(method) result(word)
+    integer, intent(in) :: method
+    character(len=:), allocatable :: word
+    if (method >= 1 .and. method <= size(INTEGRATOR_NAMES)) then
+      word = "'" // trim(INTEGRATOR_NAMES(method)) // "'"
+    else
+      word = int_str(method)
+    end if
+  end function method_word
 
   subroutine check_max_step(opts, err)
     type(integrator_options_t), intent(in) :: opts

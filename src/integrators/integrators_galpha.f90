@@ -28,7 +28,8 @@ module integrators_galpha
   use core_strings, only: int_str, real_str
   use core_linalg, only: lu_factor, lu_solve_vector
   use core_error, only: error_t, ERR_NUMERIC
-  use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t
+  use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t, &
+    INTEGRATOR_GALPHA_ADAPTIVE
   use integrators_base, only: integrator_t
   use core_progress, only: progress_t
   implicit none
@@ -162,7 +163,7 @@ contains
     type(error_t), intent(inout) :: err
     real(wp) :: rho
 
-    this%adaptive = opts%method == 'galpha_adaptive'
+    this%adaptive = opts%method == INTEGRATOR_GALPHA_ADAPTIVE
     this%n = size(q)
     this%dt = opts%dt
     this%rtol = opts%rtol

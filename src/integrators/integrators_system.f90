@@ -12,6 +12,21 @@ module integrators_system
   public :: ode2_system_t, integrator_options_t, integrator_stats_t, system_fd_jacobian, &
     bdf_order
 
+  !> The methods, in the order of their names (&dynamic integrator's choices: io_fields'
+  !> rd_enum checks them against the schema's). INTEGRATOR_AUTO is the scene's choice by rtol
+  !> and the model's stiffness (model_scene), made before integrating: no method of its own.
+  integer, parameter, public :: INTEGRATOR_AUTO = 1, INTEGRATOR_BDF = 2, INTEGRATOR_GALPHA = 3, &
+    INTEGRATOR_GALPHA_ADAPTIVE = 4, INTEGRATOR_ERK = 5
+  character(len=*), parameter, public :: INTEGRATOR_NAMES(5) = [character(len=15) :: 'auto', &
+    'bdf', 'galpha', 'galpha_adaptive', 'erk']
+  !> The Jacobian of the implicit methods, in the order of &dynamic jacobian's choices. The
+  !> integrators take the system's (ode2_system_t%jacobian) for any but JACOBIAN_INTERNAL
+  !> (CVODE's difference quotients); which of the other two it is concerns the system: flexmor's
+  !> models give their linearised matrices or forward differences.
+  integer, parameter, public :: JACOBIAN_LINEARISED = 1, JACOBIAN_FD = 2, JACOBIAN_INTERNAL = 3
+  character(len=*), parameter, public :: JACOBIAN_NAMES(3) = [character(len=10) :: &
+    'linearised', 'fd', 'internal']
+
   type, abstract :: ode2_system_t
   contains
     !> Accelerations a(t, q, v).
@@ -67,9 +82,10 @@ module integrators_system
 
   !> Options common to all integrators; each method reads the ones that apply to it.
   type :: integrator_options_t
-    !> 'bdf' (CVODE), 'galpha' (fixed step, ours), 'galpha_adaptive' (error-controlled, ours),
-    !> 'erk' (ARKODE explicit Runge-Kutta); scenes choose by rtol when not given (model_scene)
-    character(len=16) :: method = 'galpha_adaptive'
+    !> INTEGRATOR_BDF (CVODE), INTEGRATOR_GALPHA (fixed step, ours), INTEGRATOR_GALPHA_ADAPTIVE
+    !> (error-controlled, ours), INTEGRATOR_ERK (ARKODE explicit Runge-Kutta); scenes choose by
+    !> rtol when not given (model_scene)
+    integer :: method = INTEGRATOR_GALPHA_ADAPTIVE
     real(wp) :: rtol = 1.0e-6_wp              !< relative tolerance (adaptive methods)
     real(wp) :: atol = 1.0e-8_wp              !< absolute tolerance (adaptive methods)
     real(wp) :: max_step = 0.0_wp             !< largest step, 0 = no limit (adaptive methods)
@@ -78,7 +94,7 @@ module integrators_system
     !> Order of the explicit Runge-Kutta pair: 2, 3, 4, 5, 6 or 8 (ARKODE's default tables)
     integer :: erk_order = 5
     integer(i8) :: max_steps = 10000000_i8    !< step limit over the whole run
-    character(len=16) :: jacobian = 'system'  !< 'system' (ode2_system_t%jacobian) or 'internal'
+    integer :: jacobian = JACOBIAN_LINEARISED  !< JACOBIAN_*: the system's, or JACOBIAN_INTERNAL
     real(wp) :: dt = 1.0e-3_wp                !< step of fixed-step methods
     real(wp) :: rho_inf = 0.8_wp              !< generalized-alpha spectral radius at infinity
     !> Progress lines of a long run, polled per step or right-hand side evaluation (none when

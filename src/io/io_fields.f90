@@ -142,7 +142,7 @@ contains
     if (.not. e%ok()) err = e
   end subroutine rd_string
 
-  !> A keyword (mode class, law, integrator, ...): folded to lower case and checked against
+  !> A keyword (mode class, law, solver, ...): folded to lower case and checked against
   !> the schema's choices.
   subroutine rd_choice(g, var, value, err)
     type(nml_group_t), intent(inout) :: g

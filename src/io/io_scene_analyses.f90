@@ -9,7 +9,10 @@ module io_scene_analyses
     only_with, rd_labels
   use model_scene, only: auto_integrator, scene_t, controller_rec_t, UPDATE_NAMES, UPDATE_NONE, &
     UPDATE_INTERVAL, UPDATE_MAC, JOINTS_NAMES, JOINTS_HELD, EVALUATION_NAMES, &
-    EVALUATION_EXPANDED, ERROR_CHECK_NAMES, ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES
+    EVALUATION_EXPANDED, ERROR_CHECK_NAMES, ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES, &
+    STATIC_METHOD_NAMES, STATIC_ARC_LENGTH, INTEGRATOR_NAMES, INTEGRATOR_AUTO, INTEGRATOR_BDF, &
+    INTEGRATOR_GALPHA, INTEGRATOR_GALPHA_ADAPTIVE, INTEGRATOR_ERK, JACOBIAN_NAMES, &
+    JACOBIAN_INTERNAL
   implicit none
   private
   public :: read_static, read_modal, read_buckling, read_controller, read_linear, &
@@ -26,14 +29,14 @@ contains
     call rd_real(g, 'tol', scene%static%tol, err)
     call rd_int(g, 'max_iter', scene%static%max_iter, err)
     call rd_int(g, 'n_frequencies', scene%static%n_frequencies, err)
-    call rd_choice(g, 'method', scene%static%method, err)
+    call rd_enum(g, 'method', STATIC_METHOD_NAMES, scene%static%method, err)
     if (err%ok()) call only_with(g, ['arc_length     ', 'max_load_factor'], &
-      scene%static%method == 'arc_length', 'with method = ''arc_length''', err)
+      scene%static%method == STATIC_ARC_LENGTH, 'with method = ''arc_length''', err)
     if (g%has('arc_length')) call rd_real(g, 'arc_length', scene%static%arc_length, err)
     if (g%has('max_load_factor')) call rd_real(g, 'max_load_factor', &
       scene%static%max_load_factor, err)
     call rd_choice(g, 'solver', scene%static%solver, err)
-    if (err%ok() .and. scene%static%method == 'arc_length' .and. &
+    if (err%ok() .and. scene%static%method == STATIC_ARC_LENGTH .and. &
         scene%static%solver == 'krylov') call err%set(ERR_INPUT, trim(g%where()) // &
       ': variable ''solver'' = ''krylov'' is for method = ''load'' (arc-length continuation ' &
       // 'uses the dense tangent)')
@@ -124,24 +127,27 @@ contains
       call rd_real(g, 't_end', d%t_end, err)
       call rd_real(g, 'output_dt', d%output_dt, err)
       call rd_real(g, 'rtol', d%rtol, err)
-      call rd_choice(g, 'integrator', d%integrator, err)
-      if (err%ok() .and. d%integrator == 'auto') d%integrator = auto_integrator(d%rtol)
+      call rd_enum(g, 'integrator', INTEGRATOR_NAMES, d%integrator, err)
+      if (err%ok() .and. d%integrator == INTEGRATOR_AUTO) d%integrator = auto_integrator(d%rtol)
       ! Still 'auto' (tight rtol): the run chooses by the model's stiffness, unless BDF's own
       ! option says which one is meant.
-      if (err%ok() .and. d%integrator == 'auto' .and. g%has('max_order')) d%integrator = 'bdf'
+      if (err%ok() .and. d%integrator == INTEGRATOR_AUTO .and. g%has('max_order')) &
+        d%integrator = INTEGRATOR_BDF
       if (err%ok()) then
         associate (m => d%integrator, when => 'with integrator = ')
-          call only_with(g, ['dt     ', 'rho_inf'], m(1:min(6, len(m))) == 'galpha', &
+          call only_with(g, ['dt     ', 'rho_inf'], &
+            any(m == [INTEGRATOR_GALPHA, INTEGRATOR_GALPHA_ADAPTIVE]), &
             when // '''galpha'' or ''galpha_adaptive''' // auto_note(m), err)
-          call only_with(g, ['max_order'], m == 'bdf', when // '''bdf''', err)
-          call only_with(g, ['erk_order'], m == 'erk', when // '''erk''' // auto_note(m), err)
-          call only_with(g, ['max_step'], m /= 'galpha', &
+          call only_with(g, ['max_order'], m == INTEGRATOR_BDF, when // '''bdf''', err)
+          call only_with(g, ['erk_order'], m == INTEGRATOR_ERK, &
+            when // '''erk''' // auto_note(m), err)
+          call only_with(g, ['max_step'], m /= INTEGRATOR_GALPHA, &
             when // '''bdf'', ''galpha_adaptive'' or ''erk''', err)
-          call only_with(g, ['jacobian'], m /= 'erk', &
+          call only_with(g, ['jacobian'], m /= INTEGRATOR_ERK, &
             when // '''bdf'', ''galpha'' or ''galpha_adaptive''', err)
         end associate
       end if
-      call rd_choice(g, 'jacobian', d%jacobian, err)
+      call rd_enum(g, 'jacobian', JACOBIAN_NAMES, d%jacobian, err)
       call rd_real(g, 'atol', d%atol, err)
       call rd_real(g, 'max_step', d%max_step, err)
       call rd_int(g, 'max_order', d%max_order, err)
@@ -158,9 +164,9 @@ contains
       call rd_real(g, 'error_check_factor', d%error_check_factor, err)
       call rd_int(g, 'error_check_modes', d%error_check_modes, err)
       if (.not. err%ok()) return
-      if (d%jacobian == 'internal' .and. d%integrator /= 'bdf') call err%set(ERR_INPUT, &
-        g%where() // ': variable ''jacobian'': ''internal'' (CVODE''s difference quotients) ' &
-        // 'needs integrator = ''bdf''' // auto_note(d%integrator))
+      if (d%jacobian == JACOBIAN_INTERNAL .and. d%integrator /= INTEGRATOR_BDF) &
+        call err%set(ERR_INPUT, g%where() // ': variable ''jacobian'': ''internal'' (CVODE''s ' &
+        // 'difference quotients) needs integrator = ''bdf''' // auto_note(d%integrator))
     end associate
   end subroutine read_dynamic
 
@@ -231,10 +237,10 @@ contains
 
   !> Why an option of one integrator is refused when the integrator is still 'auto'.
   function auto_note(method) result(note)
-    character(len=*), intent(in) :: method
+    integer, intent(in) :: method
     character(len=:), allocatable :: note
     note = ''
-    if (method == 'auto') note = ' (below rtol 1e-6 integrator = ''auto'' chooses by the ' // &
-      'model''s stiffness when the run starts: name the integrator)'
+    if (method == INTEGRATOR_AUTO) note = ' (below rtol 1e-6 integrator = ''auto'' chooses ' &
+      // 'by the model''s stiffness when the run starts: name the integrator)'
   end function auto_note
 end module io_scene_analyses

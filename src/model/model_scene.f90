@@ -3,11 +3,19 @@
 !> Units are SI throughout: m, kg, s, N, rad.
 module model_scene
   use core_kinds, only: wp
+  use integrators_system, only: INTEGRATOR_AUTO, INTEGRATOR_BDF, INTEGRATOR_GALPHA, &
+    INTEGRATOR_GALPHA_ADAPTIVE, INTEGRATOR_ERK, INTEGRATOR_NAMES, JACOBIAN_LINEARISED, &
+    JACOBIAN_FD, JACOBIAN_INTERNAL, JACOBIAN_NAMES
   implicit none
   private
   public :: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
     force_rec_t, motion_rec_t, static_rec_t, modal_rec_t, dynamic_rec_t, reduction_rec_t, label_t, &
     buckling_rec_t, slider_rec_t, linear_rec_t, controller_rec_t, auto_integrator, auto_by_stiffness
+  ! &dynamic integrator and jacobian are the integrators' own enums: the scene's readers (io)
+  ! take them from here, with the records that hold them.
+  public :: INTEGRATOR_AUTO, INTEGRATOR_BDF, INTEGRATOR_GALPHA, INTEGRATOR_GALPHA_ADAPTIVE, &
+    INTEGRATOR_ERK, INTEGRATOR_NAMES, JACOBIAN_LINEARISED, JACOBIAN_FD, JACOBIAN_INTERNAL, &
+    JACOBIAN_NAMES
 
   !> integrator = 'auto' takes generalized-alpha with error control from this rtol up; below,
   !> BDF when the model is not stiff (auto_by_stiffness).
@@ -136,13 +144,19 @@ module model_scene
     real(wp), allocatable :: times(:), values(:)      !< table (read from `file` if given)
   end type motion_rec_t
 
+  !> &static method as an enum (read with io_fields' rd_enum): load control or arc-length
+  !> continuation.
+  integer, parameter, public :: STATIC_LOAD = 1, STATIC_ARC_LENGTH = 2
+  character(len=*), parameter, public :: STATIC_METHOD_NAMES(2) = [character(len=10) :: &
+    'load', 'arc_length']
+
   type :: static_rec_t
     logical :: active = .false.
     integer :: n_steps = 10
     real(wp) :: tol = 1.0e-10_wp
     integer :: max_iter = 30
     integer :: n_frequencies = 0    !< lowest natural frequencies written at each step
-    character(len=:), allocatable :: method   !< 'load' or 'arc_length'
+    integer :: method = STATIC_LOAD           !< STATIC_*
     real(wp) :: arc_length = 0.0_wp           !< 0: sqrt(2)/n_steps
     real(wp) :: max_load_factor = huge(1.0_wp)
     character(len=:), allocatable :: solver   !< 'auto', 'dense' or 'krylov'
@@ -197,7 +211,9 @@ module model_scene
   type :: dynamic_rec_t
     logical :: active = .false.
     real(wp) :: t_end = 0.0_wp, output_dt = 1.0e-3_wp
-    character(len=:), allocatable :: integrator, jacobian
+    !> integrators_system's INTEGRATOR_* (INTEGRATOR_AUTO until chosen: auto_integrator,
+    !> auto_by_stiffness) and JACOBIAN_*
+    integer :: integrator = INTEGRATOR_AUTO, jacobian = JACOBIAN_LINEARISED
     real(wp) :: rtol = 1.0e-6_wp, atol = 1.0e-8_wp, max_step = 0.0_wp
     integer :: max_order = 0, erk_order = 5
     real(wp) :: dt = 1.0e-3_wp, rho_inf = 0.8_wp
@@ -277,14 +293,13 @@ contains
   !> The integrator of `integrator = 'auto'` (the default), chosen by measurement on the
   !> two-link benchmark (docs/bench/work_precision.md): generalized-alpha with error control
   !> reaches tip errors down to about 1e-6 m fastest (rtol >= 1e-6). Below, the answer
-  !> depends on the model, and 'auto' is returned: the run decides by auto_by_stiffness.
-  pure function auto_integrator(rtol) result(method)
+  !> depends on the model, and INTEGRATOR_AUTO is returned: the run decides by auto_by_stiffness.
+  pure integer function auto_integrator(rtol) result(method)
     real(wp), intent(in) :: rtol
-    character(len=:), allocatable :: method
     if (rtol >= AUTO_GALPHA_RTOL) then
-      method = 'galpha_adaptive'
+      method = INTEGRATOR_GALPHA_ADAPTIVE
     else
-      method = 'auto'
+      method = INTEGRATOR_AUTO
     end if
   end function auto_integrator
 
@@ -294,13 +309,12 @@ contains
   !> the fastest mode: the two-link at 8 elements per link and rtol 1e-7 took 276,000 BDF
   !> steps (14 s) where galpha_adaptive takes 7,000 (0.4 s), whose numerical damping leaves
   !> the unresolved modes alone.
-  pure function auto_by_stiffness(omega_max, t_span) result(method)
+  pure integer function auto_by_stiffness(omega_max, t_span) result(method)
     real(wp), intent(in) :: omega_max, t_span
-    character(len=:), allocatable :: method
     if (omega_max * t_span > AUTO_STIFF_RADIANS) then
-      method = 'galpha_adaptive'
+      method = INTEGRATOR_GALPHA_ADAPTIVE
     else
-      method = 'bdf'
+      method = INTEGRATOR_BDF
     end if
   end function auto_by_stiffness
 end module model_scene

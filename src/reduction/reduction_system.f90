@@ -15,7 +15,7 @@ module reduction_system
   use model_system, only: model_t
   use model_kinematics, only: kin_state_t
   use dynamics_system, only: dynamics_t, check_finite
-  use integrators_system, only: ode2_system_t, system_fd_jacobian
+  use integrators_system, only: ode2_system_t, system_fd_jacobian, JACOBIAN_FD
   use reduction_basis, only: basis_t
   use reduction_expansion, only: expansion_set_t
   implicit none
@@ -260,7 +260,7 @@ contains
     real(wp), allocatable :: kv(:, :), dv(:, :), w(:, :)
     integer :: j, info
     type(error_t) :: err
-    if (this%dyn%jacobian_kind == 'fd' .or. this%expanded) then
+    if (this%dyn%jacobian_kind == JACOBIAN_FD .or. this%expanded) then
       call system_fd_jacobian(this, t, q, v, dadq, dadv, status)
       return
     end if
