@@ -1,7 +1,8 @@
-!> The progress lines' ETA goes by the rate since the previous line (core_progress eta_text).
+!> The progress lines' ETA goes by the rate since the previous line (core_progress eta_text), and
+!> a run whose steps have become too small to finish says so (crawl_text).
 program test_progress
-  use core_kinds, only: wp
-  use core_progress, only: eta_text
+  use core_kinds, only: wp, i8
+  use core_progress, only: eta_text, crawl_text
   use testing, only: suite_t
   implicit none
   type(suite_t) :: t
@@ -21,5 +22,16 @@ program test_progress
   call t%check(eta_text(6.0_wp, 0.4_wp, 4.0_wp, 0.4_wp) == &
     ', ETA unknown: no progress since the last line', 'no progress: said')
   call t%check(eta_text(2.0_wp, 0.0_wp, 0.0_wp, 0.0_wp) == '', 'nothing done: no ETA')
+  ! 1e-9 of the run in 2 s: 2e9 s to go.
+  call t%check(eta_text(4.0_wp, 0.5_wp + 1.0e-9_wp, 2.0_wp, 0.5_wp) == &
+    ', ETA more than 10000 h', 'a crawl: no absurd number (' // eta_text(4.0_wp, &
+    0.5_wp + 1.0e-9_wp, 2.0_wp, 0.5_wp) // ')')
+  ! 1e-9 of a 0.1 s run in 1000 steps: 1e-13 s each, under 1e-7 of the run (1e-8 s).
+  call t%check(index(crawl_text(1.0e-9_wp, 1000_i8, 0.1_wp), 'steps of about 1.00E-13 s') &
+    > 0, 'tiny steps: said (' // crawl_text(1.0e-9_wp, 1000_i8, 0.1_wp) // ')')
+  call t%check(crawl_text(1.0e-3_wp, 1000_i8, 0.1_wp) == '', 'steps of 1e-7 s: nothing')
+  call t%check(crawl_text(0.0_wp, 1000_i8, 0.1_wp) == '', &
+    'no progress at all: for the ETA to say')
+  call t%check(crawl_text(1.0e-3_wp, 0_i8, 0.1_wp) == '', 'no steps: nothing')
   call t%finish()
 end program test_progress

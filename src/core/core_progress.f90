@@ -12,7 +12,7 @@ module core_progress
   use core_strings, only: int_str
   implicit none
   private
-  public :: progress_t, eta_text
+  public :: progress_t, eta_text, crawl_text
 
   type :: progress_t
     !> Off (the default): `due` is always false and nothing is printed.
@@ -31,6 +31,8 @@ module core_progress
     !> Elapsed wall time and fraction done at the previous line (or the start): the ETA goes by
     !> the rate since then, as runs slow down or speed up (the adaptive steps follow the motion).
     real(wp), private :: elapsed_prev = 0, frac_prev = 0
+    !> Steps at the previous line: their mean size since then shows a run that crawls.
+    integer(i8), private :: steps_prev = 0
   contains
     procedure :: start => progress_start
     procedure :: due => progress_due
@@ -55,6 +57,7 @@ contains
     this%n_lines = 0
     this%elapsed_prev = 0
     this%frac_prev = 0
+    this%steps_prev = 0
     call system_clock(this%c_start, this%rate)
     this%c_next = this%c_start + ticks(this)
   end subroutine progress_start
@@ -75,7 +78,8 @@ contains
     real(wp), intent(in) :: t
     integer(i8), intent(in) :: n_steps
     character(len=:), allocatable :: line
-    real(wp) :: elapsed, frac
+    real(wp) :: elapsed, frac, span
+    integer(i8) :: steps
     integer :: d
     ! An evaluation of a step that gets rejected may lie ahead of a later one: never go back.
     this%t_shown = min(max(this%t_shown, t, this%t_begin), this%t_end)
@@ -89,7 +93,11 @@ contains
       fixed(this%t_end, d) // ' s (' // fixed(100 * frac, 1) // ' %), ' // &
       count_str(this%steps_done + n_steps) // ' steps, '
     if (this%n_updates >= 0) line = line // int_str(this%n_updates) // ' basis updates, '
-    line = line // duration(elapsed) // ' elapsed' // next_eta(this, elapsed, frac)
+    steps = this%steps_done + n_steps
+    span = this%t_end - this%t_begin
+    line = line // duration(elapsed) // ' elapsed' // crawl_text(frac - this%frac_prev, &
+      steps - this%steps_prev, span) // next_eta(this, elapsed, frac)
+    this%steps_prev = steps
     write(this%unit, '(a)') line
     flush(this%unit)
   end subroutine progress_report_time
@@ -153,11 +161,35 @@ contains
     end if
   end function eta_text
 
-  !> Seconds below two minutes, then minutes, then hours.
+  !> ', steps of about h s' where the mean step since the previous line (d_frac of the span in
+  !> d_steps steps) is below CRAWL of the span: at that size the run needs more steps than
+  !> the integrators allow (10 million), which a user should see long before they run out (a
+  !> mechanism at a dead point: the four-bar of input/four_bar.nml with the rocker pin moved
+  !> so that the crank cannot turn took steps of 1e-11 s).
+  pure function crawl_text(d_frac, d_steps, span) result(s)
+    real(wp), intent(in) :: d_frac, span
+    integer(i8), intent(in) :: d_steps
+    character(len=:), allocatable :: s
+    real(wp), parameter :: CRAWL = 1.0e-7_wp
+    real(wp) :: h
+    character(len=16) :: buf
+    s = ''
+    ! No progress at all: the ETA says so.
+    if (d_steps <= 0 .or. .not. span > 0 .or. .not. d_frac > 0) return
+    h = d_frac * span / real(d_steps, wp)
+    if (h >= CRAWL * span) return
+    write(buf, '(es9.2)') h
+    s = ', steps of about ' // trim(adjustl(buf)) // ' s (under 1e-7 of the run: too small ' // &
+      'to finish; a singular configuration?)'
+  end function crawl_text
+
+  !> Seconds below two minutes, then minutes, then hours; beyond 10,000 h only that.
   pure function duration(sec) result(s)
     real(wp), intent(in) :: sec
     character(len=:), allocatable :: s
-    if (sec < 120) then
+    if (sec >= 3.6e7_wp) then
+      s = 'more than 10000 h'
+    else if (sec < 120) then
       s = fixed(sec, 1) // ' s'
     else if (sec < 7200) then
       s = fixed(sec / 60, 1) // ' min'

@@ -24,7 +24,7 @@ module integrators_cvode
   use fsunlinsol_dense_mod, only: FSUNLinSol_Dense
   use fcvode_mod, only: CV_BDF, CV_NORMAL, FCVodeCreate, FCVodeInit, FCVodeReInit, FCVodeFree, &
     FCVode, FCVodeSStolerances, FCVodeSetUserData, FCVodeSetErrHandlerFn, &
-    FCVodeSetLinearSolver, FCVodeSetJacFn, FCVodeSetMaxOrd, FCVodeSetMaxStep, &
+    FCVodeSetLinearSolver, FCVodeSetJacFn, FCVodeSetMaxOrd, FCVodeSetMaxStep, FCVodeSetMinStep, &
     FCVodeSetMaxNumSteps, FCVodeSetStopTime, FCVodeGetNumSteps, FCVodeGetNumJacEvals, &
     FCVodeGetNumLinSolvSetups, &
     FCVodeGetNumErrTestFails, FCVodeGetNumNonlinSolvConvFails, FCVodeGetCurrentTime
@@ -91,6 +91,11 @@ contains
       call check(solver, FCVodeSetMaxStep(this%mem, opts%max_step), 'CVodeSetMaxStep', err)
     end if
     call check(solver, FCVodeSetStopTime(this%mem, t_stop), 'CVodeSetStopTime', err)
+    ! Steps below the round-off of t cannot move it: CVODE would only warn and go on until
+    ! max_steps (a mechanism at a dead point took 10 million steps at t = 1.5e-4). The same
+    ! limit as galpha_adaptive's.
+    call check(solver, FCVodeSetMinStep(this%mem, 16 * spacing(max(abs(t_stop), 1.0_wp))), &
+      'CVodeSetMinStep', err)
     if (.not. err%ok()) return
     call attach_dense_solver(this, opts%jacobian /= JACOBIAN_INTERNAL, err)
   end subroutine cvode_start
