@@ -32,6 +32,7 @@ program test_progress
   call t%check(crawl_text(1.0e-3_wp, 1000_i8, 0.1_wp) == '', 'steps of 1e-7 s: nothing')
   call t%check(crawl_text(0.0_wp, 1000_i8, 0.1_wp) == '', &
     'no progress at all: for the ETA to say')
-  call t%check(crawl_text(1.0e-3_wp, 0_i8, 0.1_wp) == '', 'no steps: nothing')
+  call t%check(crawl_text(1.0e-12_wp, 999_i8, 0.1_wp) == '', &
+    'a few small steps (the first of a run): nothing')
   call t%finish()
 end program test_progress

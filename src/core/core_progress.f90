@@ -162,7 +162,7 @@ contains
   end function eta_text
 
   !> ', steps of about h s' where the mean step since the previous line (d_frac of the span in
-  !> d_steps steps) is below CRAWL of the span: at that size the run needs more steps than
+  !> d_steps steps, at least 1000) is below CRAWL of the span: at that size the run needs more steps than
   !> the integrators allow (10 million), which a user should see long before they run out (a
   !> mechanism at a dead point: the four-bar of input/four_bar.nml with the rocker pin moved
   !> so that the crank cannot turn took steps of 1e-11 s).
@@ -174,8 +174,9 @@ contains
     real(wp) :: h
     character(len=16) :: buf
     s = ''
-    ! No progress at all: the ETA says so.
-    if (d_steps <= 0 .or. .not. span > 0 .or. .not. d_frac > 0) return
+    ! No progress at all: the ETA says so. A few small steps are no crawl (a run's first step
+    ! is small, and a line may follow it at once).
+    if (d_steps < 1000 .or. .not. span > 0 .or. .not. d_frac > 0) return
     h = d_frac * span / real(d_steps, wp)
     if (h >= CRAWL * span) return
     write(buf, '(es9.2)') h
