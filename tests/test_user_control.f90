@@ -161,7 +161,6 @@ contains
     real(wp), intent(in) :: period
     real(wp), parameter :: PATH_BOUND = 2.0e-7_wp   ! 10 x twice the global error [m]
     type(run_t) :: r_pid, r_mimo, r_mixed
-    type(results_t) :: res
     type(error_t) :: err
     real(wp), allocatable :: p_pid(:, :), p_mimo(:, :), p_mixed(:, :)
     character(len=:), allocatable :: what, pids
@@ -183,12 +182,9 @@ contains
     ran = ran .and. err%ok()
     call t%check(err%ok(), trim(what) // ': a PID beside a user law runs ' // msg(err))
     if (.not. ran) return
-    call res%from_run(r_pid)
-    call res%node_position('tip', 'dynamic', p_pid, err)
-    call res%from_run(r_mimo)
-    call res%node_position('tip', 'dynamic', p_mimo, err)
-    call res%from_run(r_mixed)
-    call res%node_position('tip', 'dynamic', p_mixed, err)
+    p_pid = tip_path(r_pid)
+    p_mimo = tip_path(r_mimo)
+    p_mixed = tip_path(r_mixed)
     ! The disturbances move the tip before the integrals bring it back: a real comparison.
     call t%check(maxval(abs(p_pid(2, :))) > 1.0e-3_wp, trim(what) // ': the tip moves')
     call t%close_array(reshape(p_mimo, [size(p_mimo)]), reshape(p_pid, [size(p_pid)]), &
@@ -196,6 +192,17 @@ contains
     call t%close_array(reshape(p_mixed, [size(p_mixed)]), reshape(p_pid, [size(p_pid)]), &
       0.0_wp, PATH_BOUND, trim(what) // ': PID + user law = two PIDs')
   end subroutine same_as_pid
+
+  !> The tip's positions at the output times of a run's dynamic analysis.
+  function tip_path(run) result(p)
+    type(run_t), intent(in) :: run
+    real(wp), allocatable :: p(:, :)
+    type(results_t) :: res
+    type(error_t) :: err
+    call res%from_run(run)
+    call res%node_position('tip', 'dynamic', p, err)
+    call t%check(err%ok(), 'the tip''s path ' // msg(err))
+  end function tip_path
 
   !> &dynamic error_check: the second run calls the same user law (a copy). The PID law as a
   !> user law against itself at rtol 1e-10: the runs differ by the integrator's global error,
@@ -228,7 +235,6 @@ contains
   subroutine library_laws()
     real(wp), parameter :: PATH_BOUND = 2.0e-7_wp   ! as in same_as_pid [m]
     type(run_t) :: r_pid, r_lib, r_wrong, r_set
-    type(results_t) :: res
     type(error_t) :: err
     real(wp), allocatable :: p_pid(:, :), p_lib(:, :), p_wrong(:, :), p_set(:, :)
     character(len=2), parameter :: LABELS(2) = ['c1', 'c2']
@@ -248,14 +254,10 @@ contains
     ran = ran .and. err%ok()
     call t%check(err%ok(), 'program laws over library laws run ' // msg(err))
     if (.not. ran) return
-    call res%from_run(r_pid)
-    call res%node_position('tip', 'dynamic', p_pid, err)
-    call res%from_run(r_lib)
-    call res%node_position('tip', 'dynamic', p_lib, err)
-    call res%from_run(r_wrong)
-    call res%node_position('tip', 'dynamic', p_wrong, err)
-    call res%from_run(r_set)
-    call res%node_position('tip', 'dynamic', p_set, err)
+    p_pid = tip_path(r_pid)
+    p_lib = tip_path(r_lib)
+    p_wrong = tip_path(r_wrong)
+    p_set = tip_path(r_set)
     call t%close_array(reshape(p_lib, [size(p_lib)]), reshape(p_pid, [size(p_pid)]), &
       0.0_wp, PATH_BOUND, 'library laws = two PIDs')
     call t%check(maxval(abs(p_wrong - p_pid)) > 1.0e-4_wp, 'kp x 3 in the library laws ' // &
