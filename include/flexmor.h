@@ -3,7 +3,8 @@
  * flexmor::flexmor), which does both).
  *
  * A run is an opaque handle: open it on a scene file, give the scene's user control laws
- * (&controller law = 'user', docs/input.md), execute, write the result file, close. Every
+ * (&controller law = 'user' without a `library`, docs/input.md), execute, write the result
+ * file, close. Every
  * handle owns its run and its callbacks: several handles may live side by side in one process
  * (not used from two threads at once).
  *
@@ -27,7 +28,13 @@ typedef void *flexmor_handle;
  * is called once per sample and u is held until the next). A continuous law is called at the
  * integrator's trial states, so it keeps its memory in x, not in user_data.
  * Return 0 on success, > 0 for a recoverable failure (the integrator retries a shorter step),
- * < 0 for a fatal one (the run stops with an error naming the controller). */
+ * < 0 for a fatal one (the run stops with an error naming the controller).
+ *
+ * A scene can name such a function itself (&controller library = 'laws.so', symbol = 'law',
+ * params = ..., docs/input.md): then user_data points to the params as doubles (NULL without;
+ * a copy for the call, not to be kept), and the library may declare their count,
+ * `const int law_n_params = N;`, which the scene's must match. So one function serves a
+ * program and a scene. */
 typedef int (*flexmor_control_law)(double t, int n_y, const double *y, const double *y_dot,
                                    int n_x, const double *x, double *x_out, int n_u,
                                    double *u, void *user_data);
@@ -38,7 +45,8 @@ flexmor_handle flexmor_open(const char *path, char *errbuf, int errlen);
 
 /* Give the &controller `label` (law = 'user') its law, between flexmor_open and
  * flexmor_execute; user_data is passed to every call (it must stay valid until the run is
- * executed). Setting a label again replaces its law. */
+ * executed). Setting a label again replaces its law, as it replaces a law of the scene's
+ * `library`. */
 int flexmor_set_controller(flexmor_handle handle, const char *label,
                            flexmor_control_law callback, void *user_data, char *errbuf,
                            int errlen);

@@ -2,7 +2,8 @@
 !> run%set_control_law): a PID written as a user law on a rigid two-link arm gives the same
 !> motion as the built-in law = 'pid' (two SISO PIDs; one MIMO user law with two actuators,
 !> two outputs and two states; a PID beside a user law), continuous and sampled; several runs
-!> with their own laws in one process; and every misuse gives a clear error.
+!> with their own laws in one process; the law of a shared library (&controller library) and
+!> the program's law in its place; and every misuse gives a clear error.
 module user_control_laws
   use flexmor, only: wp, control_law_t
   implicit none
@@ -88,6 +89,7 @@ program test_user_control
   call same_as_pid(0.01_wp)
   call misuse()
   call with_error_check()
+  call library_laws()
   call t%finish()
 
 contains
@@ -159,7 +161,6 @@ contains
     real(wp), intent(in) :: period
     real(wp), parameter :: PATH_BOUND = 2.0e-7_wp   ! 10 x twice the global error [m]
     type(run_t) :: r_pid, r_mimo, r_mixed
-    type(results_t) :: res
     type(error_t) :: err
     real(wp), allocatable :: p_pid(:, :), p_mimo(:, :), p_mixed(:, :)
     character(len=:), allocatable :: what, pids
@@ -181,12 +182,9 @@ contains
     ran = ran .and. err%ok()
     call t%check(err%ok(), trim(what) // ': a PID beside a user law runs ' // msg(err))
     if (.not. ran) return
-    call res%from_run(r_pid)
-    call res%node_position('tip', 'dynamic', p_pid, err)
-    call res%from_run(r_mimo)
-    call res%node_position('tip', 'dynamic', p_mimo, err)
-    call res%from_run(r_mixed)
-    call res%node_position('tip', 'dynamic', p_mixed, err)
+    p_pid = tip_path(r_pid)
+    p_mimo = tip_path(r_mimo)
+    p_mixed = tip_path(r_mixed)
     ! The disturbances move the tip before the integrals bring it back: a real comparison.
     call t%check(maxval(abs(p_pid(2, :))) > 1.0e-3_wp, trim(what) // ': the tip moves')
     call t%close_array(reshape(p_mimo, [size(p_mimo)]), reshape(p_pid, [size(p_pid)]), &
@@ -194,6 +192,17 @@ contains
     call t%close_array(reshape(p_mixed, [size(p_mixed)]), reshape(p_pid, [size(p_pid)]), &
       0.0_wp, PATH_BOUND, trim(what) // ': PID + user law = two PIDs')
   end subroutine same_as_pid
+
+  !> The tip's positions at the output times of a run's dynamic analysis.
+  function tip_path(run) result(p)
+    type(run_t), intent(in) :: run
+    real(wp), allocatable :: p(:, :)
+    type(results_t) :: res
+    type(error_t) :: err
+    call res%from_run(run)
+    call res%node_position('tip', 'dynamic', p, err)
+    call t%check(err%ok(), 'the tip''s path ' // msg(err))
+  end function tip_path
 
   !> &dynamic error_check: the second run calls the same user law (a copy). The PID law as a
   !> user law against itself at rtol 1e-10: the runs differ by the integrator's global error,
@@ -216,6 +225,66 @@ contains
       1.0e-6_wp, 'the second run follows the same law (distance ' // &
       rtxt(maxval(run%check_distance)) // ' m)')
   end subroutine with_error_check
+
+  !> &controller library (examples/c/pid_law.c, built by CTest: FLEXMOR_PID_LAW, else
+  !> pid_law.so in the current folder): as two SISO laws with the PIDs' gains (params = kp,
+  !> ki, kd, r = 0; the integral their state) it gives the built-in PIDs' motion, to the same
+  !> bound as same_as_pid (the Jacobians of the two differ in the same way); and a law set by
+  !> the program replaces a library's: with wrong gains in the scene (kp three times) the
+  !> library laws alone move the tip elsewhere, the program's PID laws bring it back.
+  subroutine library_laws()
+    real(wp), parameter :: PATH_BOUND = 2.0e-7_wp   ! as in same_as_pid [m]
+    type(run_t) :: r_pid, r_lib, r_wrong, r_set
+    type(error_t) :: err
+    real(wp), allocatable :: p_pid(:, :), p_lib(:, :), p_wrong(:, :), p_set(:, :)
+    character(len=2), parameter :: LABELS(2) = ['c1', 'c2']
+    logical :: ran
+    call run_scene(ARM // pid_groups(0.0_wp), 'pid.nml', [character(len=3) ::], &
+      reshape([integer ::], [2, 0]), 0.0_wp, r_pid, err)
+    ran = err%ok()
+    call run_scene(ARM // library_groups(1.0_wp), 'lib.nml', [character(len=3) ::], &
+      reshape([integer ::], [2, 0]), 0.0_wp, r_lib, err)
+    ran = ran .and. err%ok()
+    call t%check(err%ok(), 'library laws run ' // msg(err))
+    call run_scene(ARM // library_groups(3.0_wp), 'wrong.nml', [character(len=3) ::], &
+      reshape([integer ::], [2, 0]), 0.0_wp, r_wrong, err)
+    ran = ran .and. err%ok()
+    call run_scene(ARM // library_groups(3.0_wp), 'set.nml', LABELS, &
+      reshape([1, 1, 2, 2], [2, 2]), 0.0_wp, r_set, err)
+    ran = ran .and. err%ok()
+    call t%check(err%ok(), 'program laws over library laws run ' // msg(err))
+    if (.not. ran) return
+    p_pid = tip_path(r_pid)
+    p_lib = tip_path(r_lib)
+    p_wrong = tip_path(r_wrong)
+    p_set = tip_path(r_set)
+    call t%close_array(reshape(p_lib, [size(p_lib)]), reshape(p_pid, [size(p_pid)]), &
+      0.0_wp, PATH_BOUND, 'library laws = two PIDs')
+    call t%check(maxval(abs(p_wrong - p_pid)) > 1.0e-4_wp, 'kp x 3 in the library laws ' // &
+      'moves the tip elsewhere (' // rtxt(maxval(abs(p_wrong - p_pid))) // ' m)')
+    call t%close_array(reshape(p_set, [size(p_set)]), reshape(p_pid, [size(p_pid)]), &
+      0.0_wp, PATH_BOUND, 'the program''s laws replace the library''s')
+  end subroutine library_laws
+
+  !> Two &controller groups, c1 and c2, on the joints with the law of the library pid_law.so
+  !> and params = the PIDs' gains, kp times kp_factor.
+  function library_groups(kp_factor) result(text)
+    real(wp), intent(in) :: kp_factor
+    character(len=:), allocatable :: text
+    character(len=1024) :: path
+    character(len=400) :: line
+    integer :: i, n, stat
+    call get_environment_variable('FLEXMOR_PID_LAW', path, n, stat)
+    if (stat /= 0 .or. n == 0) path = 'pid_law.so'
+    text = ''
+    do i = 1, 2
+      write(line, '(a,i0,a,i0,a,i0,a,3(es23.16,a))') "&controller label = 'c", i, &
+        "', law = 'user', actuator = 'j", i, ".torque', measure = 'j", i, &
+        ".angle', n_states = 1, symbol = 'pid_law', params = ", kp_factor * KP(i), ', ', &
+        KI(i), ', ', KD(i), ', 0'
+      text = text // trim(line) // ", library = '" // trim(path) // "' /" // NL
+    end do
+  end function library_groups
 
   subroutine misuse()
     type(run_t) :: run, run_pid

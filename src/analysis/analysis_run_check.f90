@@ -89,9 +89,10 @@ contains
     end if
   end procedure run_error_check
 
-  !> The control laws a program gave (&controller law = 'user') go to the second run as
-  !> they are after the first (docs/input.md: a law's own data beyond its states x must not
-  !> carry over between runs).
+  !> The user control laws (&controller law = 'user') go to the second run as they are after
+  !> the first (docs/input.md: a law's own data beyond its states x must not carry over
+  !> between runs): a program's, which the second run's load cannot know, and a library's
+  !> (that load attached its own already; the copy is the same law).
   subroutine copy_user_laws(this, rerun, err)
     type(run_t), intent(in) :: this
     type(run_t), intent(inout) :: rerun

@@ -1,5 +1,6 @@
 !> User control laws of a run (&controller law = 'user'): given by the program that uses
-!> flexmor as a library, between run%load and run%execute.
+!> flexmor as a library, between run%load and run%execute. A law the program gives replaces
+!> the one of the scene's `library`, which the model has from load on (model_build).
 submodule (analysis_run) analysis_run_control
   use model_control, only: LAW_USER
   implicit none
@@ -42,8 +43,9 @@ contains
       associate (c => this%dyn%model%controllers(k))
         if (c%law_kind == LAW_USER .and. .not. allocated(c%user_law)) then
           call err%set(ERR_INPUT, 'group &controller ''' // c%label // ''': variable ' // &
-            '''law'': ''user'' needs a control law from the program that runs the scene ' // &
-            '(run%set_control_law, flexmor_set_controller); the flexmor program has none')
+            '''law'': ''user'' needs a control law: a shared library''s (''library'' and ' // &
+            '''symbol'') or one from the program that runs the scene ' // &
+            '(run%set_control_law, flexmor_set_controller)')
           return
         end if
       end associate

@@ -16,7 +16,9 @@
 !>
 !> A &controller with law = 'user' gets its law from the program: extend control_law_t
 !> (deferred evaluate, docs/api.md) and call run%set_control_law('label', law, err) between
-!> load and execute. C programs use the same through include/flexmor.h (flexmor_c).
+!> load and execute. C programs use the same through include/flexmor.h (flexmor_c). A law
+!> so set replaces the one a scene may name in a shared library (&controller library,
+!> symbol), which load attaches.
 !>
 !> Library code never stops the program: every failure comes back as an error_t whose
 !> message names the file, group and variable. With CMake: find_package(flexmor) and

@@ -4,10 +4,10 @@
 !> mutable state, so several handles (a sweep) live side by side in one process.
 module flexmor_c
   use, intrinsic :: iso_c_binding, only: c_ptr, c_funptr, c_int, c_double, c_char, c_null_ptr, &
-    c_null_char, c_loc, c_f_pointer, c_f_procpointer, c_associated
+    c_null_char, c_loc, c_f_pointer, c_associated
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
-  use model_control, only: control_law_t
+  use model_control_c, only: c_law_t
   use analysis_run, only: run_t
   use analysis_results, only: results_t
   implicit none
@@ -19,51 +19,7 @@ module flexmor_c
     type(run_t) :: run
   end type handle_t
 
-  !> A law that calls a C function with the data the program gave with it.
-  type, extends(control_law_t) :: c_law_t
-    type(c_funptr) :: callback
-    type(c_ptr) :: user_data = c_null_ptr
-  contains
-    procedure :: evaluate => c_law_evaluate
-  end type c_law_t
-
-  abstract interface
-    function c_callback(t, n_y, y, y_dot, n_x, x, x_out, n_u, u, user_data) result(status) &
-        bind(C)
-      import :: c_double, c_int, c_ptr
-      real(c_double), value :: t
-      integer(c_int), value :: n_y, n_x, n_u
-      real(c_double), intent(in) :: y(*), y_dot(*), x(*)
-      real(c_double), intent(out) :: x_out(*), u(*)
-      type(c_ptr), value :: user_data
-      integer(c_int) :: status
-    end function c_callback
-  end interface
-
 contains
-
-  !> The law's arguments go through copies of C's double: wp need not be that kind.
-  subroutine c_law_evaluate(this, t, y, y_dot, x, x_out, u, status)
-    class(c_law_t), intent(in) :: this
-    real(wp), intent(in) :: t, y(:), y_dot(:), x(:)
-    real(wp), intent(out) :: x_out(:), u(:)
-    integer, intent(out) :: status
-    procedure(c_callback), pointer :: f
-    ! At least one element each: C gets a valid pointer even for n_x = 0.
-    real(c_double) :: yc(max(1, size(y))), ydc(max(1, size(y))), xc(max(1, size(x))), &
-      xo(max(1, size(x))), uc(max(1, size(u)))
-    call c_f_procpointer(this%callback, f)
-    yc(1:size(y)) = real(y, c_double)
-    ydc(1:size(y)) = real(y_dot, c_double)
-    xc = 0.0_c_double
-    xc(1:size(x)) = real(x, c_double)
-    xo = 0.0_c_double
-    uc = 0.0_c_double
-    status = int(f(real(t, c_double), int(size(y), c_int), yc, ydc, int(size(x), c_int), xc, &
-      xo, int(size(u), c_int), uc, this%user_data))
-    x_out = real(xo(1:size(x)), wp)
-    u = real(uc(1:size(u)), wp)
-  end subroutine c_law_evaluate
 
   function c_open(path, errbuf, errlen) result(handle) bind(C, name='flexmor_open')
     character(kind=c_char), intent(in) :: path(*)
@@ -94,8 +50,8 @@ contains
     integer(c_int) :: code
     type(handle_t), pointer :: h
     type(error_t) :: err
-    if (of_handle(handle, h, err, 'flexmor_set_controller')) &
-      call h%run%set_control_law(from_c(label), c_law_t(callback, user_data), err)
+    if (of_handle(handle, h, err, 'flexmor_set_controller')) call h%run%set_control_law( &
+      from_c(label), c_law_t(callback=callback, user_data=user_data), err)
     code = to_c(err, errbuf, errlen)
   end function c_set_controller
 

@@ -7,6 +7,7 @@ module io_scene_analyses
   use io_namelist, only: nml_group_t
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_enum, rd_label, &
     only_with, rd_labels
+  use io_table, only: relative_to
   use model_scene, only: auto_integrator, scene_t, controller_rec_t, UPDATE_NAMES, UPDATE_NONE, &
     UPDATE_INTERVAL, UPDATE_MAC, JOINTS_NAMES, JOINTS_HELD, EVALUATION_NAMES, &
     EVALUATION_EXPANDED, ERROR_CHECK_NAMES, ERROR_CHECK_TOLERANCE, ERROR_CHECK_MODES, &
@@ -86,7 +87,9 @@ contains
     ! A user law computes its own errors: gains and a reference would be silently unused.
     call only_with(g, [character(len=9) :: 'kp', 'ki', 'kd', 'reference'], pid, &
       'with law = ''pid''', err)
-    call only_with(g, ['n_states'], .not. pid, 'with law = ''user''', err)
+    call only_with(g, [character(len=8) :: 'n_states', 'library', 'symbol', 'params'], &
+      .not. pid, 'with law = ''user''', err)
+    if (.not. pid) call read_library_law(g, r, err)
     if (err%ok() .and. pid .and. (size(r%actuator) /= 1 .or. size(r%measure) /= 1)) &
       call err%set(ERR_INPUT, g%where() // ': law = ''pid'' takes one ''actuator'' and ' // &
       'one ''measure'' (several: law = ''user'')')
@@ -96,6 +99,39 @@ contains
     if (err%ok() .and. .not. r%u_min < r%u_max) call err%set(ERR_INPUT, g%where() // &
       ': ''u_min'' must be below ''u_max''')
   end subroutine read_controller
+
+  !> law = 'user' from a shared library: `library` (relative to the scene file's folder, as a
+  !> table's `file`) and `symbol` go together; `params` only go to such a law (a law the
+  !> program gives gets the program's own data).
+  subroutine read_library_law(g, r, err)
+    type(nml_group_t), intent(inout) :: g
+    type(controller_rec_t), intent(inout) :: r
+    type(error_t), intent(inout) :: err
+    type(error_t) :: e
+    character(len=:), allocatable :: path
+    call rd_string(g, 'library', path, err)
+    call rd_string(g, 'symbol', r%symbol, err)
+    if (.not. err%ok()) return
+    if (g%has('library') .and. .not. g%has('symbol')) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''library'' needs ''symbol'', the ' // &
+        'name of the law''s function in it')
+    else if (g%has('symbol') .and. .not. g%has('library')) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''symbol'' needs ''library'', the ' // &
+        'shared library that has it')
+    else if (g%has('library') .and. len_trim(path) == 0) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''library'' must not be empty')
+    else if (g%has('symbol') .and. len_trim(r%symbol) == 0) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''symbol'' must not be empty')
+    else if (g%has('params') .and. .not. g%has('library')) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''params'' goes to a law from ' // &
+        '''library'' and ''symbol'' (a law the program gives gets the program''s own data)')
+    end if
+    if (.not. err%ok() .or. .not. g%has('library')) return
+    r%library = relative_to(g%path, path)
+    if (.not. g%has('params')) return
+    call g%get_real_array('params', r%params, e)
+    if (.not. e%ok()) err = e
+  end subroutine read_library_law
 
   subroutine read_linear(g, scene, err)
     type(nml_group_t), intent(inout) :: g

@@ -318,7 +318,7 @@ module io_schema_tables
     var_spec_t('motion', 'file', VK_STRING, '', 'law', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'table CSV file')]
-  type(var_spec_t), parameter :: CONTROLLER_VARS(13) = [ &
+  type(var_spec_t), parameter :: CONTROLLER_VARS(16) = [ &
     var_spec_t('controller', 'label', VK_STRING, '', '', .true., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'name (output /controllers/<label>)'), &
@@ -357,7 +357,16 @@ module io_schema_tables
       '', 'upper limit of the actuator'), &
     var_spec_t('controller', 'feedforward', VK_LOGICAL, '', '.false.', .false., &
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
-      '', 'add the rigid-body inverse dynamics of reference')]
+      '', 'add the rigid-body inverse dynamics of reference'), &
+    var_spec_t('controller', 'library', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'law = ''user'': shared library of the law'), &
+    var_spec_t('controller', 'symbol', VK_STRING, '', '', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'law = ''user'': the law''s C function in library'), &
+    var_spec_t('controller', 'params', VK_REAL_LIST, '', 'none', .false., &
+      -huge(1.0_wp), .false., huge(1.0_wp), .false., &
+      '', 'law = ''user'': values handed to the library''s law')]
   type(var_spec_t), parameter :: STATIC_VARS(8) = [ &
     var_spec_t('static', 'n_steps', VK_INT, '', '10', .false., &
       1.0_wp, .false., huge(1.0_wp), .false., &
@@ -519,7 +528,7 @@ module io_schema_tables
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       '', 'nodes whose static compliance is written')]
   !> Every variable, group by group.
-  type(var_spec_t), parameter :: SCHEMA(164) = [ &
+  type(var_spec_t), parameter :: SCHEMA(167) = [ &
     SCENE_VARS, NODE_VARS, LINK_VARS, HINGE_VARS, TRUSS_VARS, SLIDER_VARS, &
     MASS_VARS, FORCE_VARS, MOTION_VARS, CONTROLLER_VARS, &
     STATIC_VARS, MODAL_VARS, BUCKLING_VARS, LINEAR_VARS, DYNAMIC_VARS, REDUCTION_VARS, &

@@ -3,6 +3,7 @@ submodule (model_build) model_build_control
   use model_control, only: controller_t, ACT_MODE, ACT_COORD, MEAS_MODE, MEAS_COORD, LAW_USER, &
     LAW_PID, controller_sizes
   use model_scene, only: controller_rec_t, label_t
+  use model_control_c, only: c_law_t, load_library_law
   use core_strings, only: int_str
   use elements_base, only: mode_class_name
   implicit none
@@ -159,7 +160,8 @@ contains
         return
       end if
     end do
-    if (.not. r%feedforward) return
+    if (allocated(r%library)) call library_law(r, where, c, err)
+    if (.not. r%feedforward .or. .not. err%ok()) return
     ! The rigid model's inverse dynamics gives the torque (force) of a joint that follows its
     ! reference: the controller must drive the joint it measures.
     c%feedforward = .true.
@@ -173,6 +175,24 @@ contains
       call err%set(ERR_INPUT, where // ': variable ''feedforward'' needs a ''reference''')
     end if
   end subroutine controller_of
+
+  !> The law of a scene's `library` and `symbol`, with `params`: the model's, as a PID's gains
+  !> are, so that every run of the scene has it (the flexmor program, each sweep case, the
+  !> error check's second run). A law the program sets later replaces it.
+  subroutine library_law(r, where, c, err)
+    type(controller_rec_t), intent(in) :: r
+    character(len=*), intent(in) :: where
+    type(controller_t), intent(inout) :: c
+    type(error_t), intent(inout) :: err
+    type(c_law_t) :: law
+    type(error_t) :: e
+    call load_library_law(r%library, r%symbol, r%params, law, e)
+    if (e%ok()) then
+      allocate(c%user_law, source=law)
+    else
+      call err%set(e%code, where // ': ' // e%message)
+    end if
+  end subroutine library_law
 
   !> 'name.component' of an actuator (var = 'actuator') or a measured output: a joint's mode
   !> ('hinge.torque' / 'hinge.angle', 'truss.force' / 'truss.elongation') or a node's

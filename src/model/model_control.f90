@@ -1,10 +1,11 @@
 !> Feedback controllers of a model (docs/input.md, &controller): a PID law on one measured
 !> output, tracking a reference motion, acting through one actuator, or a law supplied by the
-!> program (law = 'user', a control_law_t) on several measured outputs and actuators with
-!> states of its own; continuous or sampled with a zero-order hold, within the actuators'
-!> limits. This module knows where a controller measures and acts and evaluates the PID law;
-!> the states of a run (the PID's integral, a user law's states, the held outputs) belong to
-!> the run (dynamics_control), so one model serves many runs.
+!> program or a shared library (law = 'user', a control_law_t; model_control_c has the laws
+!> written in C) on several measured outputs and actuators with states of its own; continuous
+!> or sampled with a zero-order hold, within the actuators' limits. This module knows where a
+!> controller measures and acts and evaluates the PID law; the states of a run (the PID's
+!> integral, a user law's states, the held outputs) belong to the run (dynamics_control), so
+!> one model serves many runs.
 module model_control
   use core_kinds, only: wp
   implicit none
@@ -22,9 +23,10 @@ module model_control
   integer, parameter :: LAW_PID = 1, LAW_USER = 2
 
   !> A control law supplied by the program that uses flexmor (law = 'user'; docs/api.md):
-  !> extend it and give it to run%set_control_law. The run keeps its own copy. evaluate is
-  !> called at trial states of the integrator (continuous) or once per sample (sampled), so a
-  !> law keeps its memory in x, never in itself (hence intent(in)).
+  !> extend it and give it to run%set_control_law. The run keeps its own copy, and copies of
+  !> a model copy it again (by assignment: a law must stay valid so). evaluate is called at
+  !> trial states of the integrator (continuous) or once per sample (sampled), so a law keeps
+  !> its memory in x, never in itself (hence intent(in)).
   type, abstract :: control_law_t
   contains
     procedure(law_evaluate), deferred :: evaluate
@@ -55,7 +57,8 @@ module model_control
     !> Where this controller's actuators, measured outputs and states start (0-based) in the
     !> run's arrays over all controllers (dynamics_t ctrl_u, ctrl_y, ctrl_x).
     integer :: u_offset = 0, y_offset = 0, x_offset = 0
-    !> The law of law = 'user', set by the program before the run.
+    !> The law of law = 'user': from the scene's `library` (model_build), or set by the
+    !> program before the run (which replaces a library's).
     class(control_law_t), allocatable :: user_law
     integer :: reference = 0                  !< motion index of the reference, 0: r = 0
     real(wp) :: kp = 0.0_wp, ki = 0.0_wp, kd = 0.0_wp

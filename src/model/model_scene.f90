@@ -188,6 +188,11 @@ module model_scene
     real(wp) :: kp = 0.0_wp, ki = 0.0_wp, kd = 0.0_wp, period = 0.0_wp
     real(wp) :: u_min = -huge(1.0_wp), u_max = huge(1.0_wp)
     logical :: feedforward = .false.
+    !> law = 'user' from a shared library: its path (resolved against the scene file's folder
+    !> when read), the name of the law's C function in it, and the values handed to the law
+    !> (unallocated when the program gives the law).
+    character(len=:), allocatable :: library, symbol
+    real(wp), allocatable :: params(:)
   end type controller_rec_t
 
   !> A linearised state-space model (docs/input.md, &linear).

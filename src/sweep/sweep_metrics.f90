@@ -6,12 +6,13 @@ module sweep_metrics
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
   use analysis_run, only: run_t
+  use model_control, only: LAW_PID
   implicit none
   private
   public :: METRIC_NAMES, METRIC_UNITS, case_metrics, not_available, check_metric_node
 
   !> The control errors are in the measured outputs' units (m or rad), the largest over all
-  !> controllers: NaN without &controller.
+  !> PID controllers: NaN without one (a user law's error is its own).
   !> error_check, error_check_rotation: the largest distance and rotation from the second run
   !> of &dynamic error_check (NaN without it, and the rotation without nodes that have one).
   character(len=20), parameter :: METRIC_NAMES(10) = [character(len=20) :: &
@@ -53,6 +54,7 @@ contains
     type(error_t), intent(out) :: err
     real(wp), allocatable :: deflection(:), zero(:)
     real(wp) :: motion_end
+    logical, allocatable :: pid(:)
     integer :: k, in, nt
     metrics = not_available()
     associate (dyn => run%dyn, model => run%dyn%model)
@@ -81,10 +83,13 @@ contains
       end if
       if (allocated(run%check_distance)) metrics(9) = maxval(run%check_distance)
       if (allocated(run%check_rotation)) metrics(10) = maxval(run%check_rotation)
-      if (allocated(run%control%error_hist)) then
-        if (size(run%control%error_hist, 1) > 0) then
-          metrics(7) = maxval(abs(run%control%error_hist))
-          metrics(8) = maxval(abs(run%control%error_hist(:, nt)))
+      ! A user law computes its errors itself: only the PIDs' r - y are known (the history's
+      ! rows of the others hold 0).
+      if (allocated(run%control%error_hist) .and. allocated(model%controllers)) then
+        pid = model%controllers%law_kind == LAW_PID
+        if (any(pid) .and. size(run%control%error_hist, 1) == size(pid)) then
+          metrics(7) = maxval(abs(run%control%error_hist), mask=spread(pid, 2, nt))
+          metrics(8) = maxval(abs(run%control%error_hist(:, nt)), mask=pid)
         end if
       end if
     end associate

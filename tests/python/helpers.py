@@ -1,15 +1,22 @@
 """What the Python tests share: where the executables are (FLEXMOR_BIN and FLEXMOR_SWEEP_BIN,
-set by CTest; a Debug build by default), a small scene, and loading a benchmark driver."""
+set by CTest; a Debug build by default) and the control law library, small scenes, the closed
+form of the examples' PD, and loading a benchmark driver."""
 import importlib.util
+import math
 import os
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[2]
 BIN = Path(os.environ.get("FLEXMOR_BIN", ROOT / "build-debug" / "bin" / "flexmor"))
 SWEEP_BIN = Path(os.environ.get("FLEXMOR_SWEEP_BIN",
                                 ROOT / "build-debug" / "bin" / "flexmor-sweep"))
+#: examples/c/pid_law.c built as a shared library by CTest (FLEXMOR_PID_LAW), a user control law
+#: for &controller library.
+PID_LAW = Path(os.environ.get("FLEXMOR_PID_LAW", ROOT / "build-debug" / "tests" / "pid_law.so"))
 
 #: A 1 m arm of two beam elements, hinged at a fixed base and driven by motion 'm1': the
 #: tests add the motion, masses and analyses they need.
@@ -38,6 +45,15 @@ TWO_LINK = """
 &mass node = 'elbow', m = 1.0 /
 &mass node = 'tip',   m = 3.0 /
 """
+
+def rigid_link_pd(t, tau=0.05, kp=2.0, kd=0.5):
+    """The angle of the rigid 1 m link of examples/c (J = rho A L^3 / 3) under a PD and a
+    constant torque tau from rest: J y'' + kd y' + kp y = tau, underdamped."""
+    j = 2700 * 1.0e-4 / 3
+    w, z = math.sqrt(kp / j), kd / (2 * math.sqrt(kp * j))
+    wd = w * math.sqrt(1 - z * z)
+    return tau / kp * (1 - np.exp(-z * w * t) * (np.cos(wd * t) + z * w / wd * np.sin(wd * t)))
+
 
 def load_driver(path):
     """A benchmark driver of scripts/ as a module (the drivers are scripts, not part of the

@@ -201,15 +201,17 @@ def test_bad_controller(tmp_path, ctrl, fragments):
     assert_clean_error(proc, out, "&controller", *fragments[1:])
 
 
-def test_user_law_needs_a_program(tmp_path):
-    """law = 'user' takes its law from a program through the API: the flexmor program has
-    none and says so (the library test test_user_control checks the same for run_t); without
-    a &dynamic analysis the controllers are not run, so the open-loop analyses work."""
+def test_user_law_needs_a_law(tmp_path):
+    """law = 'user' without `library` takes its law from a program through the API: the
+    flexmor program has none and says where one comes from (the library test
+    test_user_control checks the same for run_t); without a &dynamic analysis the controllers
+    are not run, so the open-loop analyses work."""
     ctrl = ("&hinge label = 'j1', node = 'base', link = 'arm', mode = 'dynamic' /\n"
             "&controller label = 'ext', law = 'user', actuator = 'j1.torque', "
             "measure = 'j1.angle', n_states = 1, period = 0.01 /\n")
     proc, out = run_scene(tmp_path, ARM + ctrl + RUN.format(t_end=0.1))
-    assert_clean_error(proc, out, "&controller 'ext'", "'law'", "'user'", "flexmor program")
+    assert_clean_error(proc, out, "&controller 'ext'", "'law'", "'user'", "'library'",
+                       "set_control_law")
     run_ok(tmp_path, ARM + ctrl + "&modal n_modes = 1 /\n", "modal")
 
 
