@@ -81,6 +81,11 @@ def load_node_path(path: str | os.PathLike, label: str = "tip") -> tuple[np.ndar
     path = os.fspath(path)
     with open_h5(path) as f:
         labels = _node_labels(f.get("nodes"))
+        if not labels and not isinstance(f.get("time"), h5py.Dataset):
+            # A static, modal or buckling result: no time histories at all.
+            raise ResultFileError(f"{path}: no dynamic run (no /time and no /nodes: the scene "
+                                  f"had no &dynamic group; a static run's nodes are under "
+                                  f"/static/nodes)")
         if label not in labels:
             available = ", ".join(labels) if labels else "none"
             raise ResultFileError(

@@ -70,6 +70,16 @@ def test_missing_label_lists_available(tmp_path):
     assert "hand" in message and "elbow, tip" in message and str(f) in message
 
 
+def test_result_without_a_dynamic_run(tmp_path):
+    """A static (or modal) result has no /time and no /nodes: said so, not 'available: none'."""
+    f = tmp_path / "static.h5"
+    with h5py.File(f, "w") as h5:
+        h5.attrs["flexmor_version"] = "0.1.0"
+        h5["static/nodes/tip/position"] = np.zeros((3, 3))
+    with pytest.raises(flexmor_results.ResultFileError, match="no dynamic run .*&dynamic"):
+        flexmor_results.load_node_path(f, "tip")
+
+
 def test_missing_file_and_not_hdf5(tmp_path):
     with pytest.raises(flexmor_results.ResultFileError, match="no such file"):
         flexmor_results.load_node_path(tmp_path / "nope.h5", "tip")
