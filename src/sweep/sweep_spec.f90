@@ -54,8 +54,8 @@ module sweep_spec
   real(wp), parameter :: INT_TOL = 1.0e-9_wp
 
   interface
-    !> The variable that names a group of a repeating kind (in sweep_spec_names; the cases use
-    !> it too: gfortran does not export a private procedure of the parent).
+    !> The variable that names a group of a repeating kind (in sweep_spec_names; declared here
+    !> because sweep_spec_cases uses it too, and a submodule sees no other submodule's own).
     pure module function key_var(group) result(v)
       character(len=*), intent(in) :: group
       character(len=:), allocatable :: v
