@@ -2,7 +2,7 @@
 !> a run whose steps have become too small to finish says so (crawl_text).
 program test_progress
   use core_kinds, only: wp, i8
-  use core_progress, only: eta_text, crawl_text
+  use core_progress, only: progress_t, eta_text, crawl_text
   use testing, only: suite_t
   implicit none
   type(suite_t) :: t
@@ -34,5 +34,52 @@ program test_progress
     'no progress at all: for the ETA to say')
   call t%check(crawl_text(1.0e-12_wp, 999_i8, 0.1_wp) == '', &
     'a few small steps (the first of a run): nothing')
+  call test_skip_pause(t)
   call t%finish()
+
+contains
+
+  !> A line after a pause of 0.2 s (a basis update) that moved the run by 1e-9: without
+  !> skip_pause its ETA extrapolates the pause (more than 10000 h), with it the rate starts
+  !> after the pause (0.5e9 times the microseconds between the two calls: far below it).
+  subroutine test_skip_pause(t)
+    type(suite_t), intent(inout) :: t
+    character(len=200) :: lines(2, 2)
+    integer :: skip
+    do skip = 1, 2
+      block
+        type(progress_t) :: p
+        integer :: u
+        open(newunit=u, status='scratch', action='readwrite')
+        p%enabled = .true.
+        p%interval = 0.0_wp
+        p%unit = u
+        call p%start('reduced', 0.0_wp, 1.0_wp)
+        call p%report_time(0.5_wp, 100_i8)
+        call pause(0.2_wp)
+        p%steps_done = 100
+        if (skip == 2) call p%skip_pause()
+        call p%report_time(0.5_wp + 1.0e-9_wp, 1_i8)
+        rewind(u)
+        read(u, '(a)') lines(1, skip)
+        read(u, '(a)') lines(2, skip)
+        close(u)
+      end block
+    end do
+    call t%check(index(lines(2, 1), 'more than 10000 h') > 0, 'without skip_pause: ' // &
+      trim(lines(2, 1)))
+    call t%check(index(lines(2, 2), 'more than 10000 h') == 0 .and. &
+      index(lines(2, 2), 'ETA') > 0, 'with skip_pause: ' // trim(lines(2, 2)))
+  end subroutine test_skip_pause
+
+  !> Wait `sec` seconds of wall time.
+  subroutine pause(sec)
+    real(wp), intent(in) :: sec
+    integer(i8) :: c0, c, rate
+    call system_clock(c0, rate)
+    do
+      call system_clock(c)
+      if (real(c - c0, wp) / rate >= sec) exit
+    end do
+  end subroutine pause
 end program test_progress

@@ -459,16 +459,24 @@ contains
     end if
   end subroutine run_buckling
 
-  !> One line naming the first load step whose equilibrium is unstable, if any.
+  !> One line naming the first load step whose equilibrium is unstable, if any. Arc-length
+  !> continuation is meant to pass limit points, so there it reports the branch it followed
+  !> instead of suggesting a cure.
   subroutine warn_unstable(this)
     type(run_t), intent(inout) :: this
     integer :: k, n
+    character(len=:), allocatable :: where
     if (all(this%static_stable)) return
     n = size(this%static_stable)
     k = findloc(this%static_stable, .false., dim=1)
-    call add_warning(this, 'static: equilibrium unstable from load step ' // int_str(k) // &
-      ' of ' // int_str(n) // ' (load factor ' // real_str(this%static_load_factor(k)) // &
-      '): the tangent stiffness is not positive definite (buckled? past a limit point? ' // &
-      'try a perturbation)')
+    where = ' from load step ' // int_str(k) // ' of ' // int_str(n) // ' (load factor ' // &
+      approx_str(this%static_load_factor(k)) // ')'
+    if (this%scene%static%method == STATIC_ARC_LENGTH) then
+      call add_warning(this, 'static: the path passes unstable equilibria' // where // &
+        ': past a limit point or a bifurcation (/static/stable marks each step)')
+    else
+      call add_warning(this, 'static: equilibrium unstable' // where // ': the tangent ' // &
+        'stiffness is not positive definite (buckled? past a limit point? try a perturbation)')
+    end if
   end subroutine warn_unstable
 end module analysis_run

@@ -91,8 +91,10 @@ contains
       if (.not. err%ok()) return
       if (iseg <= size(checks)) call check_basis(red, spec, seg_end, log, err)
       if (.not. err%ok()) return
-      if (associated(opts%progress) .and. spec%mode /= UPDATE_NONE) &
+      if (associated(opts%progress) .and. spec%mode /= UPDATE_NONE) then
         opts%progress%n_updates = log%n_updates
+        call opts%progress%skip_pause()
+      end if
       seg_start = seg_end
     end do
     if (red%expanded) call red%check_expansions()

@@ -62,6 +62,11 @@ contains
       nt = size(run%time)
       allocate(deflection(nt), zero(model%n_dy))
       zero = 0.0_wp
+      ! The kinematics was left at the run's end: Newton from there to the start of a large
+      ! motion fails (the sweep example's case with the joints turned by 3 pi / 4 and pi / 2).
+      ! The run's first configuration is next to the rigid one; each later rigid solution
+      ! starts from the one before.
+      call dyn%kin%restart_from(dyn%x_hist(:, 1))
       do k = 1, nt
         call dyn%kin%solve(model, dyn%full_q(run%time(k), zero), err)
         if (.not. err%ok()) return

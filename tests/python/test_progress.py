@@ -54,7 +54,12 @@ SHORT = "\n" + ARM + """&motion label = 'm1', law = 'cubic', start = 0, end = 0.
 DURATION = r"(\d+\.\d) (s|min|h)"
 # The ETA goes by the rate since the previous line; where nothing has advanced since (lines 1 ms
 # apart here) it says so instead.
-ETA = r"(?:, ETA " + DURATION + r"|, ETA unknown: no progress since the last line)?$"
+# A line whose fraction has hardly moved (a reduced run's first line after a basis update) may
+# promise 'more than 10000 h'; steps too small to finish would be named before the ETA.
+ETA = (r"(?:, steps of about \S+ s \(under 1e-7 of the run: too small to finish; a singular "
+       r"configuration\?\))?"
+       r"(?:, ETA " + DURATION + r"|, ETA more than 10000 h"
+       r"|, ETA unknown: no progress since the last line)?$")
 TIME_LINE = re.compile(
     r"^flexmor: (dynamic|reduced|check) +t = (\d+\.\d+) of (\d+\.\d+) s \((\d+\.\d) %\), (\d+) steps, "
     r"(?:(\d+) basis updates, )?" + DURATION + r" elapsed" + ETA)
