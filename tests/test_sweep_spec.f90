@@ -24,6 +24,12 @@ program test_sweep_spec
     // "&motion label = 'm1', end = 1.0, duration = 0.5 /" // NL // &
     "&mass node = 'c', m = 2.0 /" // NL // &
     "&dynamic t_end = 1.0 /" // NL
+  !> The same scene with lists: gravity, and a table motion.
+  character(len=*), parameter :: LIST_SCENE = BASE_SCENE(:index(BASE_SCENE, '&motion') - 1) // &
+    "&motion label = 'm1', law = 'table', times = 0, 0.5, 1, values = 0, 0.25, 1 /" // NL // &
+    "&mass node = 'c', m = 2.0 /" // NL // &
+    "&scene gravity = 0.5, -9.81 /" // NL // &
+    "&dynamic t_end = 1.0 /" // NL
   type(suite_t) :: t
 
   call t%init('sweep specification')
@@ -37,6 +43,8 @@ program test_sweep_spec
   call test_apply_case()
   call test_errors()
   call test_base_errors()
+  call test_list_entries()
+  call test_list_entry_errors()
   call t%finish()
 
 contains
@@ -288,12 +296,10 @@ contains
     call apply_case(s, base, 2, case_file, err)
     call t%check(.not. err%ok(), 'case number out of range: ' // err%message)
     ! One &parameter, several variables: both take the case's value.
-    call base%parse(BASE_SCENE, 'base.nml', err)
     call parse_ok(s, SWEEP // "&parameter name = 'link.l1.E', 'link.l2.E', values = 1e9, 2e9 /", &
       'tied names')
-    call apply_case(s, base, 2, case_file, err)
-    if (err%ok()) call read_scene(case_file, scene, err)
-    call t%check(err%ok() .and. s%n_cases() == 2 .and. s%n_parameters() == 1 .and. &
+    call t%check(case_scene(s, BASE_SCENE, 2, scene, 'tied names') .and. s%n_cases() == 2 .and. &
+      s%n_parameters() == 1 .and. &
       scene%links(1)%e_modulus == 2.0e9_wp .and. scene%links(2)%e_modulus == 2.0e9_wp, &
       'tied names: one column, every named variable set')
   end subroutine test_apply_case
@@ -318,7 +324,11 @@ contains
     call parse_fails(SWEEP // "&parameter name = 'motion.m1.law', values = 1 /", &
       [character(40) :: "'motion.m1.law'", 'keyword', 'cannot be swept'], 'keyword variable')
     call parse_fails(SWEEP // "&parameter name = 'scene.gravity', values = 1 /", &
-      [character(40) :: "'scene.gravity'", 'list', 'cannot be swept'], 'list variable')
+      [character(40) :: "'scene.gravity'", 'real list', "'scene.gravity(1)'"], &
+      'list variable without an entry')
+    call parse_fails(SWEEP // "&parameter name = 'link.l1.bending(1)', values = 1 /", &
+      [character(40) :: "'link.l1.bending(1)'", 'keyword list', 'cannot be swept'], &
+      'entry of a keyword list')
     call parse_fails(SWEEP // "&parameter name = 'link.l1.n_elements', values = 2, 2.5 /", &
       [character(40) :: "'link.l1.n_elements'", 'value 2 (2.5)', 'not a whole number'], &
       'non-integral value of an integer variable')
@@ -424,6 +434,73 @@ contains
       [character(40) :: "'mass.c.m'", '2 &mass groups', "node 'c'"], 'ambiguous key', &
       BASE_SCENE // "&mass node = 'c', m = 1 /" // NL)
   end subroutine test_base_errors
+
+  !> Parameters on one entry of a list: that entry takes the case's value, the others stay.
+  subroutine test_list_entries()
+    type(sweep_spec_t) :: s
+    type(scene_t) :: scene
+    call parse_ok(s, SWEEP // &
+      "&parameter name = 'scene.gravity(2)', values = -1.5, -3.25 /" // NL // &
+      "&parameter name = ' motion.m1.values( 2 ) ', values = 0.125 /" // NL // &
+      "&parameter name = 'motion.m1.values(3)', values = 0.75 /" // NL // &
+      "&parameter name = 'motion.m1.times(2)', values = 0.375 /", 'list entries')
+    call t%check(s%names(1)%s == 'scene.gravity(2)' .and. s%n_cases() == 2, &
+      'names with an entry kept as given')
+    if (.not. case_scene(s, LIST_SCENE, 2, scene, 'a case with list entries')) return
+    call t%check(scene%gravity(1) == 0.5_wp .and. scene%gravity(2) == -3.25_wp, &
+      'gravity(2) set, gravity(1) as the base has it')
+    call t%check(all(scene%motions(1)%values == [0.0_wp, 0.125_wp, 0.75_wp]), &
+      'two entries of one list, both set')
+    call t%check(all(scene%motions(1)%times == [0.0_wp, 0.375_wp, 1.0_wp]), &
+      'a second list of the same group')
+  end subroutine test_list_entries
+
+  !> Case icase of s written into the scene base_text and read by the scene reader: true if
+  !> both worked (checked as `what`).
+  logical function case_scene(s, base_text, icase, scene, what) result(ok)
+    type(sweep_spec_t), intent(in) :: s
+    character(len=*), intent(in) :: base_text, what
+    integer, intent(in) :: icase
+    type(scene_t), intent(out) :: scene
+    type(nml_file_t) :: base, case_file
+    type(error_t) :: err
+    call base%parse(base_text, 'base.nml', err)
+    if (err%ok()) call apply_case(s, base, icase, case_file, err)
+    if (err%ok()) call read_scene(case_file, scene, err)
+    ok = err%ok()
+    call t%check(ok, what // ' reads')
+    if (.not. ok) write(*, '(a)') '        ' // err%message
+  end function case_scene
+
+  !> Errors of a name with an entry: in the sweep file alone, and against the base scene.
+  subroutine test_list_entry_errors()
+    call parse_fails(SWEEP // "&parameter name = 'dynamic.rtol(1)', values = 1 /", &
+      [character(40) :: 'sweep.nml:2', '&parameter #1', "'dynamic.rtol(1)'", "'rtol'", &
+      'not a list', "without '(1)'"], 'entry of a scalar variable')
+    call parse_fails(SWEEP // "&parameter name = 'scene.gravity(1.5)', values = 1 /", &
+      [character(40) :: '&parameter #1', "'scene.gravity(1.5)'", "'(1.5)'", 'whole number'], &
+      'non-integer entry')
+    call parse_fails(SWEEP // "&parameter name = 'scene.gravity(-1)', values = 1 /", &
+      [character(40) :: "'scene.gravity(-1)'", "'(-1)'", 'at least 1'], 'negative entry')
+    call parse_fails(SWEEP // "&parameter name = 'scene.gravity()', values = 1 /", &
+      [character(40) :: "'scene.gravity()'", "'()'", 'whole number'], 'empty entry')
+    call parse_fails(SWEEP // "&parameter name = 'scene.gravity(0)', values = 1 /", &
+      [character(40) :: '&parameter #1', "'scene.gravity(0)'", 'entry 0', 'count from 1'], &
+      'entry 0')
+    call parse_fails(SWEEP // "&parameter name = 'scene.gravity2)', values = 1 /", &
+      [character(40) :: "'scene.gravity2)'", "without '('"], "')' without '('")
+    call parse_fails(SWEEP // "&parameter name = 'scene.gravity(2)', values = 1 /" // NL // &
+      "&parameter name = 'scene.gravity(1)', values = 2 /" // NL // &
+      "&parameter name = 'Scene.Gravity(2)', values = 3 /", &
+      [character(40) :: '&parameter #3', "'Scene.Gravity(2)'", "#1 'scene.gravity(2)'"], &
+      'the same entry twice')
+    call base_fails("&parameter name = 'scene.gravity(3)', values = 1 /", &
+      [character(40) :: 'sweep.nml:2', '&parameter #1', "'scene.gravity(3)'", 'entry 3', &
+      "'gravity'", "'base.nml'", 'has 2 entries'], 'entry beyond the base list', LIST_SCENE)
+    call base_fails("&parameter name = 'motion.m1.times(1)', values = 1 /", &
+      [character(40) :: '&parameter #1', "'motion.m1.times(1)'", "does not set 'times'", &
+      "'base.nml'"], 'a list the base scene does not set')
+  end subroutine test_list_entry_errors
 
   !> apply_case on the base scene must fail with a message containing `parts`.
   subroutine base_fails(params, parts, what, base_text)

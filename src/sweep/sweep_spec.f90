@@ -10,9 +10,6 @@ module sweep_spec
   use core_error, only: error_t, ERR_INPUT
   use core_strings, only: int_str, real_str, lower_case
   use io_namelist, only: nml_file_t, nml_group_t, string_t
-  use io_namelist_lexer, only: is_name
-  use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS, SCHEMA, find_spec, kind_name, VK_REAL, &
-    VK_INT
   implicit none
   private
   public :: sweep_spec_t, apply_case
@@ -22,6 +19,8 @@ module sweep_spec
     character(len=:), allocatable :: name        ! as given
     character(len=:), allocatable :: origin      ! "sweep.nml:7: group &parameter #2 'name'"
     character(len=:), allocatable :: group, key, var   ! group and var lower case; key '' if none
+    !> The entry of a list variable, 'scene.gravity(2)'; 0 for a variable that is one number.
+    integer :: entry = 0
     logical :: is_int = .false.
     real(wp), allocatable :: list(:)             ! product/zip
     real(wp) :: lo = 0, hi = 0                   ! random/lhs (integer variables: integral)
@@ -55,12 +54,21 @@ module sweep_spec
   real(wp), parameter :: INT_TOL = 1.0e-9_wp
 
   interface
-    !> The variable that names a group of a repeating kind (in sweep_spec_cases, which uses it
-    !> too: gfortran does not export a private procedure of the parent).
+    !> The variable that names a group of a repeating kind (in sweep_spec_names; declared here
+    !> because sweep_spec_cases uses it too, and a submodule sees no other submodule's own).
     pure module function key_var(group) result(v)
       character(len=*), intent(in) :: group
       character(len=:), allocatable :: v
     end function key_var
+    !> p%name ('group.variable', 'group.key.variable', either with '(k)' for one entry of a
+    !> list) into p's group, key, var and entry, checked against the scene schema.
+    module subroutine split_name(p, err)
+      type(param_t), intent(inout) :: p
+      type(error_t), intent(inout) :: err
+    end subroutine split_name
+    pure module logical function same_target(a, b)
+      type(param_t), intent(in) :: a, b
+    end function same_target
     module subroutine gen_product(this, err)
       type(sweep_spec_t), intent(inout) :: this
       type(error_t), intent(inout) :: err
@@ -435,72 +443,6 @@ contains
     end do
   end subroutine check_integral
 
-  !> 'group.variable' or 'group.key.variable' into its parts; a key may itself contain dots
-  !> (everything between the first and the last dot).
-  subroutine split_name(p, err)
-    type(param_t), intent(inout) :: p
-    type(error_t), intent(inout) :: err
-    character(len=:), allocatable :: name
-    integer :: d1, d2, k
-
-    name = trim(adjustl(p%name))
-    d1 = index(name, '.')
-    d2 = index(name, '.', back=.true.)
-    if (d1 == 0) then
-      call err%set(ERR_INPUT, p%origin // ": a name has the form 'group.variable' or " // &
-        "'group.key.variable' (e.g. 'dynamic.rtol', 'link.link1.E')")
-      return
-    end if
-    p%group = lower_case(name(1:d1 - 1))
-    p%var = lower_case(name(d2 + 1:))
-    p%key = ''
-    if (d2 > d1) p%key = name(d1 + 1:d2 - 1)
-
-    if (all(SCENE_GROUPS /= p%group)) then
-      call err%set(ERR_INPUT, p%origin // ": unknown group '" // p%group // "' (scene groups: " &
-        // join(SCENE_GROUPS) // ')')
-      return
-    end if
-    if (any(SINGLE_GROUPS == p%group)) then
-      if (d2 > d1) then
-        call err%set(ERR_INPUT, p%origin // ': group &' // p%group // ' appears at most ' // &
-          "once and takes no key: write '" // name(1:d1 - 1) // '.' // name(d2 + 1:) // "'")
-        return
-      end if
-    else if (d2 == d1) then
-      call err%set(ERR_INPUT, p%origin // ': group &' // p%group // ' may repeat: name ' // &
-        "one by its " // key_var(p%group) // ", '" // name(1:d1 - 1) // '.<' // &
-        key_var(p%group) // '>.' // name(d2 + 1:) // "'")
-      return
-    else if (len(p%key) == 0) then
-      call err%set(ERR_INPUT, p%origin // ': the key (the group''s ' // key_var(p%group) // &
-        ') is empty')
-      return
-    end if
-    if (.not. is_name(p%var)) then
-      call err%set(ERR_INPUT, p%origin // ": '" // p%var // "' is not a variable name")
-      return
-    end if
-
-    k = find_spec(p%group, p%var)
-    if (k == 0) then
-      call err%set(ERR_INPUT, p%origin // ": &" // p%group // " has no variable '" // p%var // &
-        "' (docs/input.md lists them)")
-      return
-    end if
-    if (SCHEMA(k)%kind /= VK_REAL .and. SCHEMA(k)%kind /= VK_INT) then
-      call err%set(ERR_INPUT, p%origin // ": variable '" // p%var // "' of &" // p%group // &
-        ' is a ' // kind_name(SCHEMA(k)%kind) // ', not one number: it cannot be swept')
-      return
-    end if
-    p%is_int = SCHEMA(k)%kind == VK_INT
-  end subroutine split_name
-
-  pure logical function same_target(a, b)
-    type(param_t), intent(in) :: a, b
-    same_target = a%group == b%group .and. a%key == b%key .and. a%var == b%var
-  end function same_target
-
   ! ---------------------------------------------------------------- sizes
 
   pure integer function spec_n_cases(this) result(n)
@@ -515,16 +457,4 @@ contains
     if (allocated(this%names)) n = size(this%names)
   end function spec_n_parameters
 
-  ! ---------------------------------------------------------------- text helpers
-
-  function join(items) result(s)
-    character(len=*), intent(in) :: items(:)
-    character(len=:), allocatable :: s
-    integer :: i
-    s = ''
-    do i = 1, size(items)
-      if (i > 1) s = s // ', '
-      s = s // trim(items(i))
-    end do
-  end function join
 end module sweep_spec

@@ -4,17 +4,10 @@ submodule (sweep_spec) sweep_spec_cases
   use core_kinds, only: i8
   use core_error, only: ERR_INTERNAL
   use sweep_random, only: rng_t, rng_init, uniform, permutation
+  use io_schema, only: SINGLE_GROUPS
   implicit none
 
 contains
-
-  module procedure key_var
-    if (group == 'mass' .or. group == 'force') then
-      v = 'node'
-    else
-      v = 'label'
-    end if
-  end procedure key_var
 
   ! ---------------------------------------------------------------- generating the cases
 
@@ -155,12 +148,59 @@ contains
     real(wp), intent(in) :: x
     type(nml_file_t), intent(inout) :: scene_file
     type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: text
     integer :: ig
     call find_group(p, scene_file, ig, err)
     if (.not. err%ok()) return
-    call scene_file%groups(ig)%set_raw(p%var, value_text(x, p%is_int), err)
+    if (p%entry > 0) then
+      call entry_text(p, x, scene_file%groups(ig), scene_file%path, text, err)
+      if (.not. err%ok()) return
+    else
+      text = value_text(x, p%is_int)
+    end if
+    call scene_file%groups(ig)%set_raw(p%var, text, err)
     if (.not. err%ok()) call err%prefix(p%origin // ': ')
   end subroutine set_value
+
+  !> The group's list p%var with entry p%entry replaced by x, as namelist text: a namelist sets
+  !> a list whole, so the other entries are written back as the scene (or an earlier
+  !> parameter on another entry) has them.
+  subroutine entry_text(p, x, group, path, text, err)
+    type(param_t), intent(in) :: p
+    real(wp), intent(in) :: x
+    type(nml_group_t), intent(in) :: group
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable, intent(out) :: text
+    type(error_t), intent(inout) :: err
+    type(nml_group_t) :: g
+    real(wp), allocatable :: list(:)
+    integer :: i
+
+    g = group   ! a copy: reading the list must not mark it used in the scene
+    if (.not. g%has(p%var)) then
+      call err%set(ERR_INPUT, p%origin // ': &' // p%group // " of the base scene '" // path // &
+        "' does not set '" // p%var // "': a sweep changes one entry of a list the base " // &
+        'scene gives (write the whole list there)')
+      return
+    end if
+    call g%get_real_array(p%var, list, err)
+    if (.not. err%ok()) then
+      call err%prefix(p%origin // ': ')
+      return
+    end if
+    if (p%entry > size(list)) then
+      call err%set(ERR_INPUT, p%origin // ': entry ' // int_str(p%entry) // " of '" // p%var // &
+        "' is beyond the list of &" // p%group // " in the base scene '" // path // "', " // &
+        'which has ' // int_str(size(list)) // ' entries')
+      return
+    end if
+    list(p%entry) = x
+    text = ''
+    do i = 1, size(list)
+      if (i > 1) text = text // ', '
+      text = text // value_text(list(i), .false.)
+    end do
+  end subroutine entry_text
 
   !> Index in `file%groups` of the group the parameter names.
   subroutine find_group(p, file, ig, err)

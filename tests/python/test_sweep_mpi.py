@@ -358,8 +358,8 @@ def test_library_law_sweep(tmp_path):
     disturbance torque under mpirun with 2 ranks: the worker rank loads the library itself.
     Each case's tip follows the PD's closed form with its torque (observed 1.8e-10 rad at BDF
     rtol 1e-9; bound 1e-8 rad), the control-error metrics are NaN (a user law's error is its
-    own) and the cases are those of a serial sweep, bit for bit. The law's params are one
-    list, which a sweep cannot set element by element: refused with a message."""
+    own) and the cases are those of a serial sweep, bit for bit. The law's params are a
+    list: a name without an entry is refused with a message."""
     import flexmor
     base = (ROOT / "examples" / "c" / "rigid_link_library.nml").read_text()
     base = base.replace("t_end = 10.0", "t_end = 2.0")
@@ -389,6 +389,88 @@ def test_library_law_sweep(tmp_path):
 """)
     proc = run_sweep(tmp_path, out="params.h5")
     assert proc.returncode == 1 and "'params'" in proc.stderr and "list" in proc.stderr
+    assert "'controller.ext.params(1)'" in proc.stderr
+
+
+@pytest.mark.skipif(not PID_LAW.is_file(), reason="pid_law.so not built")
+def test_sweep_of_library_law_params(tmp_path):
+    """Entries of a library law's params swept under mpirun with 2 ranks: kp = params(1) and
+    kd = params(3) of examples/c/rigid_link_library.nml's PD (two entries of one list, each
+    its own &parameter), the other entries as the base scene has them. Each case's tip follows
+    the PD's closed form with its own kp and kd (observed 2.5e-10 rad at BDF rtol 1e-9; bound
+    1e-8 rad), so the larger kp settles nearer zero (tau / kp); the sweep file keeps the names
+    as given, and summary and plot take them. An entry beyond the four params, or the same
+    entry twice, is refused before any case runs."""
+    import flexmor
+    from flexmor import sweep_plot, sweep_summary
+    base = (ROOT / "examples" / "c" / "rigid_link_library.nml").read_text()
+    base = base.replace("t_end = 10.0", "t_end = 2.0")
+    shutil.copy(PID_LAW, tmp_path / "pid_law.so")
+    kp, kd = "controller.ext.params(1)", "controller.ext.params(3)"
+    write_inputs(tmp_path, f"""&sweep base = 'base.nml', node = 'tip', case_files = .true. /
+&parameter name = '{kp}', values = 2.0, 8.0 /
+&parameter name = '{kd}', values = 0.5, 0.25 /
+""", base)
+    proc = run_sweep(tmp_path, 2)
+    assert proc.returncode == 0, proc.stderr
+    sweep = flexmor.read_sweep(tmp_path / "out.h5")
+    assert sweep.parameter_names == [kp, kd] and list(sweep.status) == [0, 0, 0, 0]
+    final = []
+    for i in range(4):
+        gain, damping = sweep.parameter(kp)[i], sweep.parameter(kd)[i]
+        assert (gain, damping) == ([2.0, 8.0][i // 2], [0.5, 0.25][i % 2])
+        result = flexmor.read_result(sweep.case_file(i))
+        tip = result.nodes["tip"].position
+        angle = np.arctan2(tip[:, 1], tip[:, 0])
+        assert np.max(np.abs(angle - rigid_link_pd(result.time, kp=gain, kd=damping))) < 1e-8
+        assert result.attrs["input_overrides"].startswith(f"{kp} = ")
+        final.append(abs(angle[-1]))
+    assert max(final[2:]) < min(final[:2])
+    assert sweep_summary.main([str(tmp_path / "out.h5"), "--csv", str(tmp_path / "s.csv")]) == 0
+    assert (tmp_path / "s.csv").read_text().splitlines()[0].count("controller.ext.params(") == 2
+    png = tmp_path / "kp.png"
+    assert sweep_plot.main([str(tmp_path / "out.h5"), "--metric", "max_tip_deflection", "--x",
+                            kp, "--where", f"{kd}=0.5", "-o", str(png)]) == 0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    for extra, fragments in [
+            (f"&parameter name = 'controller.ext.params(5)', values = 1 /",
+             ["'controller.ext.params(5)'", "entry 5", "has 4 entries", "base.nml"]),
+            (f"&parameter name = '{kp}', values = 1 /\n&parameter name = '{kp}', values = 2 /",
+             ["&parameter #2", f"'{kp}'", "the same scene variable"])]:
+        (tmp_path / "sweep.nml").write_text("&sweep base = 'base.nml', node = 'tip' /\n" + extra
+                                            + "\n")
+        proc = run_sweep(tmp_path, out="bad.h5")
+        assert proc.returncode == 1, proc.stderr
+        assert all(f in proc.stderr for f in fragments), proc.stderr
+        assert not (tmp_path / "bad.h5").exists()
+
+
+def test_sweep_of_gravity_entry_matches_direct_runs(tmp_path):
+    """scene.gravity(2) swept on the flexible arm of BASE with &scene gravity = 0.5, -9.81
+    (gx stays 0.5): each case's result file holds the tip path a flexmor run of the scene
+    with that gravity written by hand gives (the same scene: observed identical, bound
+    1e-12 m), and the stronger gravity deflects the tip more (observed 0.4900 and 0.4954 m)."""
+    base = "&scene gravity = 0.5, -9.81 /\n" + BASE
+    write_inputs(tmp_path, """&sweep base = 'base.nml', node = 'tip', case_files = .true. /
+&parameter name = 'scene.gravity(2)', values = -3.0, -30.0 /
+""", base)
+    proc = run_sweep(tmp_path, 2)
+    assert proc.returncode == 0, proc.stderr
+    import flexmor
+    sweep = flexmor.read_sweep(tmp_path / "out.h5")
+    assert list(sweep.status) == [0, 0]
+    assert np.array_equal(sweep.parameter("scene.gravity(2)"), [-3.0, -30.0])
+    for i, gy in enumerate(["-3.0", "-30.0"]):
+        (tmp_path / f"direct{i}.nml").write_text(base.replace("-9.81", gy))
+        direct = subprocess.run([str(FLEXMOR_BIN), f"direct{i}.nml", "-o", f"direct{i}.h5",
+                                 "-q"], cwd=tmp_path, env=ENV, capture_output=True, text=True,
+                                timeout=600)
+        assert direct.returncode == 0, direct.stderr
+        want = flexmor.read_result(tmp_path / f"direct{i}.h5").nodes["tip"].position
+        got = flexmor.read_result(sweep.case_file(i)).nodes["tip"].position
+        assert got.shape == want.shape and np.max(np.abs(got - want)) < 1e-12
+    deflection = sweep.metric("max_tip_deflection")
+    assert deflection[1] > deflection[0] > 0
 
 
 def test_example_sweep_every_case_runs(tmp_path):
