@@ -1,8 +1,9 @@
 !> The dynamic analysis of a run: the integrator and its options, the full or reduced model,
 !> the controllers' sampling times and feedforward.
 submodule (analysis_run) analysis_run_dynamic
-  use model_scene, only: UPDATE_NONE, JOINTS_HELD, EVALUATION_EXPANDED
-  use integrators_system, only: INTEGRATOR_AUTO, INTEGRATOR_GALPHA_ADAPTIVE, INTEGRATOR_NAMES
+  use model_scene, only: UPDATE_NONE, JOINTS_HELD, EVALUATION_EXPANDED, auto_by_stiffness
+  use integrators_system, only: INTEGRATOR_AUTO, INTEGRATOR_GALPHA_ADAPTIVE, INTEGRATOR_ERK, &
+    INTEGRATOR_NAMES
   implicit none
 
 contains
@@ -31,6 +32,7 @@ contains
       call run_reduced(this, opts, breaks, err)
     else
       if (opts%method == INTEGRATOR_AUTO) call choose_integrator(this, opts, full_omega_max(this))
+      if (opts%method == INTEGRATOR_ERK) call warn_explicit_on_stiff(this, full_omega_max(this))
       call this%dyn%allocate_history(size(this%time))
       allocate(v0(this%dyn%model%n_dy))
       v0 = 0.0_wp
@@ -82,6 +84,26 @@ contains
     if (this%verbose) write(*, '(a)') 'integrator: ' // trim(INTEGRATOR_NAMES(opts%method)) // &
       ' (' // this%integrator_choice // ')'
   end subroutine choose_integrator
+
+  !> integrator = 'erk' on a model that 'auto' would call stiff: an explicit method's step is
+  !> held to about 3 / omega_max by stability whatever rtol asks (stage_pid.nml, its 2 s at
+  !> 'erk', ran for minutes), which the user should hear before waiting. omega_max < 0: not
+  !> known, nothing said.
+  subroutine warn_explicit_on_stiff(this, omega_max)
+    type(run_t), intent(inout) :: this
+    real(wp), intent(in) :: omega_max
+    real(wp) :: span
+    span = this%time(size(this%time)) - this%time(1)
+    if (.not. omega_max > 0.0_wp) return
+    if (auto_by_stiffness(omega_max, span) /= INTEGRATOR_GALPHA_ADAPTIVE) return
+    ! Appended here: gfortran keeps the parent's private add_warning local to its object.
+    if (.not. allocated(this%warnings)) allocate(this%warnings(0))
+    this%warnings = [this%warnings, string_t('dynamic: integrator = ''erk'' on a stiff ' // &
+      'model: its fastest mode (' // approx_str(omega_max / TWO_PI) // ' Hz) holds an ' // &
+      'explicit step to about ' // approx_str(3.0_wp / omega_max) // ' s, some ' // &
+      approx_str(span * omega_max / 3.0_wp) // ' steps over the run; ''galpha_adaptive'' ' // &
+      'or ''bdf'' (or ''auto'') are not so limited')]
+  end subroutine warn_explicit_on_stiff
 
   !> The fastest natural frequency [rad/s] of the full model at the start (joints locked), or
   !> -1 when the model is too large for all its modes or they cannot be computed (a singular
@@ -166,6 +188,8 @@ contains
     this%initial_basis = this%red%basis
     run_opts = opts
     if (run_opts%method == INTEGRATOR_AUTO) call choose_integrator(this, run_opts, &
+      TWO_PI * maxval(this%red%basis%frequency_hz))
+    if (run_opts%method == INTEGRATOR_ERK) call warn_explicit_on_stiff(this, &
       TWO_PI * maxval(this%red%basis%frequency_hz))
     if (this%verbose) write(*, '(a,i0,a,*(f0.3,:,", "))') 'reduction: ', &
       this%red%basis%k(), ' modes (' // this%red%basis%reason // '), [Hz]: ', &

@@ -75,3 +75,18 @@ def test_options_of_the_other_integrator(tmp_path, given, fragments):
     proc, out = run_scene(tmp_path, ARM + MOTION +
                           f"&dynamic t_end = 0.01, output_dt = 1e-3, {given} /\n")
     assert_clean_error(proc, out, "&dynamic", *fragments)
+
+
+@pytest.mark.parametrize("reduction, warned", [("", True), ("&reduction n_modes = 2 /\n", False)])
+def test_erk_on_a_stiff_model_is_warned(tmp_path, reduction, warned):
+    """integrator = 'erk' where 'auto' would find the model stiff (the full two-link: its
+    fastest mode, 4.2 kHz, turns through 1300 rad in 0.05 s; stability holds an explicit step
+    to about 3 / omega = 1.1e-4 s) gets a warning naming that step; the 2-mode reduced model
+    (23 Hz) is not stiff and gets none."""
+    text = re.sub(r"&dynamic[^/]*/", "&dynamic t_end = 0.05, integrator = 'erk' /",
+                  TWO_LINK) + reduction
+    proc, _ = run_scene(tmp_path, text)
+    assert proc.returncode == 0, proc.stderr
+    assert ("integrator = 'erk' on a stiff model" in proc.stderr) == warned, proc.stderr
+    if warned:
+        assert "holds an explicit step to about 1.13E-04 s" in proc.stderr, proc.stderr
