@@ -2,8 +2,8 @@
 reference run (the full model, or a finer reduction) is given.
 
 Two panels: the error estimate (m) at the outputs, the exact measurements of an expanded run
-(``/reduction/measured``: where a new expansion was needed, the farthest state an expansion
-served, the output samples) and the basis updates; with ``--reference`` the largest distance
+(``/reduction/measured``: where the first expansion was made, the farthest accepted state an
+expansion served, the output samples) and the basis updates; with ``--reference`` the largest distance
 of the output nodes the two files share from the reference's, interpolated to the reduced
 run's output times. Below, the residual norm of the full equations.
 
@@ -29,7 +29,7 @@ from flexmor.results import Result, ResultFileError, distance_from
 PROG = "flexmor-plot-reduction"
 
 #: Codes of /reduction/measured/kind (docs/output.md) and how they are drawn.
-MEASURED_KINDS = {1: ("new expansion needed", "v"), 2: ("farthest state served", "D"),
+MEASURED_KINDS = {1: ("first expansion", "v"), 2: ("farthest state served", "D"),
                   3: ("output sample", "o")}
 
 

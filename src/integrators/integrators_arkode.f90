@@ -128,10 +128,14 @@ contains
     real(wp), intent(in) :: t_target
     real(wp), intent(out) :: q(:), v(:)
     type(error_t), intent(inout) :: err
+    real(wp) :: t_before
 
     do while (this%t < t_target)
+      t_before = this%t
       call take_step(this, t_target, err)
       if (.not. err%ok()) return
+      ! Not after a retry from the last accepted state (take_step then did not advance).
+      if (this%t > t_before) call sys%step_accepted(this%t, this%q_accepted, this%v_accepted)
       if (associated(this%progress)) call report_progress(this)
     end do
     if (this%t == t_target) then

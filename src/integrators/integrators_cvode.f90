@@ -22,7 +22,7 @@ module integrators_cvode
   use fsundials_linearsolver_mod, only: SUNLinearSolver, FSUNLinSolFree
   use fsunmatrix_dense_mod, only: FSUNDenseMatrix, FSUNDenseMatrix_Data
   use fsunlinsol_dense_mod, only: FSUNLinSol_Dense
-  use fcvode_mod, only: CV_BDF, CV_NORMAL, FCVodeCreate, FCVodeInit, FCVodeReInit, FCVodeFree, &
+  use fcvode_mod, only: CV_BDF, CV_NORMAL, CV_ONE_STEP, FCVodeGetDky, FCVodeCreate, FCVodeInit, FCVodeReInit, FCVodeFree, &
     FCVode, FCVodeSStolerances, FCVodeSetUserData, FCVodeSetErrHandlerFn, &
     FCVodeSetLinearSolver, FCVodeSetJacFn, FCVodeSetMaxOrd, FCVodeSetMaxStep, FCVodeSetMinStep, &
     FCVodeSetMaxNumSteps, FCVodeSetStopTime, FCVodeGetNumSteps, FCVodeGetNumJacEvals, &
@@ -149,7 +149,34 @@ contains
     if (.not. err%ok()) return
 
     this%bridge%bad_status = 0
-    flag = FCVode(this%mem, t_target, this%y, t_reached, CV_NORMAL)
+    if (.not. sys%wants_steps()) then
+      flag = FCVode(this%mem, t_target, this%y, t_reached, CV_NORMAL)
+      if (flag < 0) then
+        call report_failure(this, flag, t_target, err)
+        return
+      end if
+      call get_state(this%y, q, v)
+      return
+    end if
+    ! Step by step, each accepted state to the system, then CVODE's interpolant at t_target
+    ! (what CV_NORMAL does inside).
+    do
+      if (steps_left < 1) then
+        call err%set(ERR_NUMERIC, 'CVODE: max_steps reached before t = ' // real_str(t_target))
+        return
+      end if
+      steps_left = steps_left - 1
+      flag = FCVode(this%mem, t_target, this%y, t_reached, CV_ONE_STEP)
+      if (flag < 0) then
+        call report_failure(this, flag, t_target, err)
+        return
+      end if
+      call get_state(this%y, q, v)
+      call sys%step_accepted(t_reached(1), q, v)
+      if (t_reached(1) >= t_target) exit
+    end do
+    if (t_reached(1) == t_target) return
+    flag = FCVodeGetDky(this%mem, t_target, 0_c_int, this%y)
     if (flag < 0) then
       call report_failure(this, flag, t_target, err)
       return

@@ -263,6 +263,7 @@ contains
       if (this%adaptive) then
         call adaptive_step(this, sys, err)
         if (.not. err%ok()) return
+        call sys%step_accepted(this%t, this%q, this%v)
         cycle
       end if
       call choose_step(this, t_target, h, lands)
@@ -273,6 +274,7 @@ contains
       select case (outcome)
       case (STEP_OK)
         call after_success(this)
+        call sys%step_accepted(this%t, this%q, this%v)
       case (STEP_FATAL)
         call fatal_status(this, h, err)
         return

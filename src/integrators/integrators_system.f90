@@ -60,6 +60,14 @@ module integrators_system
     !> q and v there to other coordinates of the same state, and says so (`changed`); the
     !> driver then restarts the method from them. Status as for accel. Default: no change.
     procedure :: rechart => system_no_rechart
+    !> Called by every integrator after each step it accepts, with the state there (not at
+    !> the trial states of rejected steps or Newton iterates, which `accel` also sees): a
+    !> system that measures along its trajectory (the expanded reduced model: the farthest
+    !> state each expansion served) records it here. Default: nothing.
+    procedure :: step_accepted => system_step_accepted
+    !> Whether step_accepted does anything: CVODE then steps one step at a time to call it
+    !> (otherwise it runs to each output in one call). Default: false.
+    procedure :: wants_steps => system_wants_no_steps
   end type ode2_system_t
 
   abstract interface
@@ -165,6 +173,16 @@ contains
     changed = .false.
     status = 0
   end subroutine system_no_rechart
+
+  subroutine system_step_accepted(this, t, q, v)
+    class(ode2_system_t), intent(inout) :: this
+    real(wp), intent(in) :: t, q(:), v(:)
+  end subroutine system_step_accepted
+
+  logical function system_wants_no_steps(this)
+    class(ode2_system_t), intent(in) :: this
+    system_wants_no_steps = .false.
+  end function system_wants_no_steps
 
   subroutine system_error_norm(this, dq, q_old, q_new, rtol, atol, norm)
     class(ode2_system_t), intent(inout) :: this

@@ -111,16 +111,16 @@ module reduction_expansion
     integer :: n_exact_turns = 0                     !< of them, with the turns exact
     !> The joint angles of the last state looked up (find): the error norm's configuration.
     real(wp), allocatable :: p_last(:)
-    !> Largest nodal translation [m] between the exact kinematics and an expansion: where it
-    !> is left for a new one (set_note_stale) and at the farthest state it served otherwise
-    !> (set_unchecked, at the end of a run and before a new basis).
+    !> Largest nodal translation [m] between the exact kinematics and an expansion at the
+    !> farthest accepted state it served (set_unchecked: when a new one is made, at the end of
+    !> a run and before a new basis) and at the samples.
     real(wp) :: manifold_error = 0.0_wp
     integer :: n_unchecked = 0   !< of them, where the exact model failed (not compared)
   contains
     procedure :: find => set_find
+    procedure :: note_served => set_note_served
     procedure :: centre_time => set_centre_time
     procedure :: centre_modal => set_centre_modal
-    procedure :: note_stale => set_note_stale
     procedure :: unchecked => set_unchecked
     procedure :: note_checked => set_note_checked
     procedure :: expand => set_expand
@@ -155,12 +155,17 @@ module reduction_expansion
       type(turn_t), intent(in) :: turns(:)
       integer, intent(in) :: first
     end subroutine third_terms
-    !> Make a kept expansion that serves the state (t, p, eta, eta_dot) current, and keep the
-    !> state if it is the farthest that one has served (reduction_expansion_set).
-    module logical function set_find(this, t, p, eta, eta_dot) result(found)
+    !> Make a kept expansion that serves the state (p, eta) current (reduction_expansion_set).
+    module logical function set_find(this, p, eta) result(found)
+      class(expansion_set_t), intent(inout) :: this
+      real(wp), intent(in) :: p(:), eta(:)
+    end function set_find
+    !> Keep an accepted state if it is the farthest its expansion has served
+    !> (reduction_expansion_set).
+    module subroutine set_note_served(this, t, p, eta, eta_dot)
       class(expansion_set_t), intent(inout) :: this
       real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
-    end function set_find
+    end subroutine set_note_served
     !> A new expansion about (t, eta), in an empty slot or the one used longest ago
     !> (reduction_expansion_set).
     module subroutine set_expand(this, dyn, basis, t, eta, err)
@@ -186,13 +191,6 @@ module reduction_expansion
       real(wp), intent(in) :: eta(:), eta_dot(:), tau_max
       real(wp) :: eta_c(size(eta))
     end function set_centre_modal
-    !> The distance of the expansion in use (its coordinates x_series) from the exact x at
-    !> (p, eta), where it is left (reduction_expansion_set).
-    module subroutine set_note_stale(this, model, x, x_series, p, eta)
-      class(expansion_set_t), intent(inout) :: this
-      type(model_t), intent(in) :: model
-      real(wp), intent(in) :: x(:), x_series(:), p(:), eta(:)
-    end subroutine set_note_stale
     !> A kept expansion other than skip that served a state farther than where it was
     !> compared with the exact model (0: none), and that state (reduction_expansion_set).
     module integer function set_unchecked(this, skip, t, z, z_rate) result(i)

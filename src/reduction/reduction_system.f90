@@ -24,8 +24,8 @@ module reduction_system
 
   !> What a measurement of the error indicators was taken at (expanded runs; the codes of
   !> /reduction/measured/kind).
-  integer, parameter :: MEASURED_EXPANSION = 1  !< where a new expansion was needed
-  integer, parameter :: MEASURED_FARTHEST = 2   !< the farthest state an expansion served
+  integer, parameter :: MEASURED_EXPANSION = 1  !< where the first expansion was made
+  integer, parameter :: MEASURED_FARTHEST = 2   !< the farthest accepted state one served
   integer, parameter :: MEASURED_SAMPLE = 3     !< an output (estimate_samples)
 
   !> The exact measurements of the error indicators along an expanded run, in order.
@@ -58,8 +58,9 @@ module reduction_system
     integer, allocatable :: basis_of(:)
     !> evaluation = 'expanded' (reduction_system_expanded): evaluations from the expansion,
     !> which is redone where it goes stale. The error indicators are measured exactly where
-    !> an expansion is left, at the farthest state each served and at estimate_samples
-    !> outputs spread over the run; each output reports the latest measurement.
+    !> the first expansion is made, at the farthest accepted state each served and at
+    !> estimate_samples outputs spread over the run; each output reports the latest
+    !> measurement.
     logical :: expanded = .false.
     type(expansion_set_t) :: expansions
     integer :: estimate_samples = 10
@@ -74,6 +75,8 @@ module reduction_system
     procedure :: error_norm => red_error_norm
     procedure :: allocate_history => red_allocate_history
     procedure :: check_expansions => red_check_expansions
+    procedure :: step_accepted => red_step_accepted
+    procedure :: wants_steps => red_wants_steps
     procedure :: residual_max => red_residual_max
     procedure :: estimate_max => red_estimate_max
     !> Type-bound so that the submodule links to it: gfortran 12 emits no symbol for a
@@ -96,6 +99,12 @@ module reduction_system
       class(reduced_t), intent(inout) :: this
       integer, intent(in), optional :: skip
     end subroutine red_check_expansions
+    !> An accepted step: with the expanded evaluation, the farthest state each expansion
+    !> served (reduction_system_expanded).
+    module subroutine red_step_accepted(this, t, q, v)
+      class(reduced_t), intent(inout) :: this
+      real(wp), intent(in) :: t, q(:), v(:)
+    end subroutine red_step_accepted
     !> An output of the expanded evaluation (reduction_system_expanded).
     module subroutine expanded_store(this, kg, t, eta, eta_dot, q_dy, v_dy, err)
       type(reduced_t), intent(inout) :: this
@@ -106,6 +115,12 @@ module reduction_system
   end interface
 
 contains
+
+  !> The expanded evaluation keeps the farthest accepted state of each expansion.
+  logical function red_wants_steps(this)
+    class(reduced_t), intent(in) :: this
+    red_wants_steps = this%expanded
+  end function red_wants_steps
 
   !> The full model's coordinates and velocities of a reduced state.
   subroutine red_full_state(this, eta, eta_dot, q_dy, v_dy)

@@ -1,7 +1,7 @@
 !> The expanded evaluation of a reduced model (reduction_system, `evaluation = 'expanded'`):
 !> accelerations from the kept expansions, new ones where the state leaves them, and the exact
-!> measurements of the error indicators along the run (where an expansion is left, at the
-!> farthest state each served, at estimate_samples outputs), logged in `measured`.
+!> measurements of the error indicators along the run (where the first expansion is made, at
+!> the farthest accepted state each served, at estimate_samples outputs), logged in `measured`.
 submodule (reduction_system) reduction_system_expanded
   implicit none
 
@@ -10,7 +10,7 @@ contains
   module procedure expanded_accel
     real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
     call this%dyn%prescribed(t, p, pd, pdd)
-    if (.not. this%expansions%find(t, p, eta, eta_dot)) then
+    if (.not. this%expansions%find(p, eta)) then
       call new_expansion(this, t, p, eta, eta_dot, err)
       if (.not. err%ok()) return
     end if
@@ -19,36 +19,38 @@ contains
     if (err%ok()) call check_finite(a, t, err)
   end procedure expanded_accel
 
-  !> A new expansion for the state (t, p, eta, eta_dot), which has left the kept ones, with the
-  !> error indicators measured there, exactly (apart from expanded_accel: the full model's
-  !> arrays are made only here).
+  !> A new expansion for the state (t, p, eta, eta_dot), which has left the kept ones. The
+  !> first of a run (or of a basis) is made at the state the run starts from, where the error
+  !> indicators are measured exactly; later ones at an integrator's trial state, which a
+  !> rejected step may have swung far beyond anything the run uses: not measured there (the
+  !> expansion left is compared at the farthest accepted state it served, check_expansions).
+  !> Apart from expanded_accel the full model's arrays are made only here.
   subroutine new_expansion(this, t, p, eta, eta_dot, err)
     type(reduced_t), intent(inout) :: this
     real(wp), intent(in) :: t, p(:), eta(:), eta_dot(:)
     type(error_t), intent(out) :: err
     real(wp) :: t_centre, eta_c(size(eta)), tau_max, residual, estimate
-    real(wp), allocatable :: x_series(:)
+    real(wp) :: q_dy(this%dyn%model%n_dy), v_dy(this%dyn%model%n_dy)
     type(kin_state_t) :: before
-    ! Kept ones taken again since they were left (before a slot is reused; the one left now
-    ! is measured here).
+    ! Kept ones taken again since they were left (before a slot is reused).
     call this%check_expansions(skip=this%expansions%current)
     call this%dyn%kin%save_state(before)
     if (this%expansions%current > 0) then
-      x_series = this%expansions%item(this%expansions%current)%coordinates([p, eta])
-      call measure(this, t, eta, eta_dot, residual, estimate, err, x_series)
+      ! The new expansion's kinematics start from the exact solution here, found from the
+      ! series' coordinates: after a stretch on the expansions the last exact solution may lie
+      ! turns back.
+      call this%dyn%kin%restart_from(this%expansions%item(this%expansions%current)% &
+        coordinates([p, eta]))
+      call this%full_state(eta, eta_dot, q_dy, v_dy)
+      call this%dyn%kin%solve(this%dyn%model, [p, q_dy], err, t)
     else
       call measure(this, t, eta, eta_dot, residual, estimate, err)
+      if (err%ok()) call this%measured%add(t, residual, estimate, MEASURED_EXPANSION)
+      ! Not measurable here: counted as not compared, as at the samples.
+      if (.not. err%ok()) this%expansions%n_unchecked = this%expansions%n_unchecked + 1
     end if
-    if (err%ok()) then
-      call this%measured%add(t, residual, estimate, MEASURED_EXPANSION)
-      ! The indicators leave the exact kinematics of this state.
-      if (allocated(x_series)) call this%expansions%note_stale(this%dyn%model, &
-        this%dyn%kin%x, x_series, p, eta)
-    else
-      ! Not measurable here (the kinematic Newton from the series failed: input/four_bar.nml
-      ! with 4 modes and galpha_adaptive stopped at 0.74 ms): counted as not compared, as at
-      ! the samples, and the expansion is made as usual, from the kinematics as they were.
-      this%expansions%n_unchecked = this%expansions%n_unchecked + 1
+    if (.not. err%ok()) then
+      ! The expansion is made as usual, from the kinematics as they were.
       call this%dyn%kin%restore_state(before)
       call err%clear()
     end if
@@ -85,6 +87,14 @@ contains
   !> replaced, would be measured only where it was made (spin_up's one expansion: at rest).
   !> Where the model cannot be evaluated there the expansion counts as not compared
   !> (n_unchecked).
+  !> An accepted step of the integrator: the farthest state of the expansion serving it.
+  module procedure red_step_accepted
+    real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
+    if (.not. this%expanded) return
+    call this%dyn%prescribed(t, p, pd, pdd)
+    call this%expansions%note_served(t, p, q, v)
+  end procedure red_step_accepted
+
   module procedure red_check_expansions
     real(wp), allocatable :: z(:), z_rate(:), x_series(:)
     real(wp) :: t, residual, estimate
@@ -121,7 +131,7 @@ contains
     real(wp) :: p(this%dyn%model%n_rh), pd(this%dyn%model%n_rh), pdd(this%dyn%model%n_rh)
     real(wp) :: a(size(eta)), x(this%dyn%model%n_x)
     call this%dyn%prescribed(t, p, pd, pdd)
-    if (.not. this%expansions%find(t, p, eta, eta_dot)) then
+    if (.not. this%expansions%find(p, eta)) then
       call expanded_accel(this, t, eta, eta_dot, a, err)
       if (.not. err%ok()) return
     end if
