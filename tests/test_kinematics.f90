@@ -15,7 +15,7 @@
 !>   - models whose classes do not solve give clear errors.
 program test_kinematics
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_MODEL
+  use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use testing, only: suite_t
   use fd_helpers, only: lcg_t, relerr, flat
   use io_namelist, only: nml_file_t
@@ -63,6 +63,7 @@ program test_kinematics
   end if
   call crank_tests()
   call error_tests(two_link)
+  call singular_configuration_tests()
   call ts%finish()
 
 contains
@@ -675,4 +676,39 @@ contains
     call expect_error(err, ERR_MODEL, [character(len=30) :: 'mass matrix is singular', &
       "'ac'"], 'error: a dynamic mode without inertia')
   end subroutine error_tests
+
+  !> A model regular where it starts that comes close to singular along a motion: C above the
+  !> line A-B, the trusses' elongations dynamic. Lengths 0.5 each put C on the line (J_c
+  !> singular, as in the collinear model above). Solved with C 1e-5 above it (pivot ratio
+  !> 4e-5 against 0.62 at the start, 15 times below the hint's 1e-3), the kinematics names a
+  !> singular configuration, and a solve beyond (shorter trusses: C cannot reach) fails as a
+  !> numerical failure that says so, not as a model error.
+  subroutine singular_configuration_tests()
+    type(model_t) :: model
+    type(error_t) :: err
+    type(kinematics_t) :: kin
+    real(wp) :: l0, y
+    call model_from_text( &
+      "&node label = 'A', x = 0.0, y = 0.0, fixed = .true. /" // NL // &
+      "&node label = 'C', x = 0.5, y = 0.4 /" // NL // &
+      "&node label = 'B', x = 1.0, y = 0.0, fixed = .true. /" // NL // &
+      "&truss label = 'ac', from = 'A', to = 'C', E = 1.0e9, A = 1.0e-6 /" // NL // &
+      "&truss label = 'cb', from = 'C', to = 'B', E = 1.0e9, A = 1.0e-6 /" // NL // &
+      "&mass node = 'C', m = 1.0 /" // NL, 'lowered', model, err)
+    call expect_ok(err, 'lowered node: build')
+    if (.not. err%ok()) return
+    l0 = sqrt(0.25_wp + 0.16_wp)
+    call kin%init(model)
+    call kin%solve(model, [0.0_wp, 0.0_wp], err)
+    call expect_ok(err, 'lowered node: solved where it starts')
+    call ts%check(kin%configuration_hint() == '', 'lowered node: no hint where it starts')
+    y = 1.0e-5_wp
+    call solve_path(kin, model, spread(sqrt(0.25_wp + y**2) - l0, 1, 2), err)
+    call expect_ok(err, 'lowered node: solved 1e-5 above the line')
+    call ts%check(index(kin%configuration_hint(), 'singular configuration') > 0, &
+      'lowered node: the hint names a singular configuration near the line')
+    call kin%solve(model, spread(0.499_wp - l0, 1, 2), err)
+    call expect_error(err, ERR_NUMERIC, [character(len=30) :: 'nearly singular', &
+      'singular configuration'], 'lowered node: beyond the line, a numerical failure')
+  end subroutine singular_configuration_tests
 end program test_kinematics

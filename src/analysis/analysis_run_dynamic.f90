@@ -51,6 +51,7 @@ contains
     this%dyn%controls_on = .false.
     if (.not. err%ok() .and. allocated(this%dyn%last_error%message)) &
       err%message = err%message // ' (' // this%dyn%last_error%message // ')'
+    if (.not. err%ok()) call add_configuration_hint(this%dyn, err)
     if (.not. err%ok() .and. allocated(this%control%hint)) then
       if (len(this%control%hint) > 0) err%message = err%message // '. A sampled ' // &
         'controller may be unstable: ' // this%control%hint(3:)
@@ -214,6 +215,7 @@ contains
       call integrate_reduced(this%red, update, run_opts, this%time, breaks, this%stats, &
         this%updates, err)
     end if
+    if (.not. err%ok()) call add_configuration_hint(this%red%dyn, err)
     ! What follows (&linear along the run) analyses the open loop.
     this%red%dyn%controls_on = .false.
     this%dyn = this%red%dyn
@@ -283,6 +285,18 @@ contains
     if (err%ok()) call this%control%set_feedforward(rigid, ff_q, err)
     if (.not. err%ok()) call err%prefix('group &controller: ')
   end subroutine add_feedforward
+
+  !> A failed run whose last kinematic solution is near a singular configuration says so
+  !> (the integrators' own messages, e.g. CVODE's error test failures at a dead point, do
+  !> not), unless a failed solve there has said it already.
+  subroutine add_configuration_hint(dyn, err)
+    type(dynamics_t), intent(in) :: dyn
+    type(error_t), intent(inout) :: err
+    character(len=:), allocatable :: hint
+    hint = dyn%kin%configuration_hint()
+    if (len(hint) == 0) return
+    if (index(err%message, 'singular') == 0) err%message = err%message // hint
+  end subroutine add_configuration_hint
 
   !> The sampling times of the sampled controllers within (t0, t_end], t0 + i T: breakpoints
   !> where the integrator restarts with the new held outputs.

@@ -22,8 +22,8 @@ module integrators_cvode
   use fsundials_linearsolver_mod, only: SUNLinearSolver, FSUNLinSolFree
   use fsunmatrix_dense_mod, only: FSUNDenseMatrix, FSUNDenseMatrix_Data
   use fsunlinsol_dense_mod, only: FSUNLinSol_Dense
-  use fcvode_mod, only: CV_BDF, CV_NORMAL, CV_ONE_STEP, FCVodeGetDky, FCVodeCreate, FCVodeInit, FCVodeReInit, FCVodeFree, &
-    FCVode, FCVodeSStolerances, FCVodeSetUserData, FCVodeSetErrHandlerFn, &
+  use fcvode_mod, only: CV_BDF, CV_NORMAL, CV_ONE_STEP, FCVodeCreate, FCVodeInit, &
+    FCVodeReInit, FCVodeFree, FCVode, FCVodeGetDky, FCVodeSStolerances, FCVodeSetUserData, FCVodeSetErrHandlerFn, &
     FCVodeSetLinearSolver, FCVodeSetJacFn, FCVodeSetMaxOrd, FCVodeSetMaxStep, FCVodeSetMinStep, &
     FCVodeSetMaxNumSteps, FCVodeSetStopTime, FCVodeGetNumSteps, FCVodeGetNumJacEvals, &
     FCVodeGetNumLinSolvSetups, &

@@ -74,6 +74,12 @@ module model_kinematics
     !> kinematics (a von Mises truss passing flat).
     logical :: keep_failed_guess = .false.
     integer :: n_solves = 0, n_iterations = 0
+    !> Pivot ratios min|u_ii| / max|u_ii| of J_c's factors: the last factorisation's, the
+    !> last solution's and the first solution's (-1 before it). A ratio that falls by orders
+    !> of magnitude along a motion marks a singular configuration (links aligned at a dead
+    !> point), which the messages of failed solves then name; a singular J_c at the first
+    !> solution is a model error (mode classes, supports).
+    real(wp) :: rcond_last = 1.0_wp, rcond_solution = 1.0_wp, rcond_first = -1.0_wp
     !> The rates of the last solution, when its caller noted them: the next solve at a later
     !> time then predicts by their Taylor series (model_kinematics_rates).
     type(kin_rates_t) :: rates
@@ -98,6 +104,8 @@ module model_kinematics
     procedure :: restore_state => kin_restore_state
     procedure, private :: free_modes_moved => kin_free_modes_moved
     procedure, private :: singular_message => kin_singular_message
+    !> ' (...)' when the last solution is near a singular configuration, else ''.
+    procedure :: configuration_hint => kin_configuration_hint
   end type kinematics_t
 
   interface
@@ -290,6 +298,7 @@ contains
     else
       call lu_factor(this%lu, this%ipiv, info, rcond, worst)
     end if
+    this%rcond_last = rcond
     if (rcond < SINGULAR_PIVOT) info = max(info, 1)
   end subroutine factor_jacobian
 
@@ -420,7 +429,16 @@ contains
       end if
       call factor_jacobian(this, info, worst)
       if (info /= 0) then
-        call err%set(ERR_MODEL, this%singular_message(model, q))
+        if (this%rcond_first < 0) then
+          call err%set(ERR_MODEL, this%singular_message(model, q))
+        else
+          ! Regular at the first solution: a configuration reached along the motion, which a
+          ! shorter step or another load increment may avoid (no dense diagnosis here: a run
+          ! may pass this way many times).
+          call err%set(ERR_NUMERIC, 'the kinematic Jacobian is singular here, not at the ' // &
+            'first solution: a singular configuration of the mechanism, e.g. links aligned ' // &
+            'at a dead point')
+        end if
         this%x = x_start
         return
       end if
@@ -435,6 +453,8 @@ contains
         this%modes_at_x = model%n_elastic == 0
         this%q = q
         this%has_factors = .true.
+        this%rcond_solution = this%rcond_last
+        if (this%rcond_first < 0) this%rcond_first = this%rcond_last
         this%n_iterations = this%n_iterations + it - 1
         return
       end if
@@ -444,9 +464,28 @@ contains
     end do
     write(msg, '(a,i0,a,es10.3)') 'kinematic Newton iteration did not converge in ', it - 1, &
       ' iterations, residual ', rmax
-    call err%set(ERR_NUMERIC, trim(msg))
+    call err%set(ERR_NUMERIC, trim(msg) // this%configuration_hint())
     this%x = merge(x_start, x_last, this%keep_failed_guess)
   end subroutine kin_newton
+
+  !> ' (...)' naming a singular configuration where the last solution's pivot ratio has
+  !> fallen below NEAR_SINGULAR of the first solution's, else ''. Measured on
+  !> input/four_bar.nml with its rocker pin moved to a dead point: 1.5e-2 at the start,
+  !> 1.5e-7 at the last solution before Newton failed.
+  function kin_configuration_hint(this) result(hint)
+    class(kinematics_t), intent(in) :: this
+    character(len=:), allocatable :: hint
+    real(wp), parameter :: NEAR_SINGULAR = 1.0e-3_wp
+    character(len=9) :: now, first
+    hint = ''
+    if (this%rcond_first <= 0) return
+    if (.not. this%rcond_solution < NEAR_SINGULAR * this%rcond_first) return
+    write(now, '(es9.2)') this%rcond_solution
+    write(first, '(es9.2)') this%rcond_first
+    hint = ' (the kinematic Jacobian is nearly singular there, its pivot ratio ' // &
+      trim(adjustl(now)) // ' against ' // trim(adjustl(first)) // ' at the first ' // &
+      'solution: a singular configuration of the mechanism, e.g. links aligned at a dead point)'
+  end function kin_configuration_hint
 
   !> x := x + dx on the calculable coordinates (a loop: the vector-subscripted sum makes a
   !> temporary).
