@@ -20,7 +20,7 @@ program test_sweep_file
   use io_fs, only: delete_file
   use io_hdf5, only: h5_writer_t
   use io_namelist, only: string_t
-  use io_sweep_file, only: sweep_file_t, sweep_attrs_t
+  use io_sweep_file, only: sweep_file_t, sweep_attrs_t, SWEEP_MESSAGE_LEN
   use testing, only: suite_t
   use h5_read, only: open_objects, dataset_dims, read_real, read_int, read_string_attr, &
     read_i8_attr, scratch_dir, random_tag, exists, msg
@@ -61,9 +61,14 @@ program test_sweep_file
   do i = 1, NC
     pvals(i, :) = [0.5_wp * i, 10.0_wp ** (-i)]
   end do
-  long_msg = repeat('0123456789', 30) // '!'          ! 301 bytes
-  ! 255 ASCII bytes, then 'é' (2 bytes in UTF-8: it would be split by a cut at 256), then more.
-  utf8_msg = repeat('x', 255) // char(195) // char(169) // 'tail'
+  ! Digits 0123456789... 31 bytes longer than a message may be.
+  long_msg = ''
+  do i = 0, SWEEP_MESSAGE_LEN + 30
+    long_msg = long_msg // achar(iachar('0') + mod(i, 10))
+  end do
+  ! SWEEP_MESSAGE_LEN - 1 ASCII bytes, then 'é' (2 bytes in UTF-8: it would be split by a cut at
+  ! SWEEP_MESSAGE_LEN), then more.
+  utf8_msg = repeat('x', SWEEP_MESSAGE_LEN - 1) // char(195) // char(169) // 'tail'
 
   call test_create_and_write()
   call test_resume()
@@ -154,7 +159,7 @@ contains
     integer(hid_t) :: fid
     real(wp), allocatable :: r(:)
     integer, allocatable :: iv(:)
-    character(len=256), allocatable :: m(:)
+    character(len=SWEEP_MESSAGE_LEN), allocatable :: m(:)
     integer :: j
 
     call h5fopen_f(path, H5F_ACC_RDONLY_F, fid, hdferr)
@@ -187,14 +192,16 @@ contains
     end do
 
     m = read_messages(fid)
-    call t%check(m(1) == long_msg(1:256), 'a message longer than 256 bytes is cut to 256')
+    call t%check(m(1) == long_msg(1:SWEEP_MESSAGE_LEN), &
+                 'a message longer than SWEEP_MESSAGE_LEN bytes is cut to that length')
     call t%check(m(2)(1:4) == 'fine' .and. all_nul(m(2)(5:)), &
                  "a short message is NUL padded ('fine' then NULs)")
     call t%check(all_nul(m(3)), 'an empty message is all NUL bytes')
-    call t%check(m(4)(1:255) == repeat('x', 255) .and. all_nul(m(4)(256:)), &
-                 'a cut never splits a UTF-8 character (255 bytes kept)')
+    call t%check(m(4)(1:SWEEP_MESSAGE_LEN - 1) == repeat('x', SWEEP_MESSAGE_LEN - 1) .and. &
+                 all_nul(m(4)(SWEEP_MESSAGE_LEN:)), &
+                 'a cut never splits a UTF-8 character (SWEEP_MESSAGE_LEN - 1 bytes kept)')
     call t%check(m(5)(1:9) == 'scene.nml', 'message of case 5')
-    call t%check(string_type_ok(fid), '/cases/message is a fixed 256-byte NUL-padded string')
+    call t%check(string_type_ok(fid), '/cases/message is a fixed-length NUL-padded string')
 
     ! Array constructors, not .and.: every impure function call is made.
     call t%check(all([layout_is_contiguous(fid, '/cases/status'), &
@@ -529,7 +536,7 @@ contains
     integer(hid_t) :: fid
     integer, allocatable :: rk(:)
     real(wp), allocatable :: r(:), w(:)
-    character(len=256), allocatable :: m(:)
+    character(len=SWEEP_MESSAGE_LEN), allocatable :: m(:)
     real(wp) :: wall, metrics(NM)
     character(len=:), allocatable :: message
     integer :: k
@@ -609,10 +616,11 @@ contains
     call write_bytes(to, bytes)
   end subroutine copy_prefix
 
-  !> /cases/message with its own file type as the memory type (256-byte NUL-padded fields).
+  !> /cases/message with its own file type as the memory type (NUL-padded fields of
+  !> SWEEP_MESSAGE_LEN bytes).
   function read_messages(fid) result(m)
     integer(hid_t), intent(in) :: fid
-    character(len=256), allocatable, target :: m(:)
+    character(len=SWEEP_MESSAGE_LEN), allocatable, target :: m(:)
     integer(hid_t) :: did, tid
     integer(hsize_t), allocatable :: dims(:)
     type(c_ptr) :: p
@@ -642,7 +650,7 @@ contains
     call h5dget_type_f(did, tid, hdferr)
     call h5tget_size_f(tid, sz, hdferr)
     call h5tget_strpad_f(tid, pad, hdferr)
-    string_type_ok = sz == 256 .and. pad == H5T_STR_NULLPAD_F
+    string_type_ok = sz == int(SWEEP_MESSAGE_LEN, size_t) .and. pad == H5T_STR_NULLPAD_F
     call h5tclose_f(tid, hdferr)
     call h5dclose_f(did, hdferr)
   end function string_type_ok

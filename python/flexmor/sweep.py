@@ -4,7 +4,7 @@ Layout read here (see docs/sweep.md, "Result file"), every dataset of shape (n_c
 
 - ``/cases/parameters/<name>``: float64, the value of each swept parameter per case
 - ``/cases/status``: int32, -1 not run yet, 0 ok, else the flexmor exit code of the failure
-- ``/cases/message``: fixed-length bytes (256), error text of a failed case
+- ``/cases/message``: fixed-length bytes (1024; 256 from flexmor 0.6), error text of a failed case
 - ``/cases/wall_time_s``: float64, solve time (NaN while not run)
 - ``/cases/rank``: int32, MPI rank that ran the case (-1 while not run)
 - ``/cases/metrics/<name>``: float64 scalar results (NaN where not run, failed or not applicable)

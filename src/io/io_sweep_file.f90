@@ -41,8 +41,9 @@
 !> `open_existing` as damaged or not a sweep file (ERR_INPUT); it held no case yet.
 !>
 !> Strings: root attributes are scalar variable-length UTF-8 strings (h5py reads `str`),
-!> /cases/message holds fixed-length 256-byte NUL-padded strings (h5py reads `bytes`); longer
-!> messages are cut to 256 bytes (at a UTF-8 character boundary). /cases/parameters and
+!> /cases/message holds fixed-length NUL-padded strings of SWEEP_MESSAGE_LEN bytes (h5py reads
+!> `bytes`; files of flexmor 0.6 have 256, and resume with them); longer messages are cut to
+!> the dataset's length (at a UTF-8 character boundary). /cases/parameters and
 !> /cases/metrics keep their datasets in creation order (h5py lists them in that order), which
 !> is how `open_existing` recovers the order of the metrics for `write_case`.
 !>
@@ -73,8 +74,9 @@ module io_sweep_file
   private
   public :: sweep_file_t, sweep_attrs_t, SWEEP_MESSAGE_LEN
 
-  !> Bytes of one /cases/message entry.
-  integer, parameter :: SWEEP_MESSAGE_LEN = 256
+  !> Bytes of one /cases/message entry: room for a failure's whole message with its cause
+  !> (a kinematic failure at a singular configuration takes about 400).
+  integer, parameter :: SWEEP_MESSAGE_LEN = 1024
 
   !> The root attributes of a sweep file. Strings left unallocated are written as ''.
   !> n_cases and n_parameters are taken from the shape of the parameter values given to

@@ -90,8 +90,10 @@ contains
       this%ncases = n
 
       call open_dataset(this, '/cases/status', H5T_INTEGER_F, this%status_id, err)
+      ! Of any fixed length: files of flexmor 0.6 have 256 bytes (write_case cuts to the
+      ! dataset's own length).
       call open_dataset(this, '/cases/message', H5T_STRING_F, this%message_id, err, &
-                        str_len=SWEEP_MESSAGE_LEN)
+                        fixed_string=.true.)
       call open_dataset(this, '/cases/wall_time_s', H5T_FLOAT_F, this%wall_id, err)
       call open_dataset(this, '/cases/rank', H5T_INTEGER_F, this%rank_id, err)
       if (.not. err%ok()) exit work
@@ -206,14 +208,14 @@ contains
   end subroutine check_attr
 
   !> Open dataset `name`, check it is rank 1 with n_cases elements of type class `cls`, and with
-  !> `str_len`, that they are fixed-length strings of that many bytes.
-  subroutine open_dataset(this, name, cls, dset_id, err, str_len)
+  !> `fixed_string`, that they are fixed-length strings.
+  subroutine open_dataset(this, name, cls, dset_id, err, fixed_string)
     class(sweep_file_t), intent(inout) :: this
     character(len=*), intent(in) :: name
     integer, intent(in) :: cls
     integer(hid_t), intent(out) :: dset_id
     type(error_t), intent(inout) :: err
-    integer, intent(in), optional :: str_len
+    logical, intent(in), optional :: fixed_string
     integer(hsize_t) :: n
     integer(size_t) :: type_size
     integer :: why, rank, tclass
@@ -233,10 +235,10 @@ contains
     if (rank /= 1 .or. n /= int(this%ncases, hsize_t) .or. tclass /= cls) then
       call reject(this%path, ": dataset '" // name // "' does not have the shape or type " // &
                   'of a sweep result file with ' // int_str(this%ncases) // ' cases', err)
-    else if (present(str_len)) then
-      if (vl .or. type_size /= int(str_len, size_t)) &
-        call reject(this%path, ": dataset '" // name // "' is not made of " // int_str(str_len) &
-                    // '-byte strings, so this is not a sweep result file', err)
+    else if (present(fixed_string)) then
+      if (fixed_string .and. (vl .or. type_size < 1)) &
+        call reject(this%path, ": dataset '" // name // "' is not made of fixed-length " // &
+                    'strings, so this is not a sweep result file', err)
     end if
   end subroutine open_dataset
 

@@ -20,7 +20,7 @@ module sweep_run
   use core_error, only: error_t, ERR_INPUT
   use core_strings, only: int_str, approx_str, real_str
   use io_namelist, only: nml_file_t
-  use io_sweep_file, only: sweep_file_t, sweep_attrs_t
+  use io_sweep_file, only: sweep_file_t, sweep_attrs_t, SWEEP_MESSAGE_LEN
   use io_fs, only: make_folder
   use core_version, only: FLEXMOR_VERSION
   use analysis_run, only: run_t
@@ -29,9 +29,10 @@ module sweep_run
     check_metric_node
   implicit none
   private
-  public :: run_sweep, check_sweep, MESSAGE_LEN
+  public :: run_sweep, check_sweep
 
-  integer, parameter :: MESSAGE_LEN = 256
+  !> A failed case's message, as long as the file keeps.
+  integer, parameter :: MESSAGE_LEN = SWEEP_MESSAGE_LEN
   integer, parameter :: TAG_WORK = 1, TAG_STOP = 2, TAG_RESULT = 3, TAG_MESSAGE = 4
   !> Result record sent by a worker: case, status, wall time, then the metrics.
   integer, parameter :: HEAD = 3

@@ -511,3 +511,31 @@ def test_example_sweep_every_case_runs(tmp_path):
     expected = np.max(np.linalg.norm(tip - rigid, axis=1))
     assert abs(res["metrics"]["max_tip_deflection"][-1] - expected) < 1e-8, \
         (res["metrics"]["max_tip_deflection"][-1] - expected)
+
+
+def test_failed_case_keeps_its_whole_message(tmp_path):
+    """A failed case's message with its cause: the four-bar with its rocker pin moved to a
+    dead point fails with a CVODE error and the kinematics' explanation after it (about 400
+    bytes), which the 256 bytes of /cases/message used to cut off. Files of flexmor 0.6 (256
+    bytes) still resume: the message is cut to their length."""
+    base = (ROOT / "input" / "four_bar.nml").read_text().replace("t_end = 0.0838",
+                                                                  "t_end = 0.002")
+    sweep = ("&sweep base = 'base.nml', mode = 'product', node = 'B' /\n"
+             "&parameter name = 'node.B.y', values = 0.25, 2.5e-5 /\n")
+    write_inputs(tmp_path, sweep=sweep, base=base)
+    proc = run_sweep(tmp_path, 2)
+    assert proc.returncode == 0, proc.stderr
+    res = read(tmp_path / "out.h5")
+    assert list(res["status"]) == [0, 3], res
+    message = res["message"][1]
+    assert len(message.encode()) > 256 and message.endswith("aligned at a dead point)"), message
+    assert "CVODE failed at t = 0.154" in message
+    with h5py.File(tmp_path / "out.h5", "r+") as f:     # as written by flexmor 0.6
+        del f["cases/message"]
+        f["cases/message"] = np.array([b"", b""], dtype="S256")
+        f["cases/status"][1] = -1
+    proc = run_sweep(tmp_path, 2)
+    assert proc.returncode == 0, proc.stderr
+    assert "1 already in" in proc.stdout
+    res = read(tmp_path / "out.h5")
+    assert list(res["status"]) == [0, 3] and res["message"][1] == message.encode()[:256].decode()
