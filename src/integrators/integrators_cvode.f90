@@ -159,8 +159,13 @@ contains
       return
     end if
     ! Step by step, each accepted state to the system, then CVODE's interpolant at t_target
-    ! (what CV_NORMAL does inside).
-    do
+    ! (what CV_NORMAL does inside). The last call may have stepped past this target already.
+    flag = FCVodeGetCurrentTime(this%mem, t_reached)
+    if (flag < 0) then
+      call report_failure(this, flag, t_target, err)
+      return
+    end if
+    do while (t_reached(1) < t_target)
       if (steps_left < 1) then
         call err%set(ERR_NUMERIC, 'CVODE: max_steps reached before t = ' // real_str(t_target))
         return
@@ -173,9 +178,8 @@ contains
       end if
       call get_state(this%y, q, v)
       call sys%step_accepted(t_reached(1), q, v)
-      if (t_reached(1) >= t_target) exit
     end do
-    if (t_reached(1) == t_target) return
+    ! Also where a step ended on t_target: this%y may hold an earlier target's interpolant.
     flag = FCVodeGetDky(this%mem, t_target, 0_c_int, this%y)
     if (flag < 0) then
       call report_failure(this, flag, t_target, err)
