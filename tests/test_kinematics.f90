@@ -17,6 +17,7 @@ program test_kinematics
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_MODEL, ERR_NUMERIC
   use testing, only: suite_t
+  use test_scenes, only: source_dir, make_dynamics_from
   use fd_helpers, only: lcg_t, relerr, flat
   use io_namelist, only: nml_file_t
   use io_scene, only: read_scene
@@ -64,6 +65,7 @@ program test_kinematics
   call crank_tests()
   call error_tests(two_link)
   call singular_configuration_tests()
+  call regular_spatial_configuration()
   call ts%finish()
 
 contains
@@ -679,9 +681,9 @@ contains
 
   !> A model regular where it starts that comes close to singular along a motion: C above the
   !> line A-B, the trusses' elongations dynamic. Lengths 0.5 each put C on the line (J_c
-  !> singular, as in the collinear model above). Solved with C 1e-5 above it (pivot ratio
-  !> 4e-5 against 0.62 at the start, 15 times below the hint's 1e-3), the kinematics names a
-  !> singular configuration, and a solve beyond (shorter trusses: C cannot reach) fails as a
+  !> singular, as in the collinear model above). Solved with C 1e-5 above it, ||J_c^-1|| has
+  !> grown about l / (2 y) = 2.5e4 times (the hint's threshold: 1e3), and the kinematics names
+  !> a singular configuration; a solve beyond (shorter trusses: C cannot reach) fails as a
   !> numerical failure that says so, not as a model error.
   subroutine singular_configuration_tests()
     type(model_t) :: model
@@ -701,14 +703,37 @@ contains
     call kin%init(model)
     call kin%solve(model, [0.0_wp, 0.0_wp], err)
     call expect_ok(err, 'lowered node: solved where it starts')
-    call ts%check(kin%configuration_hint() == '', 'lowered node: no hint where it starts')
+    call ts%check(kin%configuration_hint(model) == '', 'lowered node: no hint where it starts')
     y = 1.0e-5_wp
     call solve_path(kin, model, spread(sqrt(0.25_wp + y**2) - l0, 1, 2), err)
     call expect_ok(err, 'lowered node: solved 1e-5 above the line')
-    call ts%check(index(kin%configuration_hint(), 'singular configuration') > 0, &
+    call ts%check(index(kin%configuration_hint(model), 'singular configuration') > 0, &
       'lowered node: the hint names a singular configuration near the line')
     call kin%solve(model, spread(0.499_wp - l0, 1, 2), err)
     call expect_error(err, ERR_NUMERIC, [character(len=30) :: 'nearly singular', &
       'singular configuration'], 'lowered node: beyond the line, a numerical failure')
   end subroutine singular_configuration_tests
+
+  !> No hint far from a singular configuration: input/two_link_spatial.nml with both joints
+  !> turned 0.3 rad. The pivot ratio of its blocked factors (the measure the hint first used)
+  !> falls from 0.36 at the reference to 8e-7 as soon as the joints turn (measured along its
+  !> run); ||J_c^-1|| stays as it was.
+  subroutine regular_spatial_configuration()
+    type(nml_file_t) :: f
+    type(scene_t) :: scene
+    type(dynamics_t) :: dyn
+    type(error_t) :: err
+    real(wp), allocatable :: q(:)
+    call f%load(source_dir() // '/input/two_link_spatial.nml', err)
+    if (err%ok()) call make_dynamics_from(f, scene, dyn, err)
+    call expect_ok(err, 'spatial two-link: built')
+    if (.not. err%ok()) return
+    allocate(q(dyn%model%n_q))
+    q = 0.0_wp
+    q(1:dyn%model%n_rh) = 0.3_wp
+    call dyn%kin%solve(dyn%model, q, err)
+    call expect_ok(err, 'spatial two-link: solved with the joints turned')
+    call ts%check(dyn%kin%configuration_hint(dyn%model) == '', &
+      'spatial two-link: no singular configuration named where there is none')
+  end subroutine regular_spatial_configuration
 end program test_kinematics

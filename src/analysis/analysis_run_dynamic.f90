@@ -1,6 +1,7 @@
 !> The dynamic analysis of a run: the integrator and its options, the full or reduced model,
 !> the controllers' sampling times and feedforward.
 submodule (analysis_run) analysis_run_dynamic
+  use core_error, only: ERR_NUMERIC
   use model_scene, only: UPDATE_NONE, JOINTS_HELD, EVALUATION_EXPANDED, auto_by_stiffness
   use integrators_system, only: INTEGRATOR_AUTO, INTEGRATOR_GALPHA_ADAPTIVE, INTEGRATOR_ERK, &
     INTEGRATOR_NAMES
@@ -286,16 +287,14 @@ contains
     if (.not. err%ok()) call err%prefix('group &controller: ')
   end subroutine add_feedforward
 
-  !> A failed run whose last kinematic solution is near a singular configuration says so
-  !> (the integrators' own messages, e.g. CVODE's error test failures at a dead point, do
-  !> not), unless a failed solve there has said it already.
+  !> A run that failed numerically where its last kinematic solution is near a singular
+  !> configuration says so (the integrators' own messages, e.g. CVODE's error test failures
+  !> at a dead point, do not), unless a failed solve there has said it already.
   subroutine add_configuration_hint(dyn, err)
-    type(dynamics_t), intent(in) :: dyn
+    type(dynamics_t), intent(inout) :: dyn
     type(error_t), intent(inout) :: err
-    character(len=:), allocatable :: hint
-    hint = dyn%kin%configuration_hint()
-    if (len(hint) == 0) return
-    if (index(err%message, 'singular') == 0) err%message = err%message // hint
+    if (err%code /= ERR_NUMERIC .or. index(err%message, 'singular') > 0) return
+    err%message = err%message // dyn%kin%configuration_hint(dyn%model)
   end subroutine add_configuration_hint
 
   !> The sampling times of the sampled controllers within (t0, t_end], t0 + i T: breakpoints

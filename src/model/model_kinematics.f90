@@ -74,12 +74,13 @@ module model_kinematics
     !> kinematics (a von Mises truss passing flat).
     logical :: keep_failed_guess = .false.
     integer :: n_solves = 0, n_iterations = 0
-    !> Pivot ratios min|u_ii| / max|u_ii| of J_c's factors: the last factorisation's, the
-    !> last solution's and the first solution's (-1 before it). A ratio that falls by orders
-    !> of magnitude along a motion marks a singular configuration (links aligned at a dead
-    !> point), which the messages of failed solves then name; a singular J_c at the first
-    !> solution is a model error (mode classes, supports).
-    real(wp) :: rcond_last = 1.0_wp, rcond_solution = 1.0_wp, rcond_first = -1.0_wp
+    !> An estimate of ||J_c^-1|| at the first solution (-1 before it). Where it grows by orders
+    !> of magnitude along a motion, the mechanism nears a singular configuration (links
+    !> aligned at a dead point), which the messages of failed solves then name; a singular J_c
+    !> at the first solution is a model error (mode classes, supports). (Pivot ratios of the
+    !> factors do not serve: on the spatial two-link they fall from 0.36 at the reference to
+    !> 8e-7 at the first step, far from any singularity.)
+    real(wp) :: inv_norm_first = -1.0_wp
     !> The rates of the last solution, when its caller noted them: the next solve at a later
     !> time then predicts by their Taylor series (model_kinematics_rates).
     type(kin_rates_t) :: rates
@@ -104,11 +105,24 @@ module model_kinematics
     procedure :: restore_state => kin_restore_state
     procedure, private :: free_modes_moved => kin_free_modes_moved
     procedure, private :: singular_message => kin_singular_message
-    !> ' (...)' when the last solution is near a singular configuration, else ''.
+    !> ' (...)' when the last solution is near a singular configuration, else ''
+    !> (model_kinematics_diagnostics).
     procedure :: configuration_hint => kin_configuration_hint
+    procedure, private :: inverse_norm => kin_inverse_norm
+    !> Type-bound so that the submodules link to it: gfortran 12 emits no symbol for a
+    !> private module procedure it has inlined.
+    procedure, private :: factor => factor_jacobian
   end type kinematics_t
 
   interface
+    !> Size the arrays for a model and record the entry patterns of J_c (sparse only) and of
+    !> the input-coordinate columns, in the order in which kin_residual visits them
+    !> (model_kinematics_residual).
+    module subroutine kin_init(this, model, sparse)
+      class(kinematics_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      logical, intent(in), optional :: sparse
+    end subroutine kin_init
     !> Note the time derivatives of the last solution, reached at time t along a trajectory:
     !> velocities qd, xd = DF qd and accelerations qdd, xdd = D2F qd qd + DF qdd.
     module subroutine kin_note_rates(this, t, qd, qdd, xd, xdd)
@@ -180,6 +194,19 @@ module model_kinematics
       real(wp), intent(out) :: r(:)
       logical, intent(in), optional :: jacobian
     end subroutine kin_residual
+    !> ' (...)' naming a singular configuration where ||J_c^-1|| at the last solution (x, q),
+    !> refactorised there, exceeds NEAR_SINGULAR times the first solution's; '' otherwise.
+    module function kin_configuration_hint(this, model) result(hint)
+      class(kinematics_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      character(len=:), allocatable :: hint
+    end function kin_configuration_hint
+    !> An estimate of ||J_c^-1||_2 with the current factors (a few solves).
+    module function kin_inverse_norm(this, model) result(norm)
+      class(kinematics_t), intent(inout) :: this
+      type(model_t), intent(in) :: model
+      real(wp) :: norm
+    end function kin_inverse_norm
     !> Why J_c is singular, from a dense factorisation (model_kinematics_diagnostics).
     module function kin_singular_message(this, model, q) result(msg)
       class(kinematics_t), intent(inout) :: this
@@ -209,87 +236,10 @@ module model_kinematics
 
 contains
 
-  !> Size the arrays for a model and record the entry patterns of J_c (sparse only) and of the
-  !> input-coordinate columns, in the order in which kin_residual visits them.
-  subroutine kin_init(this, model, sparse)
-    class(kinematics_t), intent(inout) :: this
-    type(model_t), intent(in) :: model
-    logical, intent(in), optional :: sparse
-    type(entries_t) :: jac, inputs
-    ! Per entry (element, mode with a row, coordinate): column of J_c (0: not calculable),
-    ! sparse value slot and input entry (0: none).
-    integer, allocatable :: ent_col(:), ent_slot(:), ent_in(:)
-    integer :: iel, j, k, row, m, n_ent
-    this%sparse = .false.
-    if (present(sparse)) this%sparse = sparse
-    if (allocated(this%q)) deallocate(this%q)
-    if (allocated(this%df)) deallocate(this%df)
-    if (allocated(this%lu)) deallocate(this%lu, this%ipiv)
-    this%x = model%x0
-    allocate(this%q(model%n_q))
-    if (.not. this%sparse) allocate(this%lu(model%n_c, model%n_c), this%ipiv(model%n_c))
-    this%q = 0.0_wp
-    this%has_df = .false.
-    this%has_factors = .false.
-    this%el_nm = [(model%elements(iel)%e%n_modes(), iel = 1, model%n_elements)]
-    this%el_nd = [(size(model%elements(iel)%e%dofs), iel = 1, model%n_elements)]
-    this%mode_row = model%modes%row
-    this%mode_q = [(0, m = 1, size(model%modes))]
-    this%mode_period = model%modes%period
-    n_ent = 0
-    do m = 1, size(model%modes)
-      row = this%mode_row(m)
-      if (row == 0) cycle
-      this%mode_q(m) = model%row_q(row)
-      n_ent = n_ent + this%el_nd(model%modes(m)%element)
-    end do
-    allocate(ent_col(n_ent), ent_slot(n_ent), ent_in(n_ent))
-    n_ent = 0
-    do iel = 1, model%n_elements
-      associate (el => model%elements(iel)%e)
-        do j = 1, this%el_nm(iel)
-          row = this%mode_row(model%mode_first(iel) + j - 1)
-          if (row == 0) cycle
-          do k = 1, size(el%dofs)
-            n_ent = n_ent + 1
-            ent_col(n_ent) = model%calc_index(el%dofs(k))
-            call jac%add(row, model%calc_index(el%dofs(k)))
-            ent_slot(n_ent) = 0
-            ent_in(n_ent) = 0
-            if (model%calc_index(el%dofs(k)) > 0) ent_slot(n_ent) = jac%n
-            call inputs%add(row, model%input_q(el%dofs(k)))
-            if (model%input_q(el%dofs(k)) > 0) ent_in(n_ent) = inputs%n
-          end do
-        end do
-      end associate
-    end do
-    this%in_row = inputs%rows(1:inputs%n)
-    this%in_q = inputs%cols(1:inputs%n)
-    allocate(this%in_val(inputs%n))
-    this%in_val = 0.0_wp
-    if (allocated(this%de_offset)) deallocate(this%de_offset, this%de_val)
-    allocate(this%de_offset(model%n_elements))
-    k = 0
-    do iel = 1, model%n_elements
-      this%de_offset(iel) = k + 1
-      k = k + this%el_nm(iel) * this%el_nd(iel)
-    end do
-    allocate(this%de_val(k))
-    if (this%sparse) then
-      call this%jac_sp%setup(model%n_c, jac%rows(1:jac%n), jac%cols(1:jac%n))
-      ! Entry number -> value slot, now that the pattern is known.
-      do k = 1, n_ent
-        if (ent_slot(k) > 0) ent_slot(k) = this%jac_sp%pos(ent_slot(k))
-      end do
-    end if
-    call flat_entries(this, model, ent_col, ent_slot, ent_in)
-    if (this%sparse) call gather_lists(this)
-  end subroutine kin_init
-
   !> Factorise the Jacobian just assembled; info /= 0 if it is singular, worst is then a
   !> column that is not determined (0 if unknown).
   subroutine factor_jacobian(this, info, worst)
-    type(kinematics_t), intent(inout) :: this
+    class(kinematics_t), intent(inout) :: this
     integer, intent(out) :: info, worst
     real(wp) :: rcond
     worst = 0
@@ -298,7 +248,6 @@ contains
     else
       call lu_factor(this%lu, this%ipiv, info, rcond, worst)
     end if
-    this%rcond_last = rcond
     if (rcond < SINGULAR_PIVOT) info = max(info, 1)
   end subroutine factor_jacobian
 
@@ -429,7 +378,7 @@ contains
       end if
       call factor_jacobian(this, info, worst)
       if (info /= 0) then
-        if (this%rcond_first < 0) then
+        if (this%inv_norm_first < 0) then
           call err%set(ERR_MODEL, this%singular_message(model, q))
         else
           ! Regular at the first solution: a configuration reached along the motion, which a
@@ -453,8 +402,7 @@ contains
         this%modes_at_x = model%n_elastic == 0
         this%q = q
         this%has_factors = .true.
-        this%rcond_solution = this%rcond_last
-        if (this%rcond_first < 0) this%rcond_first = this%rcond_last
+        if (this%inv_norm_first < 0) this%inv_norm_first = this%inverse_norm(model)
         this%n_iterations = this%n_iterations + it - 1
         return
       end if
@@ -464,28 +412,15 @@ contains
     end do
     write(msg, '(a,i0,a,es10.3)') 'kinematic Newton iteration did not converge in ', it - 1, &
       ' iterations, residual ', rmax
-    call err%set(ERR_NUMERIC, trim(msg) // this%configuration_hint())
     this%x = merge(x_start, x_last, this%keep_failed_guess)
+    ! The hint refactors at the last solution (not with a kept guess: arc-length's retries).
+    if (this%keep_failed_guess) then
+      call err%set(ERR_NUMERIC, trim(msg))
+    else
+      call err%set(ERR_NUMERIC, trim(msg) // this%configuration_hint(model))
+    end if
   end subroutine kin_newton
 
-  !> ' (...)' naming a singular configuration where the last solution's pivot ratio has
-  !> fallen below NEAR_SINGULAR of the first solution's, else ''. Measured on
-  !> input/four_bar.nml with its rocker pin moved to a dead point: 1.5e-2 at the start,
-  !> 1.5e-7 at the last solution before Newton failed.
-  function kin_configuration_hint(this) result(hint)
-    class(kinematics_t), intent(in) :: this
-    character(len=:), allocatable :: hint
-    real(wp), parameter :: NEAR_SINGULAR = 1.0e-3_wp
-    character(len=9) :: now, first
-    hint = ''
-    if (this%rcond_first <= 0) return
-    if (.not. this%rcond_solution < NEAR_SINGULAR * this%rcond_first) return
-    write(now, '(es9.2)') this%rcond_solution
-    write(first, '(es9.2)') this%rcond_first
-    hint = ' (the kinematic Jacobian is nearly singular there, its pivot ratio ' // &
-      trim(adjustl(now)) // ' against ' // trim(adjustl(first)) // ' at the first ' // &
-      'solution: a singular configuration of the mechanism, e.g. links aligned at a dead point)'
-  end function kin_configuration_hint
 
   !> x := x + dx on the calculable coordinates (a loop: the vector-subscripted sum makes a
   !> temporary).

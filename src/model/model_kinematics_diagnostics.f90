@@ -23,6 +23,49 @@ contains
       'determine nothing)' // dense%free_modes_moved(model, worst)
   end procedure kin_singular_message
 
+  module procedure kin_configuration_hint
+    real(wp), parameter :: NEAR_SINGULAR = 1.0e3_wp
+    real(wp) :: r(model%n_c), now
+    integer :: info, worst
+    character(len=9) :: growth
+    hint = ''
+    if (this%inv_norm_first <= 0 .or. model%n_c == 0 .or. .not. allocated(this%q)) return
+    call this%residual(model, this%q, r, jacobian=.true.)
+    call this%factor(info, worst)
+    this%has_factors = info == 0
+    this%has_df = .false.
+    if (info == 0) then
+      now = this%inverse_norm(model)
+      if (.not. now > NEAR_SINGULAR * this%inv_norm_first) return
+      write(growth, '(es9.2)') now / this%inv_norm_first
+      hint = ' (the kinematic Jacobian is nearly singular there: ||J^-1|| ' // &
+        trim(adjustl(growth)) // ' times that at the first solution'
+    else
+      hint = ' (the kinematic Jacobian is singular there'
+    end if
+    hint = hint // ': a singular configuration of the mechanism, e.g. links aligned at a ' // &
+      'dead point)'
+  end procedure kin_configuration_hint
+
+  !> Power iteration on J^-T J^-1 from a fixed start, three rounds: near a singular
+  !> configuration the smallest singular value stands far apart and it converges at once;
+  !> elsewhere it is within a small factor, which the hint's 1e3 does not resolve.
+  module procedure kin_inverse_norm
+    real(wp) :: z(model%n_c, 1), zn
+    integer :: round
+    norm = 0.0_wp
+    if (size(z, 1) == 0) return
+    z = 1.0_wp / sqrt(real(size(z, 1), wp))
+    do round = 1, 3
+      call this%jacobian_solve(z)
+      call this%jacobian_solve(z, transposed=.true.)
+      zn = norm2(z)
+      if (.not. zn > 0 .or. zn > huge(1.0_wp)) exit
+      norm = sqrt(zn)
+      z = z / zn
+    end do
+  end procedure kin_inverse_norm
+
   !> The elastic and released modes that the undetermined motion changes. With the smallest
   !> pivot k of the factors J_c = P L U treated as zero, z_k = 1, z_(>k) = 0 and
   !> U(1:k-1, 1:k-1) z(1:k-1) = -U(1:k-1, k) solve U z = 0, so z is (nearly) the motion that

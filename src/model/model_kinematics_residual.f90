@@ -1,10 +1,82 @@
-!> The kinematic residual and Jacobian (the element pass of every Newton iteration) and the
-!> flat entry lists that kin_init makes for it.
+!> The kinematic residual and Jacobian (the element pass of every Newton iteration), and
+!> kin_init with the flat entry lists it makes for it.
 submodule (model_kinematics) model_kinematics_residual
   use elements_base, only: element_t
   implicit none
 
 contains
+
+  module procedure kin_init
+    type(entries_t) :: jac, inputs
+    ! Per entry (element, mode with a row, coordinate): column of J_c (0: not calculable),
+    ! sparse value slot and input entry (0: none).
+    integer, allocatable :: ent_col(:), ent_slot(:), ent_in(:)
+    integer :: iel, j, k, row, m, n_ent
+    this%sparse = .false.
+    if (present(sparse)) this%sparse = sparse
+    if (allocated(this%q)) deallocate(this%q)
+    if (allocated(this%df)) deallocate(this%df)
+    if (allocated(this%lu)) deallocate(this%lu, this%ipiv)
+    this%x = model%x0
+    allocate(this%q(model%n_q))
+    if (.not. this%sparse) allocate(this%lu(model%n_c, model%n_c), this%ipiv(model%n_c))
+    this%q = 0.0_wp
+    this%has_df = .false.
+    this%has_factors = .false.
+    this%el_nm = [(model%elements(iel)%e%n_modes(), iel = 1, model%n_elements)]
+    this%el_nd = [(size(model%elements(iel)%e%dofs), iel = 1, model%n_elements)]
+    this%mode_row = model%modes%row
+    this%mode_q = [(0, m = 1, size(model%modes))]
+    this%mode_period = model%modes%period
+    n_ent = 0
+    do m = 1, size(model%modes)
+      row = this%mode_row(m)
+      if (row == 0) cycle
+      this%mode_q(m) = model%row_q(row)
+      n_ent = n_ent + this%el_nd(model%modes(m)%element)
+    end do
+    allocate(ent_col(n_ent), ent_slot(n_ent), ent_in(n_ent))
+    n_ent = 0
+    do iel = 1, model%n_elements
+      associate (el => model%elements(iel)%e)
+        do j = 1, this%el_nm(iel)
+          row = this%mode_row(model%mode_first(iel) + j - 1)
+          if (row == 0) cycle
+          do k = 1, size(el%dofs)
+            n_ent = n_ent + 1
+            ent_col(n_ent) = model%calc_index(el%dofs(k))
+            call jac%add(row, model%calc_index(el%dofs(k)))
+            ent_slot(n_ent) = 0
+            ent_in(n_ent) = 0
+            if (model%calc_index(el%dofs(k)) > 0) ent_slot(n_ent) = jac%n
+            call inputs%add(row, model%input_q(el%dofs(k)))
+            if (model%input_q(el%dofs(k)) > 0) ent_in(n_ent) = inputs%n
+          end do
+        end do
+      end associate
+    end do
+    this%in_row = inputs%rows(1:inputs%n)
+    this%in_q = inputs%cols(1:inputs%n)
+    allocate(this%in_val(inputs%n))
+    this%in_val = 0.0_wp
+    if (allocated(this%de_offset)) deallocate(this%de_offset, this%de_val)
+    allocate(this%de_offset(model%n_elements))
+    k = 0
+    do iel = 1, model%n_elements
+      this%de_offset(iel) = k + 1
+      k = k + this%el_nm(iel) * this%el_nd(iel)
+    end do
+    allocate(this%de_val(k))
+    if (this%sparse) then
+      call this%jac_sp%setup(model%n_c, jac%rows(1:jac%n), jac%cols(1:jac%n))
+      ! Entry number -> value slot, now that the pattern is known.
+      do k = 1, n_ent
+        if (ent_slot(k) > 0) ent_slot(k) = this%jac_sp%pos(ent_slot(k))
+      end do
+    end if
+    call flat_entries(this, model, ent_col, ent_slot, ent_in)
+    if (this%sparse) call gather_lists(this)
+  end procedure kin_init
 
   module subroutine flat_entries(this, model, ent_col, ent_slot, ent_in)
     type(kinematics_t), intent(inout) :: this
