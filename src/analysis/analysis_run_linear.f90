@@ -132,8 +132,10 @@ contains
       ! An unallocated basis_prescribed counts as absent: the motions at basis_time apply.
       call compute_basis(dyn, spec, r%basis_time, this%q_static, r%basis_prescribed, basis, &
         err)
-      if (.not. err%ok()) call err%prefix('group &reduction: basis configuration ' // &
-        '(basis_time = ' // real_str(r%basis_time) // '): ')
+      ! What failed at the basis configuration; a message naming its group (n_modes out of
+      ! range) needs no second one.
+      if (.not. err%ok() .and. index(err%message, 'group &') /= 1) call err%prefix( &
+        'group &reduction: basis configuration (basis_time = ' // real_str(r%basis_time) // '): ')
     end associate
   end subroutine reduction_basis
 

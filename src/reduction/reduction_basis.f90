@@ -130,8 +130,9 @@ contains
 
     n_dy = dyn%model%n_dy
     if (spec%selection == 'count' .and. (spec%n_modes < 1 .or. spec%n_modes > n_dy)) then
-      call err%set(ERR_INPUT, 'group &reduction: n_modes = ' // int_str(spec%n_modes) // &
-        ' must be between 1 and the number of dynamic coordinates (' // int_str(n_dy) // ')')
+      call err%set(ERR_INPUT, 'group &reduction: variable ''n_modes'': n_modes = ' // &
+        int_str(spec%n_modes) // ' must be between 1 and the number of dynamic coordinates (' &
+        // int_str(n_dy) // ')')
       return
     end if
     ! The solution (x, q) the run goes on from; the factors are renewed by its next solve.

@@ -56,3 +56,15 @@ def test_auto_selection_reports_why(tmp_path):
         attrs = dict(f["reduction"].attrs)
     assert attrs["selection"] == "auto" and attrs["motion_bandwidth_hz"] > 0
     assert "x motion bandwidth" in attrs["reason"] and attrs["reason"] in proc.stdout
+
+
+def test_n_modes_out_of_range_names_its_group_once(tmp_path):
+    """n_modes above the number of dynamic coordinates: one 'group &reduction' and the
+    variable, not the basis configuration's prefix on a message that has its own group."""
+    nml = tmp_path / "scene.nml"
+    nml.write_text(GOOD + "&reduction n_modes = 5 /\n")
+    proc = subprocess.run([str(BIN), str(nml), "-o", str(tmp_path / "out.h5")],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1, proc.stderr
+    assert proc.stderr.count("group &reduction") == 1, proc.stderr
+    assert "variable 'n_modes'" in proc.stderr and "basis configuration" not in proc.stderr
