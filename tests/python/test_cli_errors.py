@@ -99,6 +99,11 @@ CASES = {
     "group not closed": (GOOD.replace("&modal /", "&modal"), ["scene.nml"]),
     "no nodes": ("&modal /\n", ["&node"]),
     "twice defined node": (GOOD + "&node label = 'tip', x = 2, y = 0 /\n", ["tip", "twice"]),
+    # Expanded in memory: 16 GB (and, with two such items, an integer overflow) before.
+    "huge repeat count": (GOOD.replace("&modal /", "&scene gravity = 2000000000*0.0 /\n&modal /"),
+                          ["scene.nml:", "&scene #1", "'gravity'", "more than 10000000 values"]),
+    "huge repeat count of a string": (GOOD + "&output nodes = 1500000000*'tip', 1500000000*'tip' /\n",
+                                      ["&output #1", "'nodes'", "more than 10000000 values"]),
     "static newton": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
                                    "&static n_steps = 1, max_iter = 1, tol = 1e-14 /"),
                       ["static", "did not converge"]),
