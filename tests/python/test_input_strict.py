@@ -202,6 +202,8 @@ def test_interrupt_leaves_no_file(tmp_path, long_run_seconds, sig, status):
     (("n_elements = 2", "n_elements = 2000000000"), ["too large", "GB", "n_elements"]),
     (("n_elements = 2", "n_elements = 4000"), ["too large", "limit 10000"]),
     (("t_end = 0.03", "t_end = 1e9"), ["&dynamic", "output_dt", "GB"]),
+    # Numbers of three exponent digits lost their 'E' ('3.00+298 output times').
+    (("output_dt = 1e-3", "output_dt = 1e-300"), ["&dynamic", "3.00E+298 output times"]),
     # Was a Fortran runtime error allocating 160 GB at the start of the static analysis.
     (("&modal n_modes = 2 /", "&static n_steps = 2000000000 /"), ["&static", "'n_steps'", "GB"]),
     (("t_end = 0.03, output_dt = 1e-3", "t_end = 1e6, output_dt = 1e3, integrator = 'galpha', "
