@@ -218,6 +218,28 @@ CASES.update({
                                           "end = 2 /"), ["&motion", "'end'", "'cubic'"]),
     "motion start with sum": (GOOD.replace(M1, "&motion label = 'm1', law = 'sum', terms = 'a', "
                                            "start = 1 /" + RAMP_A), ["&motion", "'start'", "'sum'"]),
+    # Each of these ended in a floating-point trap (Debug) inside the motion law, its table's
+    # spline or the kinematics, instead of a message.
+    "motion duration far too short": (GOOD.replace("duration = 0.05", "duration = 1e-300"),
+                                      ["&motion 'm1'", "'duration'", "1e-100"]),
+    "motion duration far too long": (GOOD.replace("duration = 0.05", "duration = 1e300"),
+                                     ["&motion 'm1'", "'duration'", "1.00E+300", "1e100"]),
+    "motion acceleration beyond the limit": (GOOD.replace("duration = 0.05", "duration = 1e-60"),
+                                             ["&motion 'm1'", "'duration'", "accelerations"]),
+    "motion end far too large": (GOOD.replace("end = 0.5", "end = 1e300"),
+                                 ["&motion 'm1'", "'end'", "1e100"]),
+    "motion harmonic frequency far too high": (GOOD.replace(M1, "&motion label = 'm1', law = "
+                                               "'harmonic', amplitude = 0.1, frequency = 1e300 /"),
+                                               ["&motion 'm1'", "'frequency'", "1e100"]),
+    "motion ramp rate far too high": (GOOD.replace(M1, "&motion label = 'm1', law = 'ramp', "
+                                                   "rate = 1e300 /"), ["&motion 'm1'", "'rate'"]),
+    "motion table times far too close": (GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                                      "times = 0, 1e-300, 2e-300, values = 0, "
+                                                      "0.1, 0.2 /"),
+                                         ["&motion 'm1'", "'times'", "points 1 and 2"]),
+    "motion table value far too large": (GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                                      "times = 0, 0.01, 0.02, values = 0, 1e300, "
+                                                      "0 /"), ["&motion 'm1'", "'values'"]),
     "motion ramp with auto_factor": (RED.format("auto_factor = 2").replace(
         M1, "&motion label = 'm1', law = 'sum', terms = 'a' /" + RAMP_A),
         ["&motion 'm1'", "ramp", "auto_factor"]),
