@@ -172,6 +172,11 @@ contains
     allocate(this%groups(0))
     pos = 1
     line = 1
+    ! A UTF-8 byte order mark, which Windows editors put before the text, is no text outside
+    ! a group: the user cannot see it, so refusing it would name nothing they wrote.
+    if (len(text) >= 3) then
+      if (text(1:3) == achar(239) // achar(187) // achar(191)) pos = 4
+    end if
     do
       ! Outside groups only blanks, '!' comments and the '&' of the next group may stand:
       ! anything else is text the user meant to say something with (a group whose '&' is

@@ -99,6 +99,8 @@ VARIANTS = {
     .replace("start = 0,", "start = +0.0,"),
     "several groups on a line": lambda t: t.replace("/\n&", "/ &", 3),
     "comments everywhere": lambda t: t.replace(",\n", ", ! more\n").replace("/\n", "/ ! end\n"),
+    # Windows editors (Notepad) save UTF-8 with a byte order mark: was 'text outside a group'.
+    "utf-8 byte order mark": lambda t: "\ufeff" + t,
 }
 
 
