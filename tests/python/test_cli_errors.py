@@ -174,6 +174,13 @@ CASES.update({
                                   ["'mac_threshold'", "update = 'mac'"]),
     "update_interval without update": (RED.format("n_modes = 1, update_interval = 0.1"),
                                        ["'update_interval'", "interval"]),
+    # Was exit status 5, 'CVODE: CVodeSetMinStep returned -22' (an internal error).
+    "max_step far too small": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'bdf', "
+                                            "max_step = 1e-300"),
+                               ["scene.nml:", "&dynamic #1", "'max_step'", "1e7"]),
+    "max_step below the round-off of the time": (
+        GOOD.replace("t_end = 0.02, output_dt = 1e-3", "t_end = 1e-10, output_dt = 1e-11, "
+                     "integrator = 'bdf', max_step = 1e-17"), ["'max_step'", "round-off"]),
     "erk order": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'erk', erk_order = 7"),
                   ["'erk_order'"]),
 })
