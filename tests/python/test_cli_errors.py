@@ -45,6 +45,38 @@ def test_no_arguments(tmp_path):
     assert_clean_error(proc, out, "usage")
 
 
+def test_output_onto_the_input_keeps_the_scene(tmp_path):
+    """`-o scene.nml` (however spelled, or through a link) replaced the scene by the result."""
+    nml = tmp_path / "scene.nml"
+    nml.write_text(GOOD)
+    (tmp_path / "link.nml").symlink_to("scene.nml")
+    for args in (["scene.nml", "-o", "scene.nml"], ["scene.nml", "-o", "./scene.nml"],
+                 ["link.nml", "-o", "scene.nml"]):
+        proc = subprocess.run([BIN, *args], capture_output=True, text=True, timeout=120,
+                              cwd=tmp_path)
+        assert proc.returncode == 4, proc.stderr
+        assert_clean_error(proc, tmp_path / "out.h5", "is the input file")
+        assert nml.read_text() == GOOD
+
+
+def test_output_onto_a_special_file_is_refused(tmp_path):
+    """The result is renamed onto its name: a pipe or device there (-o /dev/null as root) was
+    replaced by a regular file."""
+    import os
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    proc, _ = run(tmp_path, GOOD, [str(tmp_path / "scene.nml"), "-o", str(fifo)])
+    assert proc.returncode == 4, proc.stderr
+    assert_clean_error(proc, tmp_path / "out.h5", "not a regular file")
+    assert fifo.is_fifo()
+
+
+def test_output_option_twice(tmp_path):
+    proc, out = run(tmp_path, GOOD, ["scene.nml", "-o", "a.h5", "-o", "out.h5"])
+    assert proc.returncode == 1
+    assert_clean_error(proc, out, "-o given twice")
+
+
 CASES = {
     "unknown group": (GOOD + "&solver tol = 1 /\n", ["scene.nml", "&solver"]),
     "unknown variable": (GOOD.replace("t_end = 0.02", "t_end = 0.02, dtt = 1"),
