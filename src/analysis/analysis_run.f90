@@ -297,8 +297,10 @@ contains
     type(error_t), intent(inout) :: err
     real(wp), parameter :: MAX_HISTORY_BYTES = 4.0e9_wp
     real(wp) :: bytes
-    ! Per step: all coordinates, q, frequencies, load factor and stability (8 bytes each).
-    bytes = 8.0_wp * real(n_steps, wp) * real(model%n_x + model%n_dy + n_frequencies + 2, wp)
+    ! Per step: all coordinates, q, frequencies, load factor and stability (8 bytes each). More
+    ! frequencies than dynamic coordinates are refused with their own message.
+    bytes = 8.0_wp * real(n_steps, wp) * real(model%n_x + model%n_dy + &
+      min(n_frequencies, model%n_dy) + 2, wp)
     if (bytes > MAX_HISTORY_BYTES) call err%set(ERR_INPUT, 'group &static: variable ' // &
       '''n_steps'': ' // int_str(n_steps) // ' steps, whose histories would need ' // &
       approx_str(bytes / 1.0e9_wp) // ' GB (limit 4 GB): take fewer steps')
