@@ -136,6 +136,9 @@ CASES = {
                           ["scene.nml:", "&scene #1", "'gravity'", "more than 10000000 values"]),
     "huge repeat count of a string": (GOOD + "&output nodes = 1500000000*'tip', 1500000000*'tip' /\n",
                                       ["&output #1", "'nodes'", "more than 10000000 values"]),
+    # The static size check must leave too many frequencies to their own message.
+    "static n_frequencies huge": (GOOD.replace("&modal /", "&static n_frequencies = 2000000000 /"),
+                                  ["&static", "'n_frequencies'", "dynamic coordinates"]),
     "static newton": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
                                    "&static n_steps = 1, max_iter = 1, tol = 1e-14 /"),
                       ["static", "did not converge"]),
@@ -174,6 +177,10 @@ CASES.update({
                                          ["'basis_prescribed'", "1 values", "got 2"]),
     "reduction update without interval": (RED.format("n_modes = 1, update = 'mac'"),
                                           ["&reduction", "'update_interval'"]),
+    # Never ended: the basis check times did not move past t.
+    "reduction update interval far too small": (
+        RED.format("n_modes = 1, update = 'interval', update_interval = 1e-300"),
+        ["&reduction", "'update_interval'", "1e7"]),
     "reduction unknown update": (RED.format("n_modes = 1, update = 'often'"),
                                  ["'update'", "often"]),
     "reduction unknown eigensolver": (RED.format("n_modes = 1, eigensolver = 'magma'"),
