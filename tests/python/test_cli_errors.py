@@ -139,6 +139,12 @@ CASES = {
     # The static size check must leave too many frequencies to their own message.
     "static n_frequencies huge": (GOOD.replace("&modal /", "&static n_frequencies = 2000000000 /"),
                                   ["&static", "'n_frequencies'", "dynamic coordinates"]),
+    # A controller or &linear naming 'j1' took whichever element came first.
+    "hinge label twice": (GOOD + "&hinge label = 'j1', node = 'tip', link = 'arm', "
+                          "mode = 'dynamic' /\n", ["&hinge #2", "'j1'", "twice"]),
+    "truss with a hinge's label": (GOOD + "&node label = 'c', x = 1, y = 1, fixed = .true. /\n"
+                                   "&truss label = 'j1', from = 'tip', to = 'c', E = 1e9, "
+                                   "A = 1e-6 /\n", ["&truss #1", "'j1'", "&hinge #1"]),
     "static newton": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
                                    "&static n_steps = 1, max_iter = 1, tol = 1e-14 /"),
                       ["static", "did not converge"]),
