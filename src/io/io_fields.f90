@@ -254,7 +254,8 @@ contains
     if (.not. err%ok()) return
     if (len_trim(label) == 0) then
       call err%set(ERR_INPUT, g%where() // ': variable ''label'' must not be empty')
-    else if (index(label, '/') > 0 .or. label /= trim(adjustl(label))) then
+    ! Not label /= trim(adjustl(label)): Fortran compares blank-padded, so 'tip ' passed.
+    else if (index(label, '/') > 0 .or. label(1:1) == ' ' .or. len_trim(label) < len(label)) then
       call err%set(ERR_INPUT, g%where() // ': variable ''label'': ''' // label // &
         ''' may not contain ''/'' or start or end with a blank')
     end if

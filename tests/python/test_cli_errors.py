@@ -207,6 +207,8 @@ CASES.update({
             "mode = 'prescribed', motion = 'm1'", "mode = 'dynamic'"),
         ["static_correction", "positive definite"]),
     "empty label": (GOOD.replace("label = 'arm'", "label = ''"), ["&link", "'label'", "empty"]),
+    "label with a trailing blank": (GOOD.replace("label = 'tip', x", "label = 'tip ', x"),
+                                    ["&node #2", "'label'", "'tip '", "blank"]),
     "label with a slash": (GOOD.replace("label = 'tip', x", "label = 'a/b', x"),
                            ["&node", "'label'", "'/'"]),
     "motion on a dynamic hinge": (GOOD.replace("mode = 'prescribed'", "mode = 'dynamic'"),
