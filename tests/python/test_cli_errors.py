@@ -2,6 +2,7 @@
 one), a non-zero exit status, no backtrace, no NaN, and no result file left behind."""
 import subprocess
 
+import numpy as np
 import pytest
 
 from helpers import ARM, BIN, assert_clean_error
@@ -322,6 +323,41 @@ def test_motion_table_csv(tmp_path):
     proc = subprocess.run([BIN, str(sub / "scene.nml"), "-o", str(out)], capture_output=True,
                           text=True, timeout=120, cwd=tmp_path)
     assert_clean_error(proc, out, "&motion", "'file'", "m.csv' line 4", "0.01, x")
+
+@pytest.mark.parametrize("csv,fragments", [
+    # A floating-point trap (overflow) in the list-directed read.
+    ("0, 0\n0.01, 1e400\n", ["m.csv' line 2", "out of range"]),
+    ("1e400, 0\n1, 0.1\n2, 0.2\n", ["m.csv' line 1", "out of range"]),
+])
+def test_motion_table_csv_number_out_of_range(tmp_path, csv, fragments):
+    (tmp_path / "m.csv").write_text(csv)
+    proc, out = run(tmp_path, GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                           "file = 'm.csv' /"))
+    assert_clean_error(proc, out, "&motion", "'file'", *fragments)
+
+
+@pytest.mark.parametrize("csv", [
+    "0, 0\n" + " " * 5000 + "0.01, 0.03\n0.02, 0.05\n",   # was cut at 4096: a blank line
+    "\ufeff0, 0\n0.01, 0.03\n0.02, 0.05\n",                 # the BOM made line 1 a header
+    "\n  \nt, angle\n0, 0\n0.01, 0.03\n0.02, 0.05\n",       # the header after blank lines
+])
+def test_motion_table_csv_keeps_every_point(tmp_path, csv):
+    """Each of these tables has the points (0, 0), (0.01, 0.03), (0.02, 0.05): the run's joint
+    angle at 0.02 s is the last value, which the loss of a point would change."""
+    import h5py
+    (tmp_path / "m.csv").write_text(csv)
+    (tmp_path / "ref.csv").write_text("0, 0\n0.01, 0.03\n0.02, 0.05\n")
+    results = []
+    for name in ("m.csv", "ref.csv"):
+        out = tmp_path / "out.h5"
+        proc, out = run(tmp_path, GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                               f"file = '{name}' /"))
+        assert proc.returncode == 0, proc.stderr
+        with h5py.File(out) as f:
+            results.append(f["nodes/tip/position"][()])
+        out.unlink()
+    np.testing.assert_array_equal(results[0], results[1])
+
 
 # A column, fixed at the base, for &buckling (docs/input.md); {} takes the &buckling variables.
 COLUMN = """&node label = 'base', x = 0, y = 0, fixed = .true. /
