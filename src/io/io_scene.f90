@@ -119,6 +119,18 @@ contains
         scene%reduction%update_interval) // ' basis checks, more than the 1e7 steps a run may ' // &
         'take: raise update_interval')
     end if
+    ! Every sample of a sampled controller is a breakpoint where the integrator restarts.
+    do i = 1, size(scene%controllers)
+      if (.not. (err%ok() .and. scene%dynamic%active)) exit
+      associate (c => scene%controllers(i))
+        if (c%period > 0) then
+          if (scene%dynamic%t_end / c%period > 1.0e7_wp) call err%set(ERR_INPUT, file%path // &
+            ': group &controller ''' // c%label // ''': variable ''period'': t_end / period ' &
+            // 'gives ' // approx_str(scene%dynamic%t_end / c%period) // ' samples, each a ' // &
+            'restart of the integrator, more than the 1e7 steps a run may take: raise period')
+        end if
+      end associate
+    end do
     if (err%ok()) then
       call check_dimension(scene, err)
       if (.not. err%ok()) call err%prefix(file%path // ': ')

@@ -151,6 +151,16 @@ CASES = {
                                      ["&node #2", "'x'", "out of range", "1e100"]),
     "gravity beyond 1e100": (GOOD.replace("&modal /", "&scene gravity = 0, -1e300 /\n&modal /"),
                              ["&scene #1", "'gravity'", "1e100"]),
+    # A floating-point trap (the sample count overflowed an integer) and a hang allocating the
+    # states (16 GB), before.
+    "controller period far too small": (
+        GOOD.replace("mode = 'prescribed', motion = 'm1'", "mode = 'dynamic'") +
+        "&controller label = 'c', actuator = 'j1.torque', measure = 'j1.angle', kp = 1, "
+        "period = 1e-300 /\n", ["&controller 'c'", "'period'", "1e7"]),
+    "controller n_states far too large": (
+        GOOD.replace("mode = 'prescribed', motion = 'm1'", "mode = 'dynamic'") +
+        "&controller label = 'c', law = 'user', actuator = 'j1.torque', measure = 'j1.angle', "
+        "n_states = 2000000000 /\n", ["&controller #1", "'n_states'", "10000"]),
     "static newton": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
                                    "&static n_steps = 1, max_iter = 1, tol = 1e-14 /"),
                       ["static", "did not converge"]),
