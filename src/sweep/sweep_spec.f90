@@ -52,8 +52,9 @@ module sweep_spec
   !> A value within this relative distance of an integer counts as that integer: start/stop/n
   !> spacing of integers carries round-off.
   real(wp), parameter :: INT_TOL = 1.0e-9_wp
-  !> Cases of one sweep: every case gets rows in the result file (its message alone 256 bytes)
-  !> and in memory, created at full size before the first case runs (docs/sweep.md).
+  !> Cases of one sweep: every case gets rows in the result file (a message of hundreds of
+  !> bytes, its metrics) and in memory, created at full size before the first case runs
+  !> (docs/sweep.md).
   integer, parameter, public :: MAX_CASES = 10000000
 
   interface
