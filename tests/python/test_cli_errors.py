@@ -220,6 +220,9 @@ CASES.update({
     "empty label": (GOOD.replace("label = 'arm'", "label = ''"), ["&link", "'label'", "empty"]),
     "label with a trailing blank": (GOOD.replace("label = 'tip', x", "label = 'tip ', x"),
                                     ["&node #2", "'label'", "'tip '", "blank"]),
+    # Cut to 64 characters in the model: '&output nodes' then called such a node undefined.
+    "label too long": (GOOD.replace("'tip'", "'" + "t" * 70 + "'"),
+                       ["&node #2", "'label'", "70 characters long", "48"]),
     "label with a slash": (GOOD.replace("label = 'tip', x", "label = 'a/b', x"),
                            ["&node", "'label'", "'/'"]),
     "motion on a dynamic hinge": (GOOD.replace("mode = 'prescribed'", "mode = 'dynamic'"),
