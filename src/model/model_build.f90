@@ -89,7 +89,8 @@ module model_build
       type(beam_t), intent(out) :: beam
       type(error_t), intent(inout) :: err
     end subroutine link_header
-    !> Hinge, truss and slider labels name elements (controllers, &linear): each once.
+    !> Hinge, truss and slider labels name elements (controllers, &linear): each once; node
+    !> labels are not those of links' interior nodes.
     module subroutine check_element_labels(scene, err)
       type(scene_t), intent(in) :: scene
       type(error_t), intent(inout) :: err

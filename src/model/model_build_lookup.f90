@@ -208,7 +208,7 @@ contains
   !> controller or &linear names it ('j1.torque' drove whichever hinge came first).
   module procedure check_element_labels
     type(label_t), allocatable :: labels(:), groups(:)
-    integer :: i, k, n
+    integer :: i, k, n, j
     n = size(scene%hinges) + size(scene%trusses) + size(scene%sliders)
     allocate(labels(n), groups(n))
     do i = 1, size(scene%hinges)
@@ -234,6 +234,24 @@ contains
           return
         end if
       end do
+    end do
+    ! A &node named like a link's interior node ('arm.1') made '&output nodes' and the
+    ! controllers' 'arm.1.y' take whichever came first.
+    do i = 1, size(scene%nodes)
+      associate (label => scene%nodes(i)%label)
+        k = index(label, '.', back=.true.)
+        if (k <= 1 .or. k == len(label)) cycle
+        if (verify(label(k + 1:), '0123456789') /= 0 .or. len(label) - k > 6) cycle
+        n = link_index(scene, label(:k - 1))
+        if (n == 0) cycle
+        read(label(k + 1:), *) j
+        if (j >= 1 .and. j < scene%links(n)%n_elements) then
+          call err%set(ERR_INPUT, 'group &node #' // int_str(i) // ': label ''' // label // &
+            ''' is the name of interior node ' // int_str(j) // ' of &link ''' // &
+            scene%links(n)%label // ''': give the node another label')
+          return
+        end if
+      end associate
     end do
   end procedure check_element_labels
 

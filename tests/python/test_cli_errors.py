@@ -223,6 +223,9 @@ CASES.update({
     # Cut to 64 characters in the model: '&output nodes' then called such a node undefined.
     "label too long": (GOOD.replace("'tip'", "'" + "t" * 70 + "'"),
                        ["&node #2", "'label'", "70 characters long", "48"]),
+    # '&output nodes = 'arm.1'' took whichever of the two came first.
+    "node label of a link's interior node": (GOOD.replace("'tip'", "'arm.1'"),
+                                             ["&node #2", "'arm.1'", "interior node 1"]),
     "label with a slash": (GOOD.replace("label = 'tip', x", "label = 'a/b', x"),
                            ["&node", "'label'", "'/'"]),
     "motion on a dynamic hinge": (GOOD.replace("mode = 'prescribed'", "mode = 'dynamic'"),
