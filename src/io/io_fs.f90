@@ -14,7 +14,7 @@ module io_fs
   implicit none
   private
   public :: rename_file, delete_file, sync_file, check_output_path, install_interrupt_guard, &
-    guard_result_file, clear_result_guard, make_folder
+    guard_result_file, clear_result_guard, make_folder, same_file
 
   integer(c_int), parameter :: ENOENT = 2   !< errno "No such file or directory" (Linux)
   integer(c_int), parameter :: EISDIR = 21  !< errno "Is a directory" (Linux)
@@ -116,6 +116,12 @@ contains
     if (rc /= 0) call err%set(ERR_IO, "cannot sync '" // path // "' to disk: " // errno_text(rc))
   end subroutine sync_file
 
+  !> Whether both paths name one existing file (however spelled, through links too).
+  logical function same_file(a, b)
+    character(len=*), intent(in) :: a, b
+    same_file = c_same_file(to_c(a), to_c(b)) /= 0
+  end function same_file
+
   !> Fail early (ERR_IO) when `path` cannot become the result file: it is a folder, a device
   !> or another file that is not a regular one, the `input` file itself, its folder does not
   !> exist or is not writable. Run before the analyses, so a long run does not end in a write
@@ -133,7 +139,7 @@ contains
       return
     end if
     if (present(input)) then
-      if (c_same_file(to_c(path), to_c(input)) /= 0) then
+      if (same_file(path, input)) then
         call err%set(ERR_IO, "cannot write the result file '" // path // "': it is the " // &
           "input file '" // input // "' (give another name, e.g. -o result.h5)")
         return

@@ -329,6 +329,27 @@ def test_sweep_output_path_errors_say_why(tmp_path, out, fragment):
     assert list((tmp_path / "res").iterdir()) == []
 
 
+@pytest.mark.skipif(not Path(SWEEP_BIN).is_file(), reason="flexmor-sweep not built")
+@pytest.mark.parametrize("out,fragment", [("sweep.nml", "it is the sweep file"),
+                                          ("./base.nml", "it is the base scene")])
+def test_sweep_output_onto_its_inputs_is_refused(tmp_path, out, fragment):
+    """Was 'not an HDF5 file ... (remove it or choose another -o)' about the user's own sweep
+    file or base scene, after creating the case folder beside it."""
+    base = PLAIN.replace("&modal n_modes = 2 /\n", "")
+    sweep = ("&sweep base = 'base.nml', case_files = .true. /\n"
+             "&parameter name = 'motion.m1.end', values = 0.3 /\n")
+    (tmp_path / "base.nml").write_text(base)
+    (tmp_path / "sweep.nml").write_text(sweep)
+    proc = subprocess.run([SWEEP_BIN, "sweep.nml", "-o", out, "-q"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 4, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0] and "remove" not in lines[0], proc.stderr
+    assert (tmp_path / "base.nml").read_text() == base
+    assert (tmp_path / "sweep.nml").read_text() == sweep
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["base.nml", "sweep.nml"]
+
+
 def test_unused_motion_is_named_in_a_warning(tmp_path):
     text = PLAIN + "&motion label = 'spare', law = 'cubic', end = 1, duration = 1 /\n"
     proc, out = run(tmp_path, text, extra=("-q",))
