@@ -218,6 +218,15 @@ contains
         tok%text = s
         return
       end if
+      ! Control characters cannot be seen in the file and do not survive as text: a NUL cut
+      ! a title short in the result file and made two labels one HDF5 name.
+      if (iachar(text(pos:pos)) < 32 .and. text(pos:pos) /= achar(9) .and. &
+          text(pos:pos) /= achar(13)) then
+        tok%kind = TK_ERR
+        tok%text = 'a string may not contain control characters (byte ' // &
+          itoa(iachar(text(pos:pos))) // ')'
+        return
+      end if
       s = s // text(pos:pos)
       pos = pos + 1
     end do

@@ -226,6 +226,12 @@ CASES.update({
     # '&output nodes = 'arm.1'' took whichever of the two came first.
     "node label of a link's interior node": (GOOD.replace("'tip'", "'arm.1'"),
                                              ["&node #2", "'arm.1'", "interior node 1"]),
+    # A NUL cut the title short in the result file; in a label it made two HDF5 names one
+    # and the run failed only when writing its results.
+    "NUL in a label": (GOOD.replace("label = 'tip'", "label = 'ti\x00p'"),
+                       ["&node #2", "'label'", "control characters (byte 0)"]),
+    "NUL in the title": (GOOD.replace("&modal /", "&scene title = 'a\x00b' /\n&modal /"),
+                         ["&scene #1", "'title'", "control characters"]),
     "label with a slash": (GOOD.replace("label = 'tip', x", "label = 'a/b', x"),
                            ["&node", "'label'", "'/'"]),
     "motion on a dynamic hinge": (GOOD.replace("mode = 'prescribed'", "mode = 'dynamic'"),
