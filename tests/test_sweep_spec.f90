@@ -351,6 +351,16 @@ contains
       [character(40) :: "'link.l1.E'", "missing 'stop'"], 'range without stop')
     call parse_fails(SWEEP // "&parameter name = 'motion.m1.end', start = 0, stop = 1, n = 0 /", &
       [character(40) :: "'motion.m1.end'", 'empty range', 'n = 0'], 'empty range')
+    ! Each of these allocated its 16 GB list or table and was killed by the system.
+    call parse_fails(SWEEP // "&parameter name = 'motion.m1.end', start = 0, stop = 1, " // &
+      'n = 2000000000 /', [character(40) :: "'motion.m1.end'", "variable 'n'", '10000000'], &
+      'range beyond the case limit')
+    call parse_fails(SWEEP // "&parameter name = 'motion.m1.end', start = 0, stop = 1, " // &
+      "n = 4000 /" // NL // "&parameter name = 'link.l1.E', start = 1, stop = 2, n = 4000 /", &
+      [character(40) :: 'product', 'more than 10000000 cases'], 'product beyond the case limit')
+    call parse_fails("&sweep base = 'b.nml', mode = 'lhs', n_samples = 2000000000 /" // NL // &
+      "&parameter name = 'link.l1.E', min = 1, max = 2 /", &
+      [character(40) :: '&sweep', "'n_samples'", 'at most 10000000'], 'samples beyond the limit')
     call parse_fails(SWEEP // "&parameter name = 'link.l1.E', start = 0, stop = 1, n = 3, " // &
       'log = .true. /', [character(40) :: "'link.l1.E'", "'log'", 'start > 0'], &
       'log range through zero')

@@ -190,6 +190,8 @@ contains
     call build_model(this%scene, model, err)
     if (err%ok()) call warn_unused_motions(this)
     if (err%ok()) call check_output_nodes(this%scene, model, err)
+    if (err%ok() .and. this%scene%static%active) call check_static_size(this%scene%static%n_steps, &
+      this%scene%static%n_frequencies, model, err)
     if (err%ok() .and. this%scene%dynamic%active) call check_history_size(this%scene%dynamic, &
       model, err)
     if (err%ok() .and. this%scene%dynamic%error_check == ERROR_CHECK_MODES .and. .not. &
@@ -286,6 +288,23 @@ contains
         approx_str(d%t_end / d%dt) // ' fixed steps (limit 1e9): increase dt')
     end if
   end subroutine check_history_size
+
+  !> The static histories are allocated for all n_steps before the first step (the limit is
+  !> the dynamic one, docs/input.md): refuse what would not fit rather than fail allocating.
+  subroutine check_static_size(n_steps, n_frequencies, model, err)
+    integer, intent(in) :: n_steps, n_frequencies
+    type(model_t), intent(in) :: model
+    type(error_t), intent(inout) :: err
+    real(wp), parameter :: MAX_HISTORY_BYTES = 4.0e9_wp
+    real(wp) :: bytes
+    ! Per step: all coordinates, q, frequencies, load factor and stability (8 bytes each). More
+    ! frequencies than dynamic coordinates are refused with their own message.
+    bytes = 8.0_wp * real(n_steps, wp) * real(model%n_x + model%n_dy + &
+      min(n_frequencies, model%n_dy) + 2, wp)
+    if (bytes > MAX_HISTORY_BYTES) call err%set(ERR_INPUT, 'group &static: variable ' // &
+      '''n_steps'': ' // int_str(n_steps) // ' steps, whose histories would need ' // &
+      approx_str(bytes / 1.0e9_wp) // ' GB (limit 4 GB): take fewer steps')
+  end subroutine check_static_size
 
   !> Run the analyses the scene asks for.
   !> Recursive: &dynamic error_check runs a second run_t from within (analysis_run_check).

@@ -29,7 +29,7 @@ program flexmor_main
   run%verbose = args%verbose
   call set_progress_interval(run)
   if (err%ok()) call install_interrupt_guard('flexmor', 'no result file written', err)
-  if (err%ok()) call check_output_path(args%output, err)
+  if (err%ok()) call check_output_path(args%output, err, input=args%input)
   if (err%ok()) call run%load(args%input, err)
   if (err%ok()) call run%execute(err)
   if (err%ok()) call run%write(args%output, err)

@@ -6,10 +6,10 @@
 program flexmor_sweep_main
   use, intrinsic :: iso_fortran_env, only: error_unit
   use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_Comm_rank, MPI_Barrier, MPI_COMM_WORLD
-  use core_error, only: error_t
+  use core_error, only: error_t, ERR_IO
   use core_linalg, only: single_thread_blas, steady_heap
   use io_cli, only: cli_args_t, parse_cli
-  use io_fs, only: install_interrupt_guard
+  use io_fs, only: install_interrupt_guard, same_file
   use core_version, only: FLEXMOR_VERSION
   use sweep_spec, only: sweep_spec_t
   use sweep_run, only: run_sweep, check_sweep
@@ -39,6 +39,17 @@ program flexmor_sweep_main
       ! The sweep file is flushed after every case: an interrupt keeps what is done.
       call install_interrupt_guard('flexmor-sweep', 'the finished cases are kept in ' // &
         args%output // '; rerun the same command to resume', err, silent=rank /= 0)
+      ! An existing result file is resumed, anything else refused with 'remove it': not
+      ! advice to give about the sweep file or its base scene.
+      if (err%ok()) then
+        if (same_file(args%output, args%input)) then
+          call err%set(ERR_IO, "cannot write the sweep result file '" // args%output // &
+            "': it is the sweep file (give another name, e.g. -o sweep.h5)")
+        else if (same_file(args%output, spec%base_path)) then
+          call err%set(ERR_IO, "cannot write the sweep result file '" // args%output // &
+            "': it is the base scene '" // spec%base_path // "' (give another name)")
+        end if
+      end if
       if (err%ok()) call run_sweep(spec, args%output, MPI_COMM_WORLD, args%verbose, err)
     end if
   end if

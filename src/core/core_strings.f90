@@ -57,6 +57,10 @@ contains
       s = trim(buf)
       if (s(1:1) == '.') s = '0' // s
       if (s(len(s):len(s)) == '.') s = s(:len(s) - 1)
+    else if (abs(x) >= 9.9e99_wp .or. abs(x) < 1.0e-99_wp) then
+      ! es10.2 drops the 'E' of a three-digit exponent ('3.00+298'): give it the room.
+      write(buf, '(es12.2e3)') x
+      s = trim(adjustl(buf))
     else
       write(buf, '(es10.2)') x
       s = trim(adjustl(buf))

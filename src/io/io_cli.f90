@@ -51,6 +51,11 @@ contains
       case ('-q', '--quiet')
         args%verbose = .false.
       case ('-o')
+        ! The first name would be dropped without a word.
+        if (allocated(args%output)) then
+          call err%set(ERR_INPUT, 'option -o given twice (' // usage // ')')
+          return
+        end if
         if (i == n) then
           call err%set(ERR_INPUT, 'option -o needs a file name')
           return

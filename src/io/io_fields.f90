@@ -13,6 +13,10 @@ module io_fields
   public :: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_enum, rd_choices, rd_classes, &
     rd_label, only_with, rd_fixed_list, rd_labels, first_given
 
+  !> Longest label: the longest name the model derives from one, 'node ''<label>'' rotation',
+  !> then fills the 64 characters it keeps names in (model_system).
+  integer, parameter :: MAX_LABEL = 48
+
 contains
 
   ! Getter wrappers that keep the first error and skip work after it. Each takes the variable's
@@ -254,9 +258,17 @@ contains
     if (.not. err%ok()) return
     if (len_trim(label) == 0) then
       call err%set(ERR_INPUT, g%where() // ': variable ''label'' must not be empty')
-    else if (index(label, '/') > 0 .or. label /= trim(adjustl(label))) then
+    ! Not label /= trim(adjustl(label)): Fortran compares blank-padded, so 'tip ' passed.
+    else if (index(label, '/') > 0 .or. label(1:1) == ' ' .or. len_trim(label) < len(label)) then
       call err%set(ERR_INPUT, g%where() // ': variable ''label'': ''' // label // &
         ''' may not contain ''/'' or start or end with a blank')
+    ! The model keeps node, coordinate and element names in 64 characters ('node ''<label>''
+    ! rotation', '<link>.<k>'): a longer label was cut there, so that a node of a 70-character
+    ! label was 'not defined' for &output and labels alike in their first 64 characters met.
+    else if (len(label) > MAX_LABEL) then
+      call err%set(ERR_INPUT, g%where() // ': variable ''label'': ''' // label(:20) // &
+        '...'' is ' // int_str(len(label)) // ' characters long, more than ' // &
+        int_str(MAX_LABEL))
     end if
   end subroutine rd_label
 

@@ -12,6 +12,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+/* flexmor_probe_output: the path exists and is neither a folder nor a regular file (not an
+ * errno value: those are positive). */
+#define FLEXMOR_NOT_REGULAR (-1)
+
 /* fsync the folder holding `path` so a rename in it survives a crash (best effort). */
 static void sync_parent_dir(const char *path)
 {
@@ -71,11 +75,22 @@ void flexmor_strerror(int code, char *buf, size_t len)
  * the temporary file `tmp` next to it (ENOENT: the folder does not exist; EACCES, EROFS, ...).
  * `folder_missing` tells whether the folder of `path` is absent. The probe file is removed again; a leftover `tmp` of an earlier run is truncated, as the
  * writer would do anyway. */
+/* 1 when both paths name one existing file (same device and inode, whatever the spelling). */
+int flexmor_same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    if (stat(a, &sa) != 0 || stat(b, &sb) != 0) return 0;
+    return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
 int flexmor_probe_output(const char *path, const char *tmp, int *folder_missing)
 {
     struct stat st;
     *folder_missing = 0;
     if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) return EISDIR;
+    /* The result is renamed onto `path`: a device, pipe or socket there (-o /dev/null, run
+     * as root) would be replaced by a regular file, not written to. */
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) return FLEXMOR_NOT_REGULAR;
     int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC, 0666);
     if (fd < 0) {
         int rc = errno;

@@ -14,7 +14,7 @@ module io_fs
   implicit none
   private
   public :: rename_file, delete_file, sync_file, check_output_path, install_interrupt_guard, &
-    guard_result_file, clear_result_guard, make_folder
+    guard_result_file, clear_result_guard, make_folder, same_file
 
   integer(c_int), parameter :: ENOENT = 2   !< errno "No such file or directory" (Linux)
   integer(c_int), parameter :: EISDIR = 21  !< errno "Is a directory" (Linux)
@@ -39,6 +39,10 @@ module io_fs
       character(kind=c_char), intent(in) :: path(*)
     end function c_fsync_path
 
+    integer(c_int) function c_same_file(a, b) bind(C, name='flexmor_same_file')
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: a(*), b(*)
+    end function c_same_file
     integer(c_int) function c_probe_output(path, tmp, folder_missing) &
         bind(C, name='flexmor_probe_output')
       import :: c_int, c_char
@@ -112,17 +116,34 @@ contains
     if (rc /= 0) call err%set(ERR_IO, "cannot sync '" // path // "' to disk: " // errno_text(rc))
   end subroutine sync_file
 
-  !> Fail early (ERR_IO) when `path` cannot become the result file: it is a folder, its folder
-  !> does not exist or is not writable. Run before the analyses, so a long run does not end in
-  !> a write error. Creates and removes `path // '.tmp'`, the name the writer uses.
-  subroutine check_output_path(path, err)
+  !> Whether both paths name one existing file (however spelled, through links too).
+  logical function same_file(a, b)
+    character(len=*), intent(in) :: a, b
+    same_file = c_same_file(to_c(a), to_c(b)) /= 0
+  end function same_file
+
+  !> Fail early (ERR_IO) when `path` cannot become the result file: it is a folder, a device
+  !> or another file that is not a regular one, the `input` file itself, its folder does not
+  !> exist or is not writable. Run before the analyses, so a long run does not end in a write
+  !> error (or replace the scene it read). Creates and removes `path // '.tmp'`, the name the
+  !> writer uses.
+  subroutine check_output_path(path, err, input)
     character(len=*), intent(in) :: path
     type(error_t), intent(out) :: err
+    character(len=*), intent(in), optional :: input
+    integer(c_int), parameter :: NOT_REGULAR = -1_c_int   ! FLEXMOR_NOT_REGULAR of io_fs.c
     integer(c_int) :: rc, folder_missing
     integer :: slash
     if (len_trim(path) == 0) then
       call err%set(ERR_IO, 'the result file name is empty')
       return
+    end if
+    if (present(input)) then
+      if (same_file(path, input)) then
+        call err%set(ERR_IO, "cannot write the result file '" // path // "': it is the " // &
+          "input file '" // input // "' (give another name, e.g. -o result.h5)")
+        return
+      end if
     end if
     ! An interrupt during the probe must not leave the probe file behind either.
     call guard_result_file(path // '.tmp', path, final_ours=.false.)
@@ -130,7 +151,10 @@ contains
     call clear_result_guard()
     if (rc == 0) return
     slash = index(path, '/', back=.true.)
-    if (rc == EISDIR) then
+    if (rc == NOT_REGULAR) then
+      call err%set(ERR_IO, "cannot write the result file '" // path // "': it is not a " // &
+        "regular file (a device, pipe or socket), which the result would replace")
+    else if (rc == EISDIR) then
       call err%set(ERR_IO, "cannot write the result file '" // path // "': it is a folder " // &
         "(give a file name, e.g. -o " // path // "/result.h5)")
     else if (folder_missing /= 0 .and. slash > 1) then

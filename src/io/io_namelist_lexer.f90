@@ -27,6 +27,10 @@ module io_namelist_lexer
 
   character(*), parameter :: WHITE = ' ' // achar(9) // achar(10) // achar(13)
   character(*), parameter :: NAME_CHARS = 'abcdefghijklmnopqrstuvwxyz0123456789_'
+  !> Values of one variable after repeat counts: far above any scene's lists (a table of a
+  !> million points), far below what `2000000000*0.0` would allocate (16 GB, or an integer
+  !> overflow of the count when several such items add up).
+  integer, parameter :: MAX_VALUES = 10000000
 
 contains
 
@@ -39,11 +43,12 @@ contains
     type(token_t) :: tok, after
     type(item_t) :: it
     type(item_t), allocatable :: tmp(:)
-    integer :: pos0, line0, p, l, star, n
+    integer :: pos0, line0, p, l, star, n, total
     logical :: want_value
 
     allocate(items(4))
     n = 0
+    total = 0
     msg = ''
     eline = line
     want_value = .true.
@@ -92,6 +97,13 @@ contains
       case default
         exit
       end select
+      if (it%rep > MAX_VALUES - total) then
+        msg = 'more than ' // itoa(MAX_VALUES) // ' values (repeat counts included), at ' // &
+          itoa(it%rep) // '*'
+        eline = tok%line
+        return
+      end if
+      total = total + it%rep
       if (n == size(items)) then   ! grow geometrically: long arrays stay linear
         allocate(tmp(2 * n))
         tmp(1:n) = items
@@ -204,6 +216,15 @@ contains
         pos = pos + 1
         tok%kind = TK_STRING
         tok%text = s
+        return
+      end if
+      ! Control characters cannot be seen in the file and do not survive as text: a NUL cut
+      ! a title short in the result file and made two labels one HDF5 name.
+      if (iachar(text(pos:pos)) < 32 .and. text(pos:pos) /= achar(9) .and. &
+          text(pos:pos) /= achar(13)) then
+        tok%kind = TK_ERR
+        tok%text = 'a string may not contain control characters (byte ' // &
+          itoa(iachar(text(pos:pos))) // ')'
         return
       end if
       s = s // text(pos:pos)

@@ -9,6 +9,11 @@ module io_namelist_values
   private
   public :: to_real, to_int, shown
 
+  !> No scene quantity in SI units comes near it, while a product or a square of two such
+  !> inputs (a mass times gravity, a coordinate squared in a length) still stays finite: at
+  !> 1e300 those overflowed into a floating-point trap or a NaN deep in the model.
+  real(wp), parameter :: MAX_MAGNITUDE = 1.0e100_wp
+
 contains
 
   subroutine to_real(it, x, msg)
@@ -37,8 +42,12 @@ contains
       return
     end if
     read(t, *, iostat=ios) x
-    if (ios /= 0 .or. .not. ieee_is_finite(x)) msg = 'expected a finite real number, got ' // &
-      shown(it)
+    if (ios /= 0 .or. .not. ieee_is_finite(x)) then
+      msg = 'expected a finite real number, got ' // shown(it)
+    else if (abs(x) > MAX_MAGNITUDE) then
+      msg = 'real number out of range: ' // shown(it) // ' (magnitudes above 1e100 are ' // &
+        'not accepted)'
+    end if
   end subroutine to_real
 
   subroutine to_int(it, x, msg)

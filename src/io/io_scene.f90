@@ -6,6 +6,7 @@
 module io_scene
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
+  use core_strings, only: approx_str
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, &
@@ -13,7 +14,7 @@ module io_scene
   use io_scene_analyses, only: read_static, read_modal, read_buckling, read_controller, &
     read_linear, read_dynamic, read_reduction, read_output
   use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
-    force_rec_t, slider_rec_t
+    force_rec_t, slider_rec_t, UPDATE_NONE
   use elements_rotation, only: euler_to_matrix, rotvec_to_euler, orthonormal_frame
   use io_scene_motion, only: read_motion
   implicit none
@@ -109,6 +110,27 @@ contains
       '&static group (the compliance is computed at its equilibria)')
     if (scene%reduction%active .and. .not. scene%dynamic%active) call err%set(ERR_INPUT, &
       file%path // ': group &reduction needs a &dynamic group (it reduces the dynamic analysis)')
+    ! A run checks its basis every update_interval: one far below t_end never ended (an
+    ! interval below the round-off of t does not move it). The limit is the run's step limit.
+    if (err%ok() .and. scene%reduction%active .and. scene%reduction%update /= UPDATE_NONE) then
+      if (scene%dynamic%t_end / scene%reduction%update_interval > 1.0e7_wp) call err%set( &
+        ERR_INPUT, file%path // ': group &reduction: variable ''update_interval'': t_end / ' &
+        // 'update_interval gives ' // approx_str(scene%dynamic%t_end / &
+        scene%reduction%update_interval) // ' basis checks, more than the 1e7 steps a run may ' // &
+        'take: raise update_interval')
+    end if
+    ! Every sample of a sampled controller is a breakpoint where the integrator restarts.
+    do i = 1, size(scene%controllers)
+      if (.not. (err%ok() .and. scene%dynamic%active)) exit
+      associate (c => scene%controllers(i))
+        if (c%period > 0) then
+          if (scene%dynamic%t_end / c%period > 1.0e7_wp) call err%set(ERR_INPUT, file%path // &
+            ': group &controller ''' // c%label // ''': variable ''period'': t_end / period ' &
+            // 'gives ' // approx_str(scene%dynamic%t_end / c%period) // ' samples, each a ' // &
+            'restart of the integrator, more than the 1e7 steps a run may take: raise period')
+        end if
+      end associate
+    end do
     if (err%ok()) then
       call check_dimension(scene, err)
       if (.not. err%ok()) call err%prefix(file%path // ': ')

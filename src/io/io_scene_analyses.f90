@@ -4,6 +4,7 @@
 module io_scene_analyses
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
+  use core_strings, only: approx_str
   use io_namelist, only: nml_group_t
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_enum, rd_label, &
     only_with, rd_labels
@@ -200,6 +201,20 @@ contains
       call rd_real(g, 'error_check_factor', d%error_check_factor, err)
       call rd_int(g, 'error_check_modes', d%error_check_modes, err)
       if (.not. err%ok()) return
+      ! A step limit that forces more steps than a run may take (10^7), or one below the
+      ! round-off of the time, which the integrators cannot step (CVODE refused its options:
+      ! an internal error), fails before the run.
+      if (d%max_step > 0) then
+        if (d%t_end / d%max_step > 1.0e7_wp) then
+          call err%set(ERR_INPUT, g%where() // ': variable ''max_step'': t_end / max_step ' // &
+            'gives ' // approx_str(d%t_end / d%max_step) // ' steps, more than a run may ' // &
+            'take (1e7): raise max_step')
+        else if (d%max_step < 16 * spacing(max(d%t_end, 1.0_wp))) then
+          call err%set(ERR_INPUT, g%where() // ': variable ''max_step'': ' // &
+            approx_str(d%max_step) // ' s is below the round-off of the time: raise max_step')
+        end if
+        if (.not. err%ok()) return
+      end if
       if (d%jacobian == JACOBIAN_INTERNAL .and. d%integrator /= INTEGRATOR_BDF) &
         call err%set(ERR_INPUT, g%where() // ': variable ''jacobian'': ''internal'' (CVODE''s ' &
         // 'difference quotients) needs integrator = ''bdf''' // auto_note(d%integrator))

@@ -344,7 +344,7 @@ module io_schema_tables
       0.0_wp, .false., huge(1.0_wp), .false., &
       '', 'derivative gain'), &
     var_spec_t('controller', 'n_states', VK_INT, '', '0', .false., &
-      0.0_wp, .false., huge(1.0_wp), .false., &
+      0.0_wp, .false., 10000.0_wp, .false., &
       '', 'law = ''user'': number of the law''s own states'), &
     var_spec_t('controller', 'period', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &

@@ -1,12 +1,13 @@
 !> Two-column tables (time, value) from CSV files, for tabulated motions (`&motion law =
 !> 'table', file = ...`). One point per line, the two numbers separated by a comma, semicolon or
-!> blanks; blank lines are skipped and the first line may be a header (text that is not two
-!> numbers). Errors name the file and line.
+!> blanks; blank lines are skipped and the first line with text may be a header (text that is
+!> not two numbers). Numbers follow the scene's syntax and limits. Errors name the file and line.
 module io_table
-  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
   use core_strings, only: int_str
+  use io_namelist_lexer, only: item_t
+  use io_namelist_values, only: to_real
   implicit none
   private
   public :: read_table_csv, relative_to
@@ -27,54 +28,108 @@ contains
   end function relative_to
 
   !> Read the columns of the CSV file `path` into `times` and `values`.
+  !> The file is read whole, as the scene is: a line of fixed length cut long lines silently
+  !> (a point after 4096 blanks was skipped as a blank line).
   subroutine read_table_csv(path, times, values, err)
     character(len=*), intent(in) :: path
     real(wp), allocatable, intent(out) :: times(:), values(:)
     type(error_t), intent(out) :: err
-    character(len=4096) :: line
     character(len=256) :: msg
+    character(len=:), allocatable :: text, why
     real(wp) :: x(2)
-    integer :: u, ios, n_line
-    logical :: ok
+    real(wp), allocatable :: grown(:, :)
+    integer :: u, ios, n_line, n, pos, eol, next
+    logical :: header_allowed
     allocate(times(0), values(0))
-    open(newunit=u, file=path, status='old', action='read', iostat=ios, iomsg=msg)
+    open(newunit=u, file=path, status='old', access='stream', form='unformatted', &
+      action='read', iostat=ios, iomsg=msg)
     if (ios /= 0) then
-      call err%set(ERR_INPUT, 'cannot open table file ''' // path // ''': ' // &
-        reason(msg))
+      call err%set(ERR_INPUT, 'cannot open table file ''' // path // ''': ' // reason(msg))
       return
     end if
-    n_line = 0
-    do
-      read(u, '(a)', iostat=ios, iomsg=msg) line
-      if (is_iostat_end(ios)) exit
-      n_line = n_line + 1
-      if (ios /= 0) then
-        call err%set(ERR_INPUT, '''' // path // ''' line ' // int_str(n_line) // ': ' // &
-          reason(msg))
-        exit
-      end if
-      if (len_trim(line) == 0) cycle
-      call two_numbers(line, x, ok)
-      if (ok) then
-        times = [times, x(1)]
-        values = [values, x(2)]
-      else if (n_line > 1 .or. size(times) > 0) then
-        call err%set(ERR_INPUT, '''' // path // ''' line ' // int_str(n_line) // &
-          ': expected two finite numbers (time, value), got ''' // trim(line) // '''')
-        exit
-      end if
-    end do
+    inquire(unit=u, size=n)
+    allocate(character(max(n, 0)) :: text)
+    ios = 0
+    if (n > 0) read(u, iostat=ios, iomsg=msg) text
     close(u)
+    if (ios /= 0 .or. n < 0) then
+      if (n < 0) msg = 'size unknown'
+      call err%set(ERR_INPUT, 'cannot read table file ''' // path // ''': ' // reason(msg))
+      return
+    end if
+    allocate(grown(2, 64))
+    n = 0
+    n_line = 0
+    pos = 1
+    header_allowed = .true.
+    ! A UTF-8 byte order mark made the first point look like a header, dropped silently.
+    if (len(text) >= 3) then
+      if (text(1:3) == achar(239) // achar(187) // achar(191)) pos = 4
+    end if
+    do while (pos <= len(text))
+      call line_end(text, pos, eol, next)
+      n_line = n_line + 1
+      associate (line => text(pos:eol))
+        if (verify(line, ' ' // achar(9)) > 0) then
+          call two_numbers(line, x, why)
+          if (len(why) == 0) then
+            if (n == size(grown, 2)) grown = reshape(grown, [2, 2 * n], pad=[0.0_wp])
+            n = n + 1
+            grown(:, n) = x
+          else if (.not. header_allowed .or. len_trim(why) > 0) then
+            call err%set(ERR_INPUT, '''' // path // ''' line ' // int_str(n_line) // &
+              ': expected two finite numbers (time, value), got ''' // shown_line(line) // &
+              '''' // why)
+            return
+          end if
+          ! Only the first line with text may be a header (not a number out of range).
+          header_allowed = .false.
+        end if
+      end associate
+      pos = next
+    end do
+    times = grown(1, 1:n)
+    values = grown(2, 1:n)
   end subroutine read_table_csv
 
-  !> The two numbers of a line, if that is all it holds.
-  subroutine two_numbers(line, x, ok)
+  !> The line starting at `pos` ends at `eol` (its last character); the next starts at `next`.
+  !> A line ends at LF, CR LF or a lone CR (old Mac files).
+  pure subroutine line_end(text, pos, eol, next)
+    character(len=*), intent(in) :: text
+    integer, intent(in) :: pos
+    integer, intent(out) :: eol, next
+    integer :: k
+    k = scan(text(pos:), achar(10) // achar(13))
+    if (k == 0) then
+      eol = len(text)
+      next = len(text) + 1
+      return
+    end if
+    eol = pos + k - 2
+    next = eol + 2
+    if (text(eol + 1:eol + 1) == achar(13) .and. next <= len(text)) then
+      if (text(next:next) == achar(10)) next = next + 1
+    end if
+  end subroutine line_end
+
+  !> A line as the message shows it: trimmed, and cut when very long.
+  pure function shown_line(line) result(s)
+    character(len=*), intent(in) :: line
+    character(len=:), allocatable :: s
+    s = trim(adjustl(line))
+    if (len(s) > 80) s = s(:77) // '...'
+  end function shown_line
+
+  !> The two numbers of a line (why = ''), or why /= '': ' ' for text that is not two numbers,
+  !> ' (REASON)' for a number out of the scene reader's range.
+  subroutine two_numbers(line, x, why)
     character(len=*), intent(in) :: line
     real(wp), intent(out) :: x(2)
-    logical, intent(out) :: ok
-    character(len=*), parameter :: SEP = ' ,;' // achar(9) // achar(13)
-    integer :: pos, first, last, n, ios
-    ok = .false.
+    character(len=:), allocatable, intent(out) :: why
+    character(len=*), parameter :: SEP = ' ,;' // achar(9)
+    character(len=:), allocatable :: msg
+    integer :: pos, first, last, n
+    why = ' '
     x = 0.0_wp
     n = 0
     pos = 1
@@ -90,15 +145,17 @@ contains
       end if
       n = n + 1
       if (n > 2) return
-      ! A token list-directed input would read otherwise ('2*1', '1/') is not a number.
-      if (scan(line(first:last), '*/') > 0) return
-      read(line(first:last), *, iostat=ios) x(n)
-      if (ios /= 0) return
-      if (.not. ieee_is_finite(x(n))) return
+      ! The scene's own number syntax and limits: a list-directed read trapped on 1e400
+      ! (overflow) and took forms the scene refuses.
+      call to_real(item_t(text=line(first:last)), x(n), msg)
+      if (len(msg) > 0) then
+        if (index(msg, 'out of range') > 0) why = ' (' // msg // ')'
+        return
+      end if
       pos = last + 1
       if (pos > len(line)) exit
     end do
-    ok = n == 2
+    if (n == 2) why = ''
   end subroutine two_numbers
 
   !> gfortran's iomsg repeats the file name; keep its reason.

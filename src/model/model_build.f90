@@ -89,6 +89,12 @@ module model_build
       type(beam_t), intent(out) :: beam
       type(error_t), intent(inout) :: err
     end subroutine link_header
+    !> Hinge, truss and slider labels name elements (controllers, &linear): each once; node
+    !> labels are not those of links' interior nodes.
+    module subroutine check_element_labels(scene, err)
+      type(scene_t), intent(in) :: scene
+      type(error_t), intent(inout) :: err
+    end subroutine check_element_labels
     !> Node i's label is not defined by an earlier node.
     module subroutine check_node_label(scene, i, err)
       type(scene_t), intent(in) :: scene
@@ -246,6 +252,7 @@ contains
     type(builder_t) :: b
     integer :: i
     call check_size(scene, err); if (.not. err%ok()) return
+    call check_element_labels(scene, err); if (.not. err%ok()) return
     call model%init()
     model%gravity = scene%gravity
     if (scene%dimension == 3) then

@@ -204,6 +204,57 @@ contains
     if (err%ok()) call link_beam(scene%links(i), where, beam, err)
   end procedure link_header
 
+  !> A second element of the same label was silently shadowed by the first wherever a
+  !> controller or &linear names it ('j1.torque' drove whichever hinge came first).
+  module procedure check_element_labels
+    type(label_t), allocatable :: labels(:), groups(:)
+    integer :: i, k, n, j
+    n = size(scene%hinges) + size(scene%trusses) + size(scene%sliders)
+    allocate(labels(n), groups(n))
+    do i = 1, size(scene%hinges)
+      labels(i)%s = scene%hinges(i)%label
+      groups(i)%s = '&hinge #' // int_str(i)
+    end do
+    k = size(scene%hinges)
+    do i = 1, size(scene%trusses)
+      labels(k + i)%s = scene%trusses(i)%label
+      groups(k + i)%s = '&truss #' // int_str(i)
+    end do
+    k = k + size(scene%trusses)
+    do i = 1, size(scene%sliders)
+      labels(k + i)%s = scene%sliders(i)%label
+      groups(k + i)%s = '&slider #' // int_str(i)
+    end do
+    do i = 2, n
+      do k = 1, i - 1
+        if (labels(i)%s == labels(k)%s) then
+          call err%set(ERR_INPUT, 'group ' // groups(i)%s // ': label ''' // labels(i)%s // &
+            ''' is defined twice (also ' // groups(k)%s // '): hinges, trusses and sliders ' // &
+            'need labels of their own')
+          return
+        end if
+      end do
+    end do
+    ! A &node named like a link's interior node ('arm.1') made '&output nodes' and the
+    ! controllers' 'arm.1.y' take whichever came first.
+    do i = 1, size(scene%nodes)
+      associate (label => scene%nodes(i)%label)
+        k = index(label, '.', back=.true.)
+        if (k <= 1 .or. k == len(label)) cycle
+        if (verify(label(k + 1:), '0123456789') /= 0 .or. len(label) - k > 6) cycle
+        n = link_index(scene, label(:k - 1))
+        if (n == 0) cycle
+        read(label(k + 1:), *) j
+        if (j >= 1 .and. j < scene%links(n)%n_elements) then
+          call err%set(ERR_INPUT, 'group &node #' // int_str(i) // ': label ''' // label // &
+            ''' is the name of interior node ' // int_str(j) // ' of &link ''' // &
+            scene%links(n)%label // ''': give the node another label')
+          return
+        end if
+      end associate
+    end do
+  end procedure check_element_labels
+
   !> Node i's label is its first.
   module procedure check_node_label
     if (node_index(scene, scene%nodes(i)%label) /= i) call err%set(ERR_INPUT, &

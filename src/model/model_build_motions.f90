@@ -3,6 +3,7 @@
 submodule (model_build) model_build_motions
   use motion_law, only: motion_t, law_from_name, motion_sum, motion_table, table_problem, &
     LAW_CONSTANT, LAW_RAMP, LAW_HARMONIC, LAW_SUM, LAW_TABLE, BANDWIDTH_UNBOUNDED
+  use model_scene, only: motion_rec_t
   implicit none
 
 contains
@@ -43,6 +44,12 @@ contains
     character(len=:), allocatable :: msg
     integer :: k, j
     associate (r => scene%motions(i), where => 'group &motion ''' // scene%motions(i)%label // '''')
+      ! Before the table's spline, which would overflow on such points.
+      msg = size_problem(r)
+      if (len(msg) > 0) then
+        call err%set(ERR_INPUT, where // ': ' // msg)
+        return
+      end if
       select case (law_from_name(r%law))
       case (-1)
         call err%set(ERR_INPUT, where // ': variable ''law'': unknown law ''' // r%law // &
@@ -85,6 +92,89 @@ contains
     ! Outside the associate: gfortran 12 loses a deferred-length component given there.
     mo%label = scene%motions(i)%label
   end subroutine make_motion
+
+  !> Why the values, times, rates or accelerations of a law go beyond 1e100 in magnitude (''
+  !> if they do not). The kinematics and the integrators multiply them (squares of rates, a time step
+  !> times an acceleration): far beyond any machine's motion, they overflow, so that a
+  !> `duration = 1e-300` or `end = 1e300` ended in a floating-point trap instead of a message.
+  !> Judged in decimal logarithms, which cannot overflow themselves.
+  function size_problem(r) result(msg)
+    type(motion_rec_t), intent(in) :: r
+    character(len=:), allocatable :: msg
+    real(wp), parameter :: LG_LIMIT = 100.0_wp, MIN_DURATION = 1.0e-100_wp
+    real(wp) :: lg_span, lg_dt
+    integer :: k
+    msg = ''
+    select case (law_from_name(r%law))
+    case (LAW_SUM)
+      return                                   ! its terms are checked as motions
+    case (LAW_TABLE)
+      if (.not. (allocated(r%times) .and. allocated(r%values))) return
+      if (size(r%times) /= size(r%values)) return    ! table_problem says so
+      if (too_big(r%times, 'times') .or. too_big(r%values, 'values')) return
+      do k = 2, size(r%times)
+        lg_span = lg(r%values(k) - r%values(k - 1))
+        lg_dt = lg(r%times(k) - r%times(k - 1))
+        if (lg_span - 2 * lg_dt > LG_LIMIT) then
+          msg = 'variable ''times'': points ' // int_str(k - 1) // ' and ' // int_str(k) // &
+            ' ask for accelerations of about ' // approx_str(10.0_wp**(min(lg_span - 2 * lg_dt, &
+            300.0_wp))) // ' per s^2 (the limit is 1e100): spread the times or smooth the values'
+          return
+        end if
+      end do
+    case (LAW_HARMONIC)
+      if (too_big([r%start, r%t0, r%amplitude, r%frequency, r%phase], 'start', 't0', &
+        'amplitude', 'frequency', 'phase')) return
+      if (lg(r%amplitude) + 2 * lg(2 * acos(-1.0_wp) * r%frequency) > LG_LIMIT) msg = &
+        'variable ''frequency'': amplitude (2 pi frequency)^2 is beyond 1e100 per s^2'
+    case (LAW_RAMP)
+      if (too_big([r%start, r%t0, r%rate], 'start', 't0', 'rate')) return
+    case (LAW_CONSTANT)
+      if (too_big([r%start, r%t0, r%end], 'start', 't0', 'end')) return
+    case default                               ! rest-to-rest and spin_up: a duration
+      if (too_big([r%start, r%t0, r%end, r%duration, r%rate], 'start', 't0', 'end', &
+        'duration', 'rate')) return
+      if (.not. r%duration > 0) return               ! require_positive says so
+      if (r%duration < MIN_DURATION) then
+        msg = 'variable ''duration'': ' // approx_str(r%duration) // ' s is too short ' // &
+          '(at least 1e-100 s)'
+        return
+      end if
+      lg_span = max(lg(r%end - r%start), lg(r%rate * r%duration))
+      if (lg_span - 2 * lg(r%duration) > LG_LIMIT) msg = 'variable ''duration'': the ' // &
+        'motion needs accelerations of about ' // approx_str(10.0_wp**min(lg_span - 2 * &
+        lg(r%duration), 300.0_wp)) // ' per s^2 (the limit is 1e100): give a longer duration'
+    end select
+  contains
+    !> log10 |x|, and a very small number for zero.
+    pure real(wp) function lg(x)
+      real(wp), intent(in) :: x
+      lg = log10(max(abs(x), tiny(1.0_wp)))
+    end function lg
+
+    !> Sets msg when a value is beyond 1e100; n1 .. n5 name the values in order (n1 alone: a
+    !> whole list).
+    logical function too_big(x, n1, n2, n3, n4, n5)
+      real(wp), intent(in) :: x(:)
+      character(len=*), intent(in) :: n1
+      character(len=*), intent(in), optional :: n2, n3, n4, n5
+      integer :: i
+      character(len=:), allocatable :: name
+      too_big = .false.
+      do i = 1, size(x)
+        if (lg(x(i)) <= LG_LIMIT) cycle
+        name = n1
+        if (i == 2 .and. present(n2)) name = n2
+        if (i == 3 .and. present(n3)) name = n3
+        if (i == 4 .and. present(n4)) name = n4
+        if (i == 5 .and. present(n5)) name = n5
+        msg = 'variable ''' // name // ''': ' // approx_str(x(i)) // ' is beyond 1e100 in ' // &
+          'magnitude (a motion''s numbers, rates and accelerations must stay within it)'
+        too_big = .true.
+        return
+      end do
+    end function too_big
+  end function size_problem
 
   !> 'a' -> 'b' -> 'a': the labels of the motions `chain` from where its cycle starts.
   function cycle_text(scene, chain) result(s)

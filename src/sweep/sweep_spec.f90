@@ -52,6 +52,10 @@ module sweep_spec
   !> A value within this relative distance of an integer counts as that integer: start/stop/n
   !> spacing of integers carries round-off.
   real(wp), parameter :: INT_TOL = 1.0e-9_wp
+  !> Cases of one sweep: every case gets rows in the result file (a message of hundreds of
+  !> bytes, its metrics) and in memory, created at full size before the first case runs
+  !> (docs/sweep.md).
+  integer, parameter, public :: MAX_CASES = 10000000
 
   interface
     !> The variable that names a group of a repeating kind (in sweep_spec_names; declared here
@@ -235,6 +239,10 @@ contains
         call err%set(ERR_INPUT, g%where() // ": variable 'n_samples' must be at least 1, got " &
           // int_str(this%n_samples))
         return
+      else if (this%n_samples > MAX_CASES) then
+        call err%set(ERR_INPUT, g%where() // ": variable 'n_samples' must be at most " // &
+          int_str(MAX_CASES) // ', got ' // int_str(this%n_samples))
+        return
       end if
     case default
       call err%set(ERR_INPUT, g%where() // ": variable 'mode': unknown mode '" // this%mode // &
@@ -363,6 +371,11 @@ contains
     if (n < 1) then
       call err%set(ERR_INPUT, p%origin // ': empty range: n = ' // int_str(n) // &
         ' (n must be at least 1)')
+      return
+    end if
+    if (n > MAX_CASES) then
+      call err%set(ERR_INPUT, p%origin // ": variable 'n': " // int_str(n) // &
+        ' values, more than a sweep can have cases (' // int_str(MAX_CASES) // ')')
       return
     end if
     if (p%log .and. (start <= 0 .or. stop <= 0)) then

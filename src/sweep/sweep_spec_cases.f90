@@ -20,9 +20,9 @@ contains
     n = 1
     do j = 1, m
       n = n * size(this%params(j)%list, kind=i8)
-      if (n > huge(0)) then
+      if (n > MAX_CASES) then
         call err%set(ERR_INPUT, this%path // ': the product of the value lists has more than ' &
-          // int_str(huge(0)) // ' cases')
+          // int_str(MAX_CASES) // ' cases')
         return
       end if
     end do

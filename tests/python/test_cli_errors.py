@@ -2,6 +2,7 @@
 one), a non-zero exit status, no backtrace, no NaN, and no result file left behind."""
 import subprocess
 
+import numpy as np
 import pytest
 
 from helpers import ARM, BIN, assert_clean_error
@@ -43,6 +44,38 @@ def test_unreadable_file(tmp_path):
 def test_no_arguments(tmp_path):
     proc, out = run(tmp_path, GOOD, [])
     assert_clean_error(proc, out, "usage")
+
+
+def test_output_onto_the_input_keeps_the_scene(tmp_path):
+    """`-o scene.nml` (however spelled, or through a link) replaced the scene by the result."""
+    nml = tmp_path / "scene.nml"
+    nml.write_text(GOOD)
+    (tmp_path / "link.nml").symlink_to("scene.nml")
+    for args in (["scene.nml", "-o", "scene.nml"], ["scene.nml", "-o", "./scene.nml"],
+                 ["link.nml", "-o", "scene.nml"]):
+        proc = subprocess.run([BIN, *args], capture_output=True, text=True, timeout=120,
+                              cwd=tmp_path)
+        assert proc.returncode == 4, proc.stderr
+        assert_clean_error(proc, tmp_path / "out.h5", "is the input file")
+        assert nml.read_text() == GOOD
+
+
+def test_output_onto_a_special_file_is_refused(tmp_path):
+    """The result is renamed onto its name: a pipe or device there (-o /dev/null as root) was
+    replaced by a regular file."""
+    import os
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    proc, _ = run(tmp_path, GOOD, [str(tmp_path / "scene.nml"), "-o", str(fifo)])
+    assert proc.returncode == 4, proc.stderr
+    assert_clean_error(proc, tmp_path / "out.h5", "not a regular file")
+    assert fifo.is_fifo()
+
+
+def test_output_option_twice(tmp_path):
+    proc, out = run(tmp_path, GOOD, ["scene.nml", "-o", "a.h5", "-o", "out.h5"])
+    assert proc.returncode == 1
+    assert_clean_error(proc, out, "-o given twice")
 
 
 CASES = {
@@ -99,6 +132,35 @@ CASES = {
     "group not closed": (GOOD.replace("&modal /", "&modal"), ["scene.nml"]),
     "no nodes": ("&modal /\n", ["&node"]),
     "twice defined node": (GOOD + "&node label = 'tip', x = 2, y = 0 /\n", ["tip", "twice"]),
+    # Expanded in memory: 16 GB (and, with two such items, an integer overflow) before.
+    "huge repeat count": (GOOD.replace("&modal /", "&scene gravity = 2000000000*0.0 /\n&modal /"),
+                          ["scene.nml:", "&scene #1", "'gravity'", "more than 10000000 values"]),
+    "huge repeat count of a string": (GOOD + "&output nodes = 1500000000*'tip', 1500000000*'tip' /\n",
+                                      ["&output #1", "'nodes'", "more than 10000000 values"]),
+    # The static size check must leave too many frequencies to their own message.
+    "static n_frequencies huge": (GOOD.replace("&modal /", "&static n_frequencies = 2000000000 /"),
+                                  ["&static", "'n_frequencies'", "dynamic coordinates"]),
+    # A controller or &linear naming 'j1' took whichever element came first.
+    "hinge label twice": (GOOD + "&hinge label = 'j1', node = 'tip', link = 'arm', "
+                          "mode = 'dynamic' /\n", ["&hinge #2", "'j1'", "twice"]),
+    "truss with a hinge's label": (GOOD + "&node label = 'c', x = 1, y = 1, fixed = .true. /\n"
+                                   "&truss label = 'j1', from = 'tip', to = 'c', E = 1e9, "
+                                   "A = 1e-6 /\n", ["&truss #1", "'j1'", "&hinge #1"]),
+    # Products of such inputs overflowed deep in the model (a floating-point trap in Debug).
+    "node coordinate beyond 1e100": (GOOD.replace("x = 1, y = 0", "x = 1e300, y = 0"),
+                                     ["&node #2", "'x'", "out of range", "1e100"]),
+    "gravity beyond 1e100": (GOOD.replace("&modal /", "&scene gravity = 0, -1e300 /\n&modal /"),
+                             ["&scene #1", "'gravity'", "1e100"]),
+    # A floating-point trap (the sample count overflowed an integer) and a hang allocating the
+    # states (16 GB), before.
+    "controller period far too small": (
+        GOOD.replace("mode = 'prescribed', motion = 'm1'", "mode = 'dynamic'") +
+        "&controller label = 'c', actuator = 'j1.torque', measure = 'j1.angle', kp = 1, "
+        "period = 1e-300 /\n", ["&controller 'c'", "'period'", "1e7"]),
+    "controller n_states far too large": (
+        GOOD.replace("mode = 'prescribed', motion = 'm1'", "mode = 'dynamic'") +
+        "&controller label = 'c', law = 'user', actuator = 'j1.torque', measure = 'j1.angle', "
+        "n_states = 2000000000 /\n", ["&controller #1", "'n_states'", "10000"]),
     "static newton": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
                                    "&static n_steps = 1, max_iter = 1, tol = 1e-14 /"),
                       ["static", "did not converge"]),
@@ -137,6 +199,10 @@ CASES.update({
                                          ["'basis_prescribed'", "1 values", "got 2"]),
     "reduction update without interval": (RED.format("n_modes = 1, update = 'mac'"),
                                           ["&reduction", "'update_interval'"]),
+    # Never ended: the basis check times did not move past t.
+    "reduction update interval far too small": (
+        RED.format("n_modes = 1, update = 'interval', update_interval = 1e-300"),
+        ["&reduction", "'update_interval'", "1e7"]),
     "reduction unknown update": (RED.format("n_modes = 1, update = 'often'"),
                                  ["'update'", "often"]),
     "reduction unknown eigensolver": (RED.format("n_modes = 1, eigensolver = 'magma'"),
@@ -152,6 +218,20 @@ CASES.update({
             "mode = 'prescribed', motion = 'm1'", "mode = 'dynamic'"),
         ["static_correction", "positive definite"]),
     "empty label": (GOOD.replace("label = 'arm'", "label = ''"), ["&link", "'label'", "empty"]),
+    "label with a trailing blank": (GOOD.replace("label = 'tip', x", "label = 'tip ', x"),
+                                    ["&node #2", "'label'", "'tip '", "blank"]),
+    # Cut to 64 characters in the model: '&output nodes' then called such a node undefined.
+    "label too long": (GOOD.replace("'tip'", "'" + "t" * 70 + "'"),
+                       ["&node #2", "'label'", "70 characters long", "48"]),
+    # '&output nodes = 'arm.1'' took whichever of the two came first.
+    "node label of a link's interior node": (GOOD.replace("'tip'", "'arm.1'"),
+                                             ["&node #2", "'arm.1'", "interior node 1"]),
+    # A NUL cut the title short in the result file; in a label it made two HDF5 names one
+    # and the run failed only when writing its results.
+    "NUL in a label": (GOOD.replace("label = 'tip'", "label = 'ti\x00p'"),
+                       ["&node #2", "'label'", "control characters (byte 0)"]),
+    "NUL in the title": (GOOD.replace("&modal /", "&scene title = 'a\x00b' /\n&modal /"),
+                         ["&scene #1", "'title'", "control characters"]),
     "label with a slash": (GOOD.replace("label = 'tip', x", "label = 'a/b', x"),
                            ["&node", "'label'", "'/'"]),
     "motion on a dynamic hinge": (GOOD.replace("mode = 'prescribed'", "mode = 'dynamic'"),
@@ -169,6 +249,13 @@ CASES.update({
                                   ["'mac_threshold'", "update = 'mac'"]),
     "update_interval without update": (RED.format("n_modes = 1, update_interval = 0.1"),
                                        ["'update_interval'", "interval"]),
+    # Was exit status 5, 'CVODE: CVodeSetMinStep returned -22' (an internal error).
+    "max_step far too small": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'bdf', "
+                                            "max_step = 1e-300"),
+                               ["scene.nml:", "&dynamic #1", "'max_step'", "1e7"]),
+    "max_step below the round-off of the time": (
+        GOOD.replace("t_end = 0.02, output_dt = 1e-3", "t_end = 1e-10, output_dt = 1e-11, "
+                     "integrator = 'bdf', max_step = 1e-17"), ["'max_step'", "round-off"]),
     "erk order": (GOOD.replace("t_end = 0.02", "t_end = 0.02, integrator = 'erk', erk_order = 7"),
                   ["'erk_order'"]),
 })
@@ -213,6 +300,28 @@ CASES.update({
                                           "end = 2 /"), ["&motion", "'end'", "'cubic'"]),
     "motion start with sum": (GOOD.replace(M1, "&motion label = 'm1', law = 'sum', terms = 'a', "
                                            "start = 1 /" + RAMP_A), ["&motion", "'start'", "'sum'"]),
+    # Each of these ended in a floating-point trap (Debug) inside the motion law, its table's
+    # spline or the kinematics, instead of a message.
+    "motion duration far too short": (GOOD.replace("duration = 0.05", "duration = 1e-300"),
+                                      ["&motion 'm1'", "'duration'", "1e-100"]),
+    "motion duration far too long": (GOOD.replace("duration = 0.05", "duration = 1e300"),
+                                     ["&motion #1", "'duration'", "out of range", "1e100"]),
+    "motion acceleration beyond the limit": (GOOD.replace("duration = 0.05", "duration = 1e-60"),
+                                             ["&motion 'm1'", "'duration'", "accelerations"]),
+    "motion end far too large": (GOOD.replace("end = 0.5", "end = 1e99"),
+                                 ["&motion 'm1'", "'duration'", "accelerations", "1e100"]),
+    "motion harmonic frequency far too high": (GOOD.replace(M1, "&motion label = 'm1', law = "
+                                               "'harmonic', amplitude = 0.1, frequency = 1e60 /"),
+                                               ["&motion 'm1'", "'frequency'", "1e100"]),
+    "motion ramp rate far too high": (GOOD.replace(M1, "&motion label = 'm1', law = 'ramp', "
+                                                   "rate = 1e300 /"), ["&motion #1", "'rate'"]),
+    "motion table times far too close": (GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                                      "times = 0, 1e-300, 2e-300, values = 0, "
+                                                      "0.1, 0.2 /"),
+                                         ["&motion 'm1'", "'times'", "points 1 and 2"]),
+    "motion table value far too large": (GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                                      "times = 0, 0.01, 0.02, values = 0, 1e99, "
+                                                      "0 /"), ["&motion 'm1'", "points 1 and 2"]),
     "motion ramp with auto_factor": (RED.format("auto_factor = 2").replace(
         M1, "&motion label = 'm1', law = 'sum', terms = 'a' /" + RAMP_A),
         ["&motion 'm1'", "ramp", "auto_factor"]),
@@ -236,6 +345,41 @@ def test_motion_table_csv(tmp_path):
     proc = subprocess.run([BIN, str(sub / "scene.nml"), "-o", str(out)], capture_output=True,
                           text=True, timeout=120, cwd=tmp_path)
     assert_clean_error(proc, out, "&motion", "'file'", "m.csv' line 4", "0.01, x")
+
+@pytest.mark.parametrize("csv,fragments", [
+    # A floating-point trap (overflow) in the list-directed read.
+    ("0, 0\n0.01, 1e400\n", ["m.csv' line 2", "out of range"]),
+    ("1e400, 0\n1, 0.1\n2, 0.2\n", ["m.csv' line 1", "out of range"]),
+])
+def test_motion_table_csv_number_out_of_range(tmp_path, csv, fragments):
+    (tmp_path / "m.csv").write_text(csv)
+    proc, out = run(tmp_path, GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                           "file = 'm.csv' /"))
+    assert_clean_error(proc, out, "&motion", "'file'", *fragments)
+
+
+@pytest.mark.parametrize("csv", [
+    "0, 0\n" + " " * 5000 + "0.01, 0.03\n0.02, 0.05\n",   # was cut at 4096: a blank line
+    "\ufeff0, 0\n0.01, 0.03\n0.02, 0.05\n",                 # the BOM made line 1 a header
+    "\n  \nt, angle\n0, 0\n0.01, 0.03\n0.02, 0.05\n",       # the header after blank lines
+])
+def test_motion_table_csv_keeps_every_point(tmp_path, csv):
+    """Each of these tables has the points (0, 0), (0.01, 0.03), (0.02, 0.05): the run's joint
+    angle at 0.02 s is the last value, which the loss of a point would change."""
+    import h5py
+    (tmp_path / "m.csv").write_text(csv)
+    (tmp_path / "ref.csv").write_text("0, 0\n0.01, 0.03\n0.02, 0.05\n")
+    results = []
+    for name in ("m.csv", "ref.csv"):
+        out = tmp_path / "out.h5"
+        proc, out = run(tmp_path, GOOD.replace(M1, "&motion label = 'm1', law = 'table', "
+                                               f"file = '{name}' /"))
+        assert proc.returncode == 0, proc.stderr
+        with h5py.File(out) as f:
+            results.append(f["nodes/tip/position"][()])
+        out.unlink()
+    np.testing.assert_array_equal(results[0], results[1])
+
 
 # A column, fixed at the base, for &buckling (docs/input.md); {} takes the &buckling variables.
 COLUMN = """&node label = 'base', x = 0, y = 0, fixed = .true. /
