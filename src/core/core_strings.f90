@@ -3,7 +3,7 @@ module core_strings
   use core_kinds, only: wp
   implicit none
   private
-  public :: int_str, real_str, approx_str, lower_case
+  public :: int_str, real_str, approx_str, lower_case, after_bom
 
 contains
 
@@ -66,4 +66,12 @@ contains
       s = trim(adjustl(buf))
     end if
   end function approx_str
+  !> Where the text starts after a UTF-8 byte order mark (1 without one): Windows editors put
+  !> it before scenes and tables, and the user cannot see it.
+  pure integer function after_bom(text) result(pos)
+    character(len=*), intent(in) :: text
+    pos = 1
+    if (len(text) < 3) return
+    if (text(1:3) == char(239) // char(187) // char(191)) pos = 4
+  end function after_bom
 end module core_strings

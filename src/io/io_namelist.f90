@@ -9,7 +9,7 @@
 module io_namelist
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
-  use core_strings, only: lower_case
+  use core_strings, only: lower_case, after_bom
   use io_namelist_lexer, only: item_t, token_t, next_token, parse_values, check_name, describe, &
     at, itoa, TK_EOF, TK_ERR, TK_AMP, TK_SLASH, TK_EQ, TK_COMMA, TK_WORD, WHITE
   use io_namelist_values, only: to_real, to_int, shown
@@ -174,13 +174,10 @@ contains
     ! took 11 s to parse).
     allocate(groups(16))
     n = 0
-    pos = 1
     line = 1
-    ! A UTF-8 byte order mark, which Windows editors put before the text, is no text outside
-    ! a group: the user cannot see it, so refusing it would name nothing they wrote.
-    if (len(text) >= 3) then
-      if (text(1:3) == achar(239) // achar(187) // achar(191)) pos = 4
-    end if
+    ! A UTF-8 byte order mark is no text outside a group: refusing it would name nothing the
+    ! user wrote.
+    pos = after_bom(text)
     do
       ! Outside groups only blanks, '!' comments and the '&' of the next group may stand:
       ! anything else is text the user meant to say something with (a group whose '&' is

@@ -5,7 +5,7 @@
 module io_table
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT
-  use core_strings, only: int_str
+  use core_strings, only: int_str, after_bom
   use io_namelist_lexer, only: item_t
   use io_namelist_values, only: to_real
   implicit none
@@ -60,12 +60,9 @@ contains
     allocate(grown(2, 64))
     n = 0
     n_line = 0
-    pos = 1
     header_allowed = .true.
     ! A UTF-8 byte order mark made the first point look like a header, dropped silently.
-    if (len(text) >= 3) then
-      if (text(1:3) == achar(239) // achar(187) // achar(191)) pos = 4
-    end if
+    pos = after_bom(text)
     do while (pos <= len(text))
       call line_end(text, pos, eol, next)
       n_line = n_line + 1

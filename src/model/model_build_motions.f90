@@ -111,7 +111,9 @@ contains
     case (LAW_TABLE)
       if (.not. (allocated(r%times) .and. allocated(r%values))) return
       if (size(r%times) /= size(r%values)) return    ! table_problem says so
-      if (too_big(r%times, 'times') .or. too_big(r%values, 'values')) return
+      ! One at a time: too_big sets msg, and an .or. need not evaluate both.
+      if (too_big(r%times, 'times')) return
+      if (too_big(r%values, 'values')) return
       do k = 2, size(r%times)
         lg_span = lg(r%values(k) - r%values(k - 1))
         lg_dt = lg(r%times(k) - r%times(k - 1))
