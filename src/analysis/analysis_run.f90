@@ -203,7 +203,17 @@ contains
     if (err%ok()) then
       allocate(this%q_static(model%n_dy))
       this%q_static = 0.0_wp
+      ! A static analysis by load steps starts from the reference with the prescribed inputs
+      ! at zero and steps them (displacement control): the undeformed model need not fit
+      ! their full values (a tip pushed 0.3 m on a 1 m cantilever has no configuration
+      ! without bending), so the initial configuration is solved where the steps start.
+      if (this%scene%static%active .and. this%scene%static%method /= STATIC_ARC_LENGTH) then
+        this%dyn%ramp_prescribed = .true.
+        this%dyn%load_factor = 0.0_wp
+      end if
       call this%dyn%init(model, 0.0_wp, this%q_static, err, this%scene%linear_solver)
+      this%dyn%ramp_prescribed = .false.
+      this%dyn%load_factor = 1.0_wp
     end if
     if (.not. err%ok()) call err%prefix(this%file%path // ': ')
   end subroutine run_load_parsed
