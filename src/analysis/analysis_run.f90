@@ -329,6 +329,12 @@ contains
     ! Each summary line reaches a log before the next, long analysis: an interrupt ends the
     ! program without flushing buffers.
     flush(output_unit)
+    ! The modes and the state-space model are those of the static equilibrium, under the
+    ! loads it is in equilibrium with: an arc-length path may end at any load factor (it
+    ! stops at max_load_factor or after n_steps), and the tangent under the full loads at
+    ! that configuration would be of no equilibrium (a column at 0.36 of a load twice
+    ! critical came out unstable).
+    this%dyn%load_factor = static_end_load_factor(this)
     if (this%scene%modal%active) then
       ! The modes may be asked for at a time far along the motions (a shaft turned many
       ! radians): the kinematics gets there in steps if it must.
@@ -352,7 +358,12 @@ contains
       call run_linear(this, err)
       if (.not. err%ok()) return
     end if
+    this%dyn%load_factor = 1.0_wp
     if (this%scene%dynamic%active) then
+      if (abs(static_end_load_factor(this) - 1) > 1.0e-3_wp) call add_warning(this, &
+        'static: the ' // &
+        'arc-length path ends at load factor ' // real_str(static_end_load_factor(this)) // &
+        ', not 1: &dynamic starts from that equilibrium under the full loads')
       call run_dynamic(this, err)
       if (.not. err%ok()) return
       if (this%scene%dynamic%error_check /= ERROR_CHECK_NONE) then
@@ -401,6 +412,18 @@ contains
       ' Newton iterations', trim(krylov_note(products))
     call warn_unstable(this)
   end subroutine run_static
+
+  !> The load factor of the static equilibrium the later analyses start from: the last of an
+  !> arc-length path, else 1 (load steps end at 1; no &static: the reference).
+  pure real(wp) function static_end_load_factor(this) result(lambda)
+    type(run_t), intent(in) :: this
+    lambda = 1.0_wp
+    if (.not. this%scene%static%active) return
+    if (this%scene%static%method /= STATIC_ARC_LENGTH) return
+    if (.not. allocated(this%static_load_factor)) return
+    if (size(this%static_load_factor) > 0) &
+      lambda = this%static_load_factor(size(this%static_load_factor))
+  end function static_end_load_factor
 
   !> ' (Newton-Krylov: n products with the tangent)' when there were any, else ''.
   pure function krylov_note(products) result(note)
