@@ -133,3 +133,19 @@ def test_dynamic_after_a_path_that_stops_short_warns(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "arc-length path ends at load factor 0.66" in proc.stderr
     assert "&dynamic starts from that equilibrium under the full loads" in proc.stderr
+
+
+@pytest.mark.parametrize("loads, static, fragments", [
+    # A straight column loaded along its axis: the load exists but does no work on the
+    # dynamic coordinates at the start; it was reported as 'no &force ... acts on them'.
+    ("fx = -1000.0", "method = 'arc_length', n_steps = 5",
+     ["&static", "'method'", "do no work on the dynamic coordinates", "perturbing load"]),
+    # An arc a million times too long: no halving reaches kinematics that can be solved; it
+    # ended on the bare 'kinematic Newton iteration did not converge'.
+    ("fy = -1.0", "method = 'arc_length', n_steps = 3, arc_length = 1.0e6",
+     ["static arc-length: no equilibrium found", "halvings", "smaller arc_length",
+      "the last try: kinematic Newton"]),
+])
+def test_column_bad_paths(tmp_path, loads, static, fragments):
+    proc, out = run_scene(tmp_path, column(loads, static))
+    assert_clean_error(proc, out, *fragments)
