@@ -39,15 +39,20 @@ contains
   !> The at most n_modes largest theta > cutoff * (the largest |theta| found) and their shapes
   !> q (n_dy) and DF_dy q (n_x), at (t, q_dy) with the loads at lambda_ref; dyn%load_factor is
   !> restored. `n_found` < n_modes when fewer converged or passed the cutoff.
+  !> `resolved`, `max_rescale` and `max_rescales`: the load part of the products is scaled up
+  !> as dynamics_buckling does the dense difference (the same round-off, here of the
+  !> structure's stresses in the load force): its load factor is `lambda` on return.
   subroutine krylov_buckling(dyn, t, q_dy, n_modes, lambda_ref, cutoff, theta, shapes, &
-      node_shapes, err)
+      node_shapes, err, resolved, max_rescale, max_rescales, lambda)
     type(dynamics_t), intent(inout) :: dyn
-    real(wp), intent(in) :: t, q_dy(:), lambda_ref, cutoff
-    integer, intent(in) :: n_modes
+    real(wp), intent(in) :: t, q_dy(:), lambda_ref, cutoff, resolved, max_rescale
+    integer, intent(in) :: n_modes, max_rescales
     real(wp), allocatable, intent(out) :: theta(:), shapes(:, :), node_shapes(:, :)
     type(error_t), intent(out) :: err
+    real(wp), intent(out) :: lambda
     type(krylov_statics_t) :: kry
-    real(wp) :: saved
+    real(wp) :: saved, x(size(q_dy)), k0x(size(q_dy)), klx(size(q_dy)), ratio
+    integer :: i, attempt
     logical :: was_locked
     saved = dyn%load_factor
     was_locked = dyn%locked
@@ -58,9 +63,23 @@ contains
     if (err%ok() .and. kry%shift /= 0) call err%set(ERR_NUMERIC, 'buckling analysis: the ' // &
       'structural stiffness K0 is singular (a mechanism: a dynamic coordinate without ' // &
       'stiffness, e.g. a released hinge or a free rigid-body motion)')
+    ! The sizes of K0 x and of the load part K_L x along a fixed vector with no structure
+    ! (every coordinate, varied signs), where the load part has no reason to vanish.
+    lambda = lambda_ref
+    x = [(sin(1.0_wp + 2.3_wp * i), i = 1, size(q_dy))]
+    if (err%ok()) call kry%product(dyn, t, q_dy, x, k0x, err)
+    do attempt = 1, max_rescales + 1
+      if (.not. err%ok()) exit
+      dyn%load_factor = lambda
+      call kry%load_product(dyn, t, q_dy, x, klx, err)
+      if (.not. err%ok()) exit
+      ratio = norm2(klx) / max(norm2(k0x), tiny(1.0_wp))
+      if (ratio >= resolved .or. attempt > max_rescales) exit
+      lambda = lambda * merge(1 / ratio, max_rescale, ratio > 1 / max_rescale)
+    end do
     if (err%ok()) then
-      dyn%load_factor = lambda_ref
-      call arnoldi(kry, dyn, t, q_dy, n_modes, lambda_ref, theta, shapes, err)
+      dyn%load_factor = lambda
+      call arnoldi(kry, dyn, t, q_dy, n_modes, lambda, theta, shapes, err)
     end if
     dyn%load_factor = saved
     if (err%ok()) then

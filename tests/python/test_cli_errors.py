@@ -251,6 +251,11 @@ CASES.update({
                               ["&buckling", "'n_modes'", "at least 1"]),
     "buckling load_factor zero": (COLUMN.format("load_factor = 0"),
                                   ["&buckling", "'load_factor'", "positive"]),
+    # 1e-300 left the loads in the round-off (a wrong multiplier, 26 % off); 1e300 overflows.
+    "buckling load_factor tiny": (COLUMN.format("load_factor = 1e-300"),
+                                  ["&buckling", "'load_factor'", "1e-30 to 1e30"]),
+    "buckling load_factor huge": (COLUMN.format("load_factor = 1e300"),
+                                  ["&buckling", "'load_factor'", "1e-30 to 1e30"]),
     "buckling twice": (COLUMN.format("") + "&buckling /\n", ["&buckling", "only once"]),
     "buckling without load": (COLUMN.format("").replace("&force node = 'top', fy = -70 /", ""),
                               ["&buckling", "no load"]),

@@ -417,3 +417,29 @@ def test_displacement_control_reaction(tmp_path, n_steps):
         reaction = f["static/nodes/tip/reaction"][-1]
     assert abs(pos[1] - d) < 1e-12
     assert abs(reaction[1] / (3 * ei * d) - 1) < 10 * 2 * d**2
+
+
+@pytest.mark.parametrize("solver", ["dense", "krylov"])
+@pytest.mark.parametrize("force", [1.0e-12, 1.0e9])
+def test_buckling_multipliers_scale_with_the_load(tmp_path, solver, force):
+    """The multipliers of a load F are those of a unit load over F. The load part of the
+    tangent was differenced at load factor 1 against the round-off of K0 (1e-15 of it): a
+    1e-12 N load lost it, the dense path gave the first multiplier 0.3 % off and the third
+    30 %, the Krylov path failed ('complex multipliers'). Now it is differenced at a load
+    factor that makes it at least 1e-5 of K0 (dynamics_buckling RESOLVED), so its round-off
+    is at most 1e-15 / 1e-5 = 1e-10 of it, and the multipliers move by as much: the three
+    lowest agree with the unit load's to that (observed 5e-13); bound 1e-9."""
+    def multipliers(f, name):
+        text = f"""&scene linear_solver = 'sparse' /
+&node label = 'root', x = 0, y = 0, fixed = .true. /
+&node label = 'tip', x = 1, y = 0 /
+&link label = 'arm', from = 'root', to = 'tip', n_elements = 8,
+      E = 2.0e11, A = 1.0e-4, I = 1.0e-9, rho = 7800 /
+&force node = 'tip', fx = {-f!r} /
+&buckling n_modes = 3, solver = '{solver}' /
+"""
+        with run(tmp_path, text, name) as h5:
+            return h5["buckling/load_factor"][:] * f
+    unit, scaled = multipliers(1.0, "unit"), multipliers(force, "scaled")
+    assert abs(unit[0] / (math.pi**2 * 2.0e11 * 1.0e-9 / 4) - 1) < 5e-3
+    assert scaled.shape == (3,) and np.max(np.abs(scaled / unit - 1)) < 1e-9, (scaled, unit)
