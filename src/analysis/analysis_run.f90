@@ -192,6 +192,7 @@ contains
     if (err%ok()) call check_output_nodes(this%scene, model, err)
     if (err%ok() .and. this%scene%dynamic%active) call check_history_size(this%scene%dynamic, &
       model, err)
+    if (err%ok() .and. this%scene%static%active) call check_static_size(this%scene, model, err)
     if (err%ok() .and. this%scene%dynamic%error_check == ERROR_CHECK_MODES .and. .not. &
       this%scene%reduction%active) call err%set(ERR_INPUT, 'group &dynamic: variable ' // &
       '''error_check'': ''modes'' checks a reduced run (&reduction); ''tolerance'' checks ' // &
@@ -296,6 +297,24 @@ contains
         approx_str(d%t_end / d%dt) // ' fixed steps (limit 1e9): increase dt')
     end if
   end subroutine check_history_size
+
+  !> Refuse load steps whose results would not fit in memory (as check_history_size: a
+  !> failed allocation is a runtime error, not a message).
+  subroutine check_static_size(scene, model, err)
+    type(scene_t), intent(in) :: scene
+    type(model_t), intent(in) :: model
+    type(error_t), intent(inout) :: err
+    real(wp), parameter :: MAX_STATIC_BYTES = 4.0e9_wp
+    real(wp) :: bytes
+    ! Per step: nodal coordinates, q_dy, the load factor and stability, the frequencies and
+    ! each output node's position, rotation, reaction and compliance (8 bytes each).
+    bytes = 8.0_wp * real(scene%static%n_steps, wp) * real(model%n_x + model%n_dy + 2 + &
+      scene%static%n_frequencies + 2 * NODE_SLOTS * (size(scene%output_nodes) + &
+      NODE_SLOTS * size(scene%compliance_nodes)), wp)
+    if (bytes > MAX_STATIC_BYTES) call err%set(ERR_INPUT, 'group &static: variable ' // &
+      '''n_steps'' = ' // int_str(scene%static%n_steps) // ': the results of that many ' // &
+      'steps would need ' // approx_str(bytes / 1.0e9_wp) // ' GB (limit 4 GB)')
+  end subroutine check_static_size
 
   !> Run the analyses the scene asks for.
   !> Recursive: &dynamic error_check runs a second run_t from within (analysis_run_check).

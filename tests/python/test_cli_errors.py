@@ -102,6 +102,14 @@ CASES = {
     "static newton": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
                                    "&static n_steps = 1, max_iter = 1, tol = 1e-14 /"),
                       ["static", "did not converge"]),
+    # The results of 2e9 load steps (880 GB) were allocated: a Fortran runtime error.
+    "static steps beyond memory": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
+                                                "&static n_steps = 2000000000 /"),
+                                   ["&static", "'n_steps'", "GB (limit 4 GB)"]),
+    "arc-length steps beyond memory": (GOOD.replace(
+        "&modal /", "&force node = 'tip', fy = -50 /\n"
+        "&static method = 'arc_length', n_steps = 2000000000 /"),
+        ["&static", "'n_steps'", "GB (limit 4 GB)"]),
 }
 
 
