@@ -150,8 +150,10 @@ contains
       dyn%load_factor = lambda
       call tangent_stiffness(dyn, t, q_dy, kt, err)
       if (.not. err%ok()) exit
-      ratio = maxval(abs(kt - res%k0)) / max(maxval(abs(res%k0)), tiny(1.0_wp))
-      if (ratio >= RESOLVED .or. attempt > MAX_RESCALES) exit
+      ! K0 = 0 (a mechanism, refused below): no round-off to resolve against.
+      if (maxval(abs(kt - res%k0)) >= RESOLVED * maxval(abs(res%k0)) .or. &
+        attempt > MAX_RESCALES) exit
+      ratio = maxval(abs(kt - res%k0)) / maxval(abs(res%k0))
       lambda = lambda * rescale(ratio)
     end do
     dyn%load_factor = saved

@@ -15,7 +15,7 @@
 !> supports of the buckling problem alone; and K0 regular (the dense path requires it too).
 module dynamics_buckling_krylov
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_NUMERIC
+  use core_error, only: error_t, ERR_NUMERIC, ERR_MODEL
   use core_strings, only: int_str
   use core_sort, only: sort_by_value
   use core_arpack, only: dnaupd, dneupd
@@ -60,9 +60,15 @@ contains
     dyn%locked = .true.
     dyn%load_factor = 0.0_wp
     call kry%precondition(dyn, t, q_dy, err)
-    if (err%ok() .and. kry%shift /= 0) call err%set(ERR_NUMERIC, 'buckling analysis: the ' // &
-      'structural stiffness K0 is singular (a mechanism: a dynamic coordinate without ' // &
-      'stiffness, e.g. a released hinge or a free rigid-body motion)')
+    ! A K0 that the factors cannot take as it is (shifted, or not at all: nothing has mass
+    ! to shift it with) is a mechanism, as the dense path says (and with its exit status);
+    ! the factorisation's own message names the static analysis and its solver.
+    if (err%code == ERR_NUMERIC .or. (err%ok() .and. kry%shift /= 0)) then
+      call err%clear()
+      call err%set(ERR_MODEL, 'buckling analysis: the structural stiffness K0 is singular ' // &
+        '(a mechanism: a dynamic coordinate without stiffness, e.g. a released hinge or a ' // &
+        'free rigid-body motion)')
+    end if
     ! The sizes of K0 x and of the load part K_L x along a fixed vector with no structure
     ! (every coordinate, varied signs), where the load part has no reason to vanish.
     lambda = lambda_ref
@@ -73,8 +79,8 @@ contains
       dyn%load_factor = lambda
       call kry%load_product(dyn, t, q_dy, x, klx, err)
       if (.not. err%ok()) exit
-      ratio = norm2(klx) / max(norm2(k0x), tiny(1.0_wp))
-      if (ratio >= resolved .or. attempt > max_rescales) exit
+      if (norm2(klx) >= resolved * norm2(k0x) .or. attempt > max_rescales) exit
+      ratio = norm2(klx) / norm2(k0x)
       lambda = lambda * merge(1 / ratio, max_rescale, ratio > 1 / max_rescale)
     end do
     if (err%ok()) then

@@ -443,3 +443,21 @@ def test_buckling_multipliers_scale_with_the_load(tmp_path, solver, force):
     unit, scaled = multipliers(1.0, "unit"), multipliers(force, "scaled")
     assert abs(unit[0] / (math.pi**2 * 2.0e11 * 1.0e-9 / 4) - 1) < 5e-3
     assert scaled.shape == (3,) and np.max(np.abs(scaled / unit - 1)) < 1e-9, (scaled, unit)
+
+
+@pytest.mark.parametrize("solver", ["dense", "krylov"])
+def test_buckling_of_a_pendulum_is_refused(tmp_path, solver):
+    """A rigid pendulum on a free hinge has no structural stiffness (K0 = 0): one error line
+    (the load factor scaling of the load part must not divide by the size of K0)."""
+    text = f"""&scene gravity = 0, -9.81, linear_solver = 'sparse' /
+&node label = 'root', x = 0, y = 0, fixed = .true. /
+&node label = 'tip', x = 0, y = -1 /
+&link label = 'arm', from = 'root', to = 'tip', E = 2.0e11, A = 1.0e-4, I = 1.0e-9,
+      rho = 7800, elongation = 'rigid', bending = 'rigid' /
+&hinge label = 'j1', node = 'root', link = 'arm', mode = 'dynamic' /
+&mass node = 'tip', m = 1.0 /
+&buckling solver = '{solver}' /
+"""
+    proc, out = run_scene(tmp_path, text)
+    fragment = "not positive definite" if solver == "dense" else "singular"
+    assert_clean_error(proc, out, "buckling analysis", "K0", fragment, "mechanism")
