@@ -362,7 +362,12 @@ contains
         this%scene%modal%n_modes, this%modal, err, solver=this%scene%modal%solver, &
         along_motion=this%scene%modal%along_motion)
       this%dyn%kin%continuation = .false.
-      if (.not. err%ok()) return
+      if (.not. err%ok()) then
+        ! The kinematics refuses a time too far along the motions: say which variable.
+        if (index(err%message, 'kinematics: the coordinates jump') == 1) &
+          call err%prefix('group &modal: variable ''time'': ')
+        return
+      end if
       if (this%verbose) write(*, '(a,*(f0.3,:,", "))') 'modal: frequencies [Hz]: ', &
         this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz)))
       flush(output_unit)

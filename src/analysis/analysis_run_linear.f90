@@ -44,6 +44,11 @@ contains
           call linearise(this%dyn, lin%time, this%q_static, inputs, outputs, &
             lin%along_motion, this%linear(1), err)
         end if
+        ! The kinematics refuses a time too far along the motions: say which variable.
+        if (.not. err%ok()) then
+          if (index(err%message, 'kinematics: the coordinates jump') == 1) &
+            call err%prefix('group &linear: variable ''time'': ')
+        end if
       else
         call along_run()
         if (err%ok()) then
