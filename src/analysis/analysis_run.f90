@@ -149,6 +149,25 @@ module analysis_run
       character(len=:), allocatable :: why
     end function mesh_check_problem
     !> &dynamic: the full or reduced model integrated (analysis_run_dynamic).
+    !> Refuse, before the run, dynamic histories that would not fit in memory or fixed steps
+    !> that would not end (analysis_run_limits; the limits are in docs/input.md).
+    module subroutine check_history_size(d, model, err)
+      type(dynamic_rec_t), intent(in) :: d
+      type(model_t), intent(in) :: model
+      type(error_t), intent(inout) :: err
+    end subroutine check_history_size
+    !> The &output nodes must exist in the model (analysis_run_limits).
+    module subroutine check_output_nodes(scene, model, err)
+      type(scene_t), intent(in) :: scene
+      type(model_t), intent(in) :: model
+      type(error_t), intent(inout) :: err
+    end subroutine check_output_nodes
+    !> Refuse load steps whose results would not fit in memory (analysis_run_limits).
+    module subroutine check_static_size(scene, model, err)
+      type(scene_t), intent(in) :: scene
+      type(model_t), intent(in) :: model
+      type(error_t), intent(inout) :: err
+    end subroutine check_static_size
     module subroutine run_dynamic(this, err)
       type(run_t), intent(inout), target :: this
       type(error_t), intent(out) :: err
@@ -190,10 +209,9 @@ contains
     call build_model(this%scene, model, err)
     if (err%ok()) call warn_unused_motions(this)
     if (err%ok()) call check_output_nodes(this%scene, model, err)
-    if (err%ok() .and. this%scene%static%active) call check_static_size(this%scene%static%n_steps, &
-      this%scene%static%n_frequencies, model, err)
     if (err%ok() .and. this%scene%dynamic%active) call check_history_size(this%scene%dynamic, &
       model, err)
+    if (err%ok() .and. this%scene%static%active) call check_static_size(this%scene, model, err)
     if (err%ok() .and. this%scene%dynamic%error_check == ERROR_CHECK_MODES .and. .not. &
       this%scene%reduction%active) call err%set(ERR_INPUT, 'group &dynamic: variable ' // &
       '''error_check'': ''modes'' checks a reduced run (&reduction); ''tolerance'' checks ' // &
@@ -205,53 +223,20 @@ contains
     if (err%ok()) then
       allocate(this%q_static(model%n_dy))
       this%q_static = 0.0_wp
+      ! A static analysis by load steps starts from the reference with the prescribed inputs
+      ! at zero and steps them (displacement control): the undeformed model need not fit
+      ! their full values (a tip pushed 0.3 m on a 1 m cantilever has no configuration
+      ! without bending), so the initial configuration is solved where the steps start.
+      if (this%scene%static%active .and. this%scene%static%method /= STATIC_ARC_LENGTH) then
+        this%dyn%ramp_prescribed = .true.
+        this%dyn%load_factor = 0.0_wp
+      end if
       call this%dyn%init(model, 0.0_wp, this%q_static, err, this%scene%linear_solver)
+      this%dyn%ramp_prescribed = .false.
+      this%dyn%load_factor = 1.0_wp
     end if
     if (.not. err%ok()) call err%prefix(this%file%path // ': ')
   end subroutine run_load_parsed
-
-  subroutine check_output_nodes(scene, model, err)
-    type(scene_t), intent(in) :: scene
-    type(model_t), intent(in) :: model
-    type(error_t), intent(inout) :: err
-    integer :: i, j
-    ! Compliance nodes first: they are also output nodes (io_scene adds them).
-    do i = 1, size(scene%compliance_nodes)
-      associate (label => scene%compliance_nodes(i)%s)
-        if (any([(scene%compliance_nodes(j)%s == label, j = 1, i - 1)])) then
-          call err%set(ERR_INPUT, 'group &output: variable ''compliance_nodes'': node ''' // &
-            label // ''' is listed twice')
-          return
-        end if
-        j = model%find_node(label)
-        if (j == 0) then
-          call err%set(ERR_INPUT, 'group &output: variable ''compliance_nodes'': node ''' // &
-            label // ''' is not defined')
-        else if (.not. any(pack(model%calc_index(max(1, model%node_coord(:, j))) > 0 .or. &
-            model%coord_input(max(1, model%node_coord(:, j))) == MODE_DYNAMIC, &
-            model%node_coord(:, j) > 0))) then
-          call err%set(ERR_INPUT, 'group &output: variable ''compliance_nodes'': node ''' // &
-            label // ''' has no free coordinate (all fixed or prescribed): its compliance ' // &
-            'would be zero')
-        end if
-        if (.not. err%ok()) return
-      end associate
-    end do
-    do i = 1, size(scene%output_nodes)
-      do j = 1, i - 1
-        if (scene%output_nodes(j)%s == scene%output_nodes(i)%s) then
-          call err%set(ERR_INPUT, 'group &output: variable ''nodes'': node ''' // &
-            scene%output_nodes(i)%s // ''' is listed twice')
-          return
-        end if
-      end do
-      if (model%find_node(scene%output_nodes(i)%s) == 0) then
-        call err%set(ERR_INPUT, 'group &output: variable ''nodes'': node ''' // &
-          scene%output_nodes(i)%s // ''' is not defined')
-        return
-      end if
-    end do
-  end subroutine check_output_nodes
 
   subroutine add_warning(this, text)
     type(run_t), intent(inout) :: this
@@ -267,44 +252,6 @@ contains
     if (len(labels) > 0) call add_warning(this, this%file%path // ': no &hinge or ' // &
       '&controller uses the &motion ' // labels // ' (prescribe it with motion = ''...'')')
   end subroutine warn_unused_motions
-
-  !> Refuse, before the run, histories that would not fit in memory or steps that would not end
-  !> (the limits are in docs/input.md).
-  subroutine check_history_size(d, model, err)
-    type(dynamic_rec_t), intent(in) :: d
-    type(model_t), intent(in) :: model
-    type(error_t), intent(inout) :: err
-    real(wp), parameter :: MAX_HISTORY_BYTES = 4.0e9_wp, MAX_FIXED_STEPS = 1.0e9_wp
-    real(wp) :: n_out, bytes
-    n_out = d%t_end / d%output_dt + 2.0_wp
-    ! Per output time: all coordinates, q and qd, energies (8 bytes each).
-    bytes = 8.0_wp * n_out * real(model%n_x + 2 * model%n_q + 4, wp)
-    if (bytes > MAX_HISTORY_BYTES) then
-      call err%set(ERR_INPUT, 'group &dynamic: variable ''output_dt'': t_end / output_dt ' // &
-        'gives ' // approx_str(n_out) // ' output times, whose histories would need ' // &
-        approx_str(bytes / 1.0e9_wp) // ' GB (limit 4 GB): increase output_dt or shorten t_end')
-    else if (d%integrator == INTEGRATOR_GALPHA .and. d%t_end / d%dt > MAX_FIXED_STEPS) then
-      call err%set(ERR_INPUT, 'group &dynamic: variable ''dt'': t_end / dt gives ' // &
-        approx_str(d%t_end / d%dt) // ' fixed steps (limit 1e9): increase dt')
-    end if
-  end subroutine check_history_size
-
-  !> The static histories are allocated for all n_steps before the first step (the limit is
-  !> the dynamic one, docs/input.md): refuse what would not fit rather than fail allocating.
-  subroutine check_static_size(n_steps, n_frequencies, model, err)
-    integer, intent(in) :: n_steps, n_frequencies
-    type(model_t), intent(in) :: model
-    type(error_t), intent(inout) :: err
-    real(wp), parameter :: MAX_HISTORY_BYTES = 4.0e9_wp
-    real(wp) :: bytes
-    ! Per step: all coordinates, q, frequencies, load factor and stability (8 bytes each). More
-    ! frequencies than dynamic coordinates are refused with their own message.
-    bytes = 8.0_wp * real(n_steps, wp) * real(model%n_x + model%n_dy + &
-      min(n_frequencies, model%n_dy) + 2, wp)
-    if (bytes > MAX_HISTORY_BYTES) call err%set(ERR_INPUT, 'group &static: variable ' // &
-      '''n_steps'': ' // int_str(n_steps) // ' steps, whose histories would need ' // &
-      approx_str(bytes / 1.0e9_wp) // ' GB (limit 4 GB): take fewer steps')
-  end subroutine check_static_size
 
   !> Run the analyses the scene asks for.
   !> Recursive: &dynamic error_check runs a second run_t from within (analysis_run_check).
@@ -338,6 +285,12 @@ contains
     ! Each summary line reaches a log before the next, long analysis: an interrupt ends the
     ! program without flushing buffers.
     flush(output_unit)
+    ! The modes and the state-space model are those of the static equilibrium, under the
+    ! loads it is in equilibrium with: an arc-length path may end at any load factor (it
+    ! stops at max_load_factor or after n_steps), and the tangent under the full loads at
+    ! that configuration would be of no equilibrium (a column at 0.36 of a load twice
+    ! critical came out unstable).
+    this%dyn%load_factor = static_end_load_factor(this)
     if (this%scene%modal%active) then
       ! The modes may be asked for at a time far along the motions (a shaft turned many
       ! radians): the kinematics gets there in steps if it must.
@@ -346,7 +299,12 @@ contains
         this%scene%modal%n_modes, this%modal, err, solver=this%scene%modal%solver, &
         along_motion=this%scene%modal%along_motion)
       this%dyn%kin%continuation = .false.
-      if (.not. err%ok()) return
+      if (.not. err%ok()) then
+        ! The kinematics refuses a time too far along the motions: say which variable.
+        if (index(err%message, 'kinematics: the coordinates jump') == 1) &
+          call err%prefix('group &modal: variable ''time'': ')
+        return
+      end if
       if (this%verbose) write(*, '(a,*(f0.3,:,", "))') 'modal: frequencies [Hz]: ', &
         this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz)))
       flush(output_unit)
@@ -361,7 +319,12 @@ contains
       call run_linear(this, err)
       if (.not. err%ok()) return
     end if
+    this%dyn%load_factor = 1.0_wp
     if (this%scene%dynamic%active) then
+      if (abs(static_end_load_factor(this) - 1) > 1.0e-3_wp) call add_warning(this, &
+        'static: the ' // &
+        'arc-length path ends at load factor ' // real_str(static_end_load_factor(this)) // &
+        ', not 1: &dynamic starts from that equilibrium under the full loads')
       call run_dynamic(this, err)
       if (.not. err%ok()) return
       if (this%scene%dynamic%error_check /= ERROR_CHECK_NONE) then
@@ -410,6 +373,18 @@ contains
       ' Newton iterations', trim(krylov_note(products))
     call warn_unstable(this)
   end subroutine run_static
+
+  !> The load factor of the static equilibrium the later analyses start from: the last of an
+  !> arc-length path, else 1 (load steps end at 1; no &static: the reference).
+  pure real(wp) function static_end_load_factor(this) result(lambda)
+    type(run_t), intent(in) :: this
+    lambda = 1.0_wp
+    if (.not. this%scene%static%active) return
+    if (this%scene%static%method /= STATIC_ARC_LENGTH) return
+    if (.not. allocated(this%static_load_factor)) return
+    if (size(this%static_load_factor) > 0) &
+      lambda = this%static_load_factor(size(this%static_load_factor))
+  end function static_end_load_factor
 
   !> ' (Newton-Krylov: n products with the tangent)' when there were any, else ''.
   pure function krylov_note(products) result(note)

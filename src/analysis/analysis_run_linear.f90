@@ -3,7 +3,7 @@
 submodule (analysis_run) analysis_run_linear
   use model_system, only: NODE_SLOTS
   use dynamics_linear, only: linearise, linear_model_t
-  use elements_base, only: MODE_DYNAMIC
+  use elements_base, only: MODE_DYNAMIC, MODE_RIGID, MODE_PRESCRIBED
   use reduction_basis, only: basis_spec_t, compute_basis, held_joints
   use model_scene, only: JOINTS_HELD
   implicit none
@@ -43,6 +43,11 @@ contains
         else
           call linearise(this%dyn, lin%time, this%q_static, inputs, outputs, &
             lin%along_motion, this%linear(1), err)
+        end if
+        ! The kinematics refuses a time too far along the motions: say which variable.
+        if (.not. err%ok()) then
+          if (index(err%message, 'kinematics: the coordinates jump') == 1) &
+            call err%prefix('group &linear: variable ''time'': ')
         end if
       else
         call along_run()
@@ -294,6 +299,16 @@ contains
       if (ios /= 0 .or. j < 1 .or. j > el%n_modes()) then
         call err%set(ERR_INPUT, where // 'element ''' // label // ''' (' // el%type_name() // &
           ') has modes 1 to ' // int_str(el%n_modes()))
+        return
+      end if
+      ! The force a rigid or prescribed mode carries is the multiplier of its kinematic
+      ! condition, not S e (which is zero there): the output would read 0 whatever the load.
+      if (stress .and. (el%mode_class(j) == MODE_RIGID .or. &
+          el%mode_class(j) == MODE_PRESCRIBED)) then
+        call err%set(ERR_INPUT, where // 'mode ' // int_str(j) // ' of ''' // label // &
+          ''' is ' // trim(merge('rigid     ', 'prescribed', el%mode_class(j) == MODE_RIGID)) &
+          // ': the force it carries is a constraint force, not (S e)_' // int_str(j) // &
+          ' (always 0); make the mode dynamic or elastic to output its stress')
         return
       end if
     end associate

@@ -239,7 +239,7 @@ contains
       call h5%write_real_1d('/buckling/load_factor', b%load_factor, err)
       if (err%ok()) call h5%write_real_2d('/buckling/shapes', b%shapes, err)
       if (err%ok()) call h5%write_real_attr('/buckling', 'reference_load_factor', &
-        this%scene%buckling%load_factor, err)
+        b%reference_load_factor, err)
       if (err%ok()) call h5%write_int_attr('/buckling', 'n_negative', b%n_negative, err)
       do i = 1, size(this%scene%output_nodes)
         if (err%ok()) call h5%write_real_2d('/buckling/nodes/' // &

@@ -40,6 +40,19 @@ module dynamics_buckling
   !> solver = 'auto' takes the matrix-free path (dynamics_buckling_krylov) where it applies
   !> above this many dynamic coordinates, as statics does (dynamics_static's KRYLOV_ABOVE).
   integer, parameter :: KRYLOV_ABOVE = 40
+  !> The load part of the tangent is differenced as K_T(lambda) - K0 (the load force is
+  !> evaluated as the generalised force plus the structure's stresses), so it carries the
+  !> round-off of K0, about 1e-15 of its largest entries: a load part below RESOLVED of K0
+  !> (a 1e-12 N load, or a tiny load_factor) would be mostly round-off, and silently wrong
+  !> multipliers came of it. Being linear in the load factor at a fixed configuration, it
+  !> is then differenced again at a load factor scaled up to bring it to the size of K0, at
+  !> most MAX_RESCALES times by at most MAX_RESCALE each (a load part that stays below is
+  !> none: loads the configuration does not turn, e.g. forces on a linear spring).
+  real(wp), parameter :: RESOLVED = 1.0e-5_wp, MAX_RESCALE = 1.0e12_wp
+  integer, parameter :: MAX_RESCALES = 6
+  !> Bounds of &buckling load_factor (its reciprocal the upper one): beyond them the loads
+  !> themselves would underflow or overflow.
+  real(wp), parameter :: MIN_LAMBDA_REF = 1.0e-30_wp
 
   !> Result of one buckling analysis; n = the number of positive multipliers kept.
   type :: buckling_result_t
@@ -49,6 +62,9 @@ module dynamics_buckling
     real(wp), allocatable :: k0(:, :), kg(:, :) !< K0 and K_G (per unit load factor)
     !> multipliers of the reversed load left out (-1: not counted, the matrix-free path)
     integer :: n_negative = 0
+    !> the load factor K_G was differenced at: &buckling load_factor, or above it where the
+    !> load part would have been lost in the round-off of K0 (RESOLVED)
+    real(wp) :: reference_load_factor = 1.0_wp
   end type buckling_result_t
 
 contains
@@ -70,8 +86,8 @@ contains
     character(len=:), allocatable :: why_not
     logical :: krylov
     real(wp), allocatable :: kt(:, :), a(:, :), theta(:), v(:, :), z(:, :), k0z(:, :), kgz(:, :)
-    real(wp) :: saved, big
-    integer :: n, info, i, nk, nz
+    real(wp) :: saved, big, lambda, ratio
+    integer :: n, info, i, nk, nz, attempt
     integer, allocatable :: keep(:)
     n = dyn%model%n_dy
     if (n_modes < 1) then
@@ -80,6 +96,11 @@ contains
     end if
     if (lambda_ref <= 0) then
       call err%set(ERR_INPUT, 'group &buckling: variable ''load_factor'' must be positive')
+      return
+    end if
+    if (lambda_ref < MIN_LAMBDA_REF .or. lambda_ref > 1 / MIN_LAMBDA_REF) then
+      call err%set(ERR_INPUT, 'group &buckling: variable ''load_factor'' must lie within ' // &
+        '1e-30 to 1e30 (the load stiffness is linear in it: the default 1 serves)')
       return
     end if
     if (n == 0) then
@@ -108,7 +129,8 @@ contains
     end if
     if (krylov) then
       call krylov_buckling(dyn, t, q_dy, n_modes, lambda_ref, THETA_CUTOFF, theta, &
-        res%shapes, res%node_shapes, err)
+        res%shapes, res%node_shapes, err, RESOLVED, MAX_RESCALE, MAX_RESCALES, &
+        res%reference_load_factor)
       if (.not. err%ok()) return
       nk = min(n_modes, size(theta))
       res%load_factor = 1 / theta(1:nk)
@@ -122,10 +144,18 @@ contains
     saved = dyn%load_factor
     dyn%load_factor = 0.0_wp
     call tangent_stiffness(dyn, t, q_dy, res%k0, err)
-    if (err%ok()) then
-      dyn%load_factor = lambda_ref
+    lambda = lambda_ref
+    do attempt = 1, MAX_RESCALES + 1
+      if (.not. err%ok()) exit
+      dyn%load_factor = lambda
       call tangent_stiffness(dyn, t, q_dy, kt, err)
-    end if
+      if (.not. err%ok()) exit
+      ! K0 = 0 (a mechanism, refused below): no round-off to resolve against.
+      if (maxval(abs(kt - res%k0)) >= RESOLVED * maxval(abs(res%k0)) .or. &
+        attempt > MAX_RESCALES) exit
+      ratio = maxval(abs(kt - res%k0)) / maxval(abs(res%k0))
+      lambda = lambda * rescale(ratio)
+    end do
     dyn%load_factor = saved
     if (.not. err%ok()) then
       call err%prefix('buckling analysis: ')
@@ -133,7 +163,8 @@ contains
     end if
     ! Symmetric for conservative loads; of a moment fixed in space only the symmetric part
     ! enters (the linearised problem of a non-conservative load is not symmetric).
-    res%kg = (kt - res%k0) / lambda_ref
+    res%kg = (kt - res%k0) / lambda
+    res%reference_load_factor = lambda
     res%kg = 0.5_wp * (res%kg + transpose(res%kg))
     z = identity(n)
     if (present(held)) then
@@ -181,6 +212,13 @@ contains
     res%node_shapes = matmul(dyn%kin%df(:, dyn%model%n_rh + 1:), res%shapes)
     call normalise(dyn, res)
   end subroutine buckling_analysis
+
+  !> The factor that brings a load part `ratio` times the size of K0 to about its size.
+  pure real(wp) function rescale(ratio) result(f)
+    real(wp), intent(in) :: ratio
+    f = MAX_RESCALE
+    if (ratio > 1 / MAX_RESCALE) f = 1 / ratio
+  end function rescale
 
   pure function identity(n) result(a)
     integer, intent(in) :: n

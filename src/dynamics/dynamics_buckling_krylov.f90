@@ -15,7 +15,7 @@
 !> supports of the buckling problem alone; and K0 regular (the dense path requires it too).
 module dynamics_buckling_krylov
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_NUMERIC
+  use core_error, only: error_t, ERR_NUMERIC, ERR_MODEL
   use core_strings, only: int_str
   use core_sort, only: sort_by_value
   use core_arpack, only: dnaupd, dneupd
@@ -39,15 +39,20 @@ contains
   !> The at most n_modes largest theta > cutoff * (the largest |theta| found) and their shapes
   !> q (n_dy) and DF_dy q (n_x), at (t, q_dy) with the loads at lambda_ref; dyn%load_factor is
   !> restored. `n_found` < n_modes when fewer converged or passed the cutoff.
+  !> `resolved`, `max_rescale` and `max_rescales`: the load part of the products is scaled up
+  !> as dynamics_buckling does the dense difference (the same round-off, here of the
+  !> structure's stresses in the load force): its load factor is `lambda` on return.
   subroutine krylov_buckling(dyn, t, q_dy, n_modes, lambda_ref, cutoff, theta, shapes, &
-      node_shapes, err)
+      node_shapes, err, resolved, max_rescale, max_rescales, lambda)
     type(dynamics_t), intent(inout) :: dyn
-    real(wp), intent(in) :: t, q_dy(:), lambda_ref, cutoff
-    integer, intent(in) :: n_modes
+    real(wp), intent(in) :: t, q_dy(:), lambda_ref, cutoff, resolved, max_rescale
+    integer, intent(in) :: n_modes, max_rescales
     real(wp), allocatable, intent(out) :: theta(:), shapes(:, :), node_shapes(:, :)
     type(error_t), intent(out) :: err
+    real(wp), intent(out) :: lambda
     type(krylov_statics_t) :: kry
-    real(wp) :: saved
+    real(wp) :: saved, x(size(q_dy)), k0x(size(q_dy)), klx(size(q_dy)), ratio
+    integer :: i, attempt
     logical :: was_locked
     saved = dyn%load_factor
     was_locked = dyn%locked
@@ -55,12 +60,32 @@ contains
     dyn%locked = .true.
     dyn%load_factor = 0.0_wp
     call kry%precondition(dyn, t, q_dy, err)
-    if (err%ok() .and. kry%shift /= 0) call err%set(ERR_NUMERIC, 'buckling analysis: the ' // &
-      'structural stiffness K0 is singular (a mechanism: a dynamic coordinate without ' // &
-      'stiffness, e.g. a released hinge or a free rigid-body motion)')
+    ! A K0 that the factors cannot take as it is (shifted, or not at all: nothing has mass
+    ! to shift it with) is a mechanism, as the dense path says (and with its exit status);
+    ! the factorisation's own message names the static analysis and its solver.
+    if (err%code == ERR_NUMERIC .or. (err%ok() .and. kry%shift /= 0)) then
+      call err%clear()
+      call err%set(ERR_MODEL, 'buckling analysis: the structural stiffness K0 is singular ' // &
+        '(a mechanism: a dynamic coordinate without stiffness, e.g. a released hinge or a ' // &
+        'free rigid-body motion)')
+    end if
+    ! The sizes of K0 x and of the load part K_L x along a fixed vector with no structure
+    ! (every coordinate, varied signs), where the load part has no reason to vanish.
+    lambda = lambda_ref
+    x = [(sin(1.0_wp + 2.3_wp * i), i = 1, size(q_dy))]
+    if (err%ok()) call kry%product(dyn, t, q_dy, x, k0x, err)
+    do attempt = 1, max_rescales + 1
+      if (.not. err%ok()) exit
+      dyn%load_factor = lambda
+      call kry%load_product(dyn, t, q_dy, x, klx, err)
+      if (.not. err%ok()) exit
+      if (norm2(klx) >= resolved * norm2(k0x) .or. attempt > max_rescales) exit
+      ratio = norm2(klx) / norm2(k0x)
+      lambda = lambda * merge(1 / ratio, max_rescale, ratio > 1 / max_rescale)
+    end do
     if (err%ok()) then
-      dyn%load_factor = lambda_ref
-      call arnoldi(kry, dyn, t, q_dy, n_modes, lambda_ref, theta, shapes, err)
+      dyn%load_factor = lambda
+      call arnoldi(kry, dyn, t, q_dy, n_modes, lambda, theta, shapes, err)
     end if
     dyn%load_factor = saved
     if (err%ok()) then

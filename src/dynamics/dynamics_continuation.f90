@@ -50,6 +50,7 @@ contains
     real(wp) :: q(size(q_dy)), l, scale
     integer :: halvings, it
     logical :: converged
+    character(len=:), allocatable :: failure
     n_done = 0
     iterations = 0
     dyn%locked = .true.
@@ -60,9 +61,19 @@ contains
     call tangent_and_load(dyn, t, q_dy, lambda, k, p, err)
     ! Without a load there is no path to follow: the tangent would be 0/0.
     if (err%ok() .and. .not. any(p /= 0)) then
-      call err%set(ERR_INPUT, 'group &static: variable ''method'': arc-length continuation ' // &
-        'follows the load factor, and the loads it scales are zero on every degree of ' // &
-        'freedom (no &force, gravity or other load acts on them)')
+      if (any(dyn%load /= 0) .or. size(dyn%model%moment_lambda) > 0) then
+        ! Loads that do no work on the dynamic coordinates at the start: a perfect column
+        ! loaded along its axis, whose path leaves the start only by bifurcation.
+        call err%set(ERR_INPUT, 'group &static: variable ''method'': arc-length ' // &
+          'continuation follows the load factor, and at the start the loads do no work on ' // &
+          'the dynamic coordinates (e.g. a straight column loaded along its axis, which ' // &
+          'leaves the straight path only by bifurcation): add a small perturbing load, ' // &
+          'or use method = ''load''')
+      else
+        call err%set(ERR_INPUT, 'group &static: variable ''method'': arc-length ' // &
+          'continuation follows the load factor, and the loads it scales are zero on ' // &
+          'every degree of freedom (no &force, gravity or other load acts on them)')
+      end if
       call finish(dyn)
       return
     end if
@@ -84,6 +95,7 @@ contains
         if (progress%due()) call progress%report_load(n_done + 1, n_steps, lambda)
       end if
       halvings = 0
+      failure = ''
       do
         q_pred = q_dy + ds * tq * c
         l_pred = lambda + ds * tl
@@ -91,7 +103,10 @@ contains
         l = l_pred
         call correct(q, l, converged)
         if (.not. err%ok()) then
-          if (err%code /= ERR_NUMERIC .or. halvings == MAX_HALVINGS) exit
+          if (err%code /= ERR_NUMERIC) exit
+          ! Kept for the message if no halving helps: an arc far too long for the path ends
+          ! in kinematics that cannot be solved, and the cure is a shorter arc.
+          failure = err%message
           call err%clear()
           converged = .false.
         end if
@@ -102,9 +117,11 @@ contains
       end do
       if (.not. err%ok()) exit
       if (.not. converged) then
+        if (len(failure) > 0) failure = '; the last try: ' // failure
         call err%set(ERR_NUMERIC, 'static arc-length: no equilibrium found from load factor ' // &
           real_str(lambda) // ' after ' // int_str(MAX_HALVINGS) // ' halvings of the arc ' // &
-          '(a bifurcation or a mechanism: try a smaller arc_length or a small perturbing load)')
+          '(a bifurcation or a mechanism: try a smaller arc_length or a small perturbing load)' &
+          // failure)
         exit
       end if
       ! The new tangent, oriented to continue in the direction just travelled.

@@ -25,6 +25,7 @@ module dynamics_static
   use core_linalg, only: lu_factor, lu_solve, chol_factor, gen_eig_values
   use dynamics_system, only: dynamics_t
   use core_progress, only: progress_t
+  use core_strings, only: int_str, real_str
   use dynamics_static_krylov, only: krylov_statics_t, difference_step
   implicit none
   private
@@ -376,6 +377,16 @@ contains
       x_steps(:, step) = dyn%kin%x
       if (present(q_steps)) q_steps(:, step) = q_dy
     end do
+    ! Failures of the kinematics or the model at a Newton iterate (a load step so large that
+    ! the first correction leaves the reach of the structure) say where they happened.
+    if (.not. err%ok()) then
+      if (index(err%message, 'static analysis') /= 1) then
+        if (err%code == ERR_NUMERIC) err%message = err%message // ' (smaller load steps: ' // &
+          'more n_steps)'
+        call err%prefix('static analysis, load step ' // int_str(step) // ' of ' // &
+          int_str(n_steps) // ' (load factor ' // real_str(lambda) // '): ')
+      end if
+    end if
     if (present(products)) products = kry%n_products
     dyn%locked = .false.
     dyn%ramp_prescribed = .false.

@@ -2,6 +2,7 @@ module model_kinematics
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC, ERR_MODEL
   use core_linalg, only: lu_factor, lu_solve
+  use core_strings, only: approx_str
   use core_sparse, only: sparse_lu_t, entries_t
   use model_system, only: model_t
   implicit none
@@ -268,7 +269,8 @@ contains
   !> first-order transfer function (a cheap predictor that keeps Newton on the right branch).
   !> On success the Jacobian at the solution is factorised and DF is NOT yet updated.
   !> The kinematic solution at q: Newton from the last solution (kin_newton). If that fails and
-  !> `continuation` is on, the step from the last q is cut into 2, 4, ... 64 equal parts, each
+  !> `continuation` is on, the step from the last q is cut into 2, 4, ... 64 equal parts (at
+  !> least one per MAX_PART of the largest jump, up to MAX_PARTS), each
   !> solved from the one before: a far jump, such as a modal analysis at a time when a shaft
   !> has turned 10 rad, defeats Newton from the reference but not in steps. The first
   !> failure's error is returned if no subdivision succeeds. t, the time of q, lets the
@@ -281,7 +283,9 @@ contains
     real(wp), intent(in), optional :: t
     real(wp), allocatable :: x_last(:), q_last(:)
     type(error_t) :: sub_err
-    integer :: n, i, n_solves
+    integer :: n, n_solves, n_min
+    real(wp), parameter :: MAX_PART = 0.5_wp, MAX_PARTS = 2.0e4_wp, MAX_COARSE_PART = 1.0e3_wp
+    real(wp) :: jump
     ! The usual path (every evaluation of a run) copies nothing.
     if (.not. this%continuation) then
       call kin_newton(this, model, q, err, t)
@@ -290,11 +294,44 @@ contains
     allocate(x_last, source=this%x)
     allocate(q_last, source=this%q)
     n_solves = this%n_solves
-    call kin_newton(this, model, q, err, t)
-    if (err%ok()) return
+    ! Newton across a jump of many radians (a shaft 1e4 turns on) diverges, to a wrong
+    ! 'singular Jacobian' or to overflow (a floating-point trap in Debug). Whether a part of
+    ! many radians converges is luck (a blade spun 3e4 rad did in 64 parts, in 300 parts of
+    ! 100 rad it did not): first the direct solve and 2 .. 64 parts where each is at most
+    ! MAX_COARSE_PART (cheap, and enough for most), then parts of at most MAX_PART (safe,
+    ! up to MAX_PARTS of them); a longer jump is refused.
+    jump = maxval(abs(q - q_last))
+    if (jump <= MAX_COARSE_PART) then
+      call kin_newton(this, model, q, err, t)
+      if (err%ok()) return
+    end if
     n = 1
     do while (n < 64)
       n = 2 * n
+      if (jump / n > MAX_COARSE_PART) cycle
+      if (in_parts(n)) return
+    end do
+    if (.not. jump <= MAX_PART * MAX_PARTS) then
+      call err%clear()
+      call err%set(ERR_NUMERIC, 'kinematics: the coordinates jump by more than ' // &
+        approx_str(MAX_PART * MAX_PARTS) // ' (m or rad) from the last solution, more than ' // &
+        'the continuation follows in steps')
+    else
+      n_min = ceiling(jump / MAX_PART)
+      if (n_min > 64) then
+        if (in_parts(n_min)) return
+      end if
+    end if
+    this%x = x_last
+    this%q = q_last
+    this%has_factors = .false.
+
+  contains
+
+    !> Solve the jump in n equal parts from the last solution; keeps the first failure.
+    logical function in_parts(n) result(ok)
+      integer, intent(in) :: n
+      integer :: i
       this%x = x_last
       this%q = q_last
       this%has_factors = .false.
@@ -302,15 +339,14 @@ contains
         call kin_newton(this, model, q_last + (real(i, wp) / n) * (q - q_last), sub_err)
         if (.not. sub_err%ok()) exit
       end do
-      if (sub_err%ok()) then
+      ok = sub_err%ok()
+      if (ok) then
         call err%clear()
         this%n_solves = n_solves + 1
-        return
+      else if (err%ok()) then
+        call err%set(sub_err%code, sub_err%message)
       end if
-    end do
-    this%x = x_last
-    this%q = q_last
-    this%has_factors = .false.
+    end function in_parts
   end subroutine kin_solve
 
   !> Start the next solve from the nodal coordinates x (a known nearby solution), without the

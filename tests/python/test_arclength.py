@@ -80,3 +80,72 @@ def test_bad_input(tmp_path, old, new, fragments):
     assert old in BASE
     proc, out = run_scene(tmp_path, BASE.replace(old, new))
     assert_clean_error(proc, out, *fragments)
+
+
+def column(loads, static):
+    """A 1 m cantilever column (8 elements, Euler load pi^2 EI / (4 L^2) = 493.5 N) under
+    `loads` (a tip force, a slight transverse part to take the buckled branch), &static
+    `static`, with its lowest two modes."""
+    return f"""&node label = 'root', x = 0, y = 0, fixed = .true. /
+&node label = 'tip', x = 1, y = 0 /
+&link label = 'arm', from = 'root', to = 'tip', n_elements = 8,
+      E = 2.0e11, A = 1.0e-4, I = 1.0e-9, rho = 7800 /
+&force node = 'tip', {loads} /
+&static {static} /
+&modal n_modes = 2 /
+&output nodes = 'tip' /
+"""
+
+
+def test_modes_at_the_end_of_a_path_that_stops_short(tmp_path):
+    """A path stopped by max_load_factor at lambda ~ 0.36 of twice the Euler load: the modes
+    are those of that equilibrium under its own loads, the same as after load steps to
+    lambda times the loads. They were taken under the full loads (above critical) and came
+    out unstable (-10 Hz instead of 5.0 Hz). Both runs reach the same equilibrium to the
+    Newton tolerance (1e-10 of 1 m; tips 1.3e-11 m apart observed, bound 1e-8 m: 8 elements
+    of 1e-10 with 10x) and difference the same tangent there; the frequency's sensitivity to
+    the state is O(1) per metre of tip, so 1e-8 m of tip moves it by ~1e-8: bound 1e-6
+    relative, far below the 2x error of the wrong load."""
+    proc, out = run_scene(tmp_path, column("fx = -1000.0, fy = -1.0",
+                                           "method = 'arc_length', n_steps = 40, "
+                                           "max_load_factor = 0.35"), "arc")
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        lam = float(f["static/load_factor"][-1])
+        f_arc = f["modal/frequency_hz"][:]
+        tip = f["static/nodes/tip/position"][-1]
+    assert 0.35 <= lam < 0.5
+    proc, out = run_scene(tmp_path, column(f"fx = {-1000.0 * lam!r}, fy = {-lam!r}",
+                                           "n_steps = 10"), "load")
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(out) as f:
+        f_load = f["modal/frequency_hz"][:]
+        tip_load = f["static/nodes/tip/position"][-1]
+    assert np.max(np.abs(tip - tip_load)) < 1e-8
+    assert np.all(f_load > 0) and np.max(np.abs(f_arc / f_load - 1)) < 1e-6, (f_arc, f_load)
+
+
+def test_dynamic_after_a_path_that_stops_short_warns(tmp_path):
+    """&dynamic after an arc-length path that ends below load factor 1 starts from that
+    equilibrium under the full loads: said in a warning (the run succeeds)."""
+    text = column("fy = -1.0", "method = 'arc_length', n_steps = 3, max_load_factor = 0.5")
+    proc, out = run_scene(tmp_path, text + "&dynamic t_end = 0.01 /\n")
+    assert proc.returncode == 0, proc.stderr
+    assert "arc-length path ends at load factor 0.66" in proc.stderr
+    assert "&dynamic starts from that equilibrium under the full loads" in proc.stderr
+
+
+@pytest.mark.parametrize("loads, static, fragments", [
+    # A straight column loaded along its axis: the load exists but does no work on the
+    # dynamic coordinates at the start; it was reported as 'no &force ... acts on them'.
+    ("fx = -1000.0", "method = 'arc_length', n_steps = 5",
+     ["&static", "'method'", "do no work on the dynamic coordinates", "perturbing load"]),
+    # An arc a million times too long: no halving reaches kinematics that can be solved; it
+    # ended on the bare 'kinematic Newton iteration did not converge'.
+    ("fy = -1.0", "method = 'arc_length', n_steps = 3, arc_length = 1.0e6",
+     ["static arc-length: no equilibrium found", "halvings", "smaller arc_length",
+      "the last try: kinematic Newton"]),
+])
+def test_column_bad_paths(tmp_path, loads, static, fragments):
+    proc, out = run_scene(tmp_path, column(loads, static))
+    assert_clean_error(proc, out, *fragments)

@@ -164,6 +164,14 @@ CASES = {
     "static newton": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
                                    "&static n_steps = 1, max_iter = 1, tol = 1e-14 /"),
                       ["static", "did not converge"]),
+    # The results of 2e9 load steps (880 GB) were allocated: a Fortran runtime error.
+    "static steps beyond memory": (GOOD.replace("&modal /", "&force node = 'tip', fy = -50 /\n"
+                                                "&static n_steps = 2000000000 /"),
+                                   ["&static", "'n_steps'", "GB (limit 4 GB)"]),
+    "arc-length steps beyond memory": (GOOD.replace(
+        "&modal /", "&force node = 'tip', fy = -50 /\n"
+        "&static method = 'arc_length', n_steps = 2000000000 /"),
+        ["&static", "'n_steps'", "GB (limit 4 GB)"]),
 }
 
 
@@ -395,6 +403,11 @@ CASES.update({
                               ["&buckling", "'n_modes'", "at least 1"]),
     "buckling load_factor zero": (COLUMN.format("load_factor = 0"),
                                   ["&buckling", "'load_factor'", "positive"]),
+    # 1e-300 left the loads in the round-off (a wrong multiplier, 26 % off); 1e300 overflows.
+    "buckling load_factor tiny": (COLUMN.format("load_factor = 1e-300"),
+                                  ["&buckling", "'load_factor'", "1e-30 to 1e30"]),
+    "buckling load_factor huge": (COLUMN.format("load_factor = 1e300"),
+                                  ["&buckling", "'load_factor'", "1e-30 to 1e30"]),
     "buckling twice": (COLUMN.format("") + "&buckling /\n", ["&buckling", "only once"]),
     "buckling without load": (COLUMN.format("").replace("&force node = 'top', fy = -70 /", ""),
                               ["&buckling", "no load"]),

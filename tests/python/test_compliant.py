@@ -366,3 +366,98 @@ def test_python_reader(tmp_path):
     assert top.compliance.shape == (2, 3, 3) and base.compliance is None
     assert base.reaction.shape == (2, 3) and abs(base.reaction[-1, 0] + 1e-3) < 1e-9
     assert static.frequency_hz.shape == (2, 1) and np.all(static.frequency_hz > 0)
+
+
+def push_tip(d, load, n_steps):
+    """A 1 m cantilever (8 elements) with its tip pushed across by a prescribed y = d, or
+    loaded by a force fy = `load` (d = None). With y prescribed, the bending mode before the
+    tip's rotation is elastic: it closes the count with one mode following."""
+    tip = f"motion_y = 'push'" if d is not None else ""
+    bending = "14*'dynamic', 'elastic', 'dynamic'" if d is not None else "'dynamic'"
+    extra = (f"&motion label = 'push', law = 'constant', start = {d} /" if d is not None
+             else f"&force node = 'tip', fy = {load!r} /")
+    return f"""&node label = 'root', x = 0, y = 0, fixed = .true. /
+&node label = 'tip', x = 1.0, y = 0, {tip} /
+&link label = 'arm', from = 'root', to = 'tip', n_elements = 8, E = 2.0e11, A = 1.0e-4,
+      I = 1.0e-9, rho = 7800, bending = {bending} /
+{extra}
+&static n_steps = {n_steps} /
+&output nodes = 'tip' /
+""".replace(", /", " /")
+
+
+def test_displacement_control_beyond_the_undeformed_model(tmp_path):
+    """The tip pushed 0.3 m across in 10 steps (displacement control): the undeformed model
+    cannot reach it (no bending: only the elastic mode could follow), so the run must start
+    where the load steps start, at 0; it failed in the initial configuration, before any
+    step. Checks: the first step (0.03 m) gives the linear reaction 3 EI d / L^3 up to the
+    geometric stiffening c (d/L)^2 (c = 1.03 observed at d/L = 1e-2): bound 10 x 2 (d/L)^2;
+    and the force-controlled cantilever under the final reaction reaches the same tip, to
+    the Newton tolerance of both runs: each stops at corrections of 1e-10 in q_dy, which
+    the 8 elements sum into at most 8e-10 m at the tip; observed 7e-11 m; bound
+    10 x 2 x 8e-10 m (a wrong equilibrium, off by the stiffening of 10 %, misses by far)."""
+    ei, d = 2.0e11 * 1.0e-9, 0.3
+    with run(tmp_path, push_tip(d, None, 10), "pushed") as f:
+        pos = f["static/nodes/tip/position"][()]
+        reaction = f["static/nodes/tip/reaction"][()]
+    assert abs(pos[-1, 1] - d) < 1e-12
+    assert abs(reaction[0, 1] / (3 * ei * d / 10) - 1) < 10 * 2 * (d / 10)**2
+    with run(tmp_path, push_tip(None, float(reaction[-1, 1]), 10), "loaded") as f:
+        loaded = f["static/nodes/tip/position"][-1]
+    assert np.max(np.abs(loaded[:2] - pos[-1, :2])) < 10 * 2 * 8e-10, (loaded, pos[-1])
+
+
+@pytest.mark.parametrize("n_steps", [1, 4])
+def test_displacement_control_reaction(tmp_path, n_steps):
+    """The tip pushed across by d = L/100 in 1 or 4 steps: reaction 3 EI d / L^3 up to the
+    geometric stiffening c (d/L)^2, c = 1.03 observed (both builds); bound 10 x 2 (d/L)^2."""
+    ei, d = 2.0e11 * 1.0e-9, 0.01
+    with run(tmp_path, push_tip(d, None, n_steps)) as f:
+        pos = f["static/nodes/tip/position"][-1]
+        reaction = f["static/nodes/tip/reaction"][-1]
+    assert abs(pos[1] - d) < 1e-12
+    assert abs(reaction[1] / (3 * ei * d) - 1) < 10 * 2 * d**2
+
+
+@pytest.mark.parametrize("solver", ["dense", "krylov"])
+@pytest.mark.parametrize("force", [1.0e-12, 1.0e9])
+def test_buckling_multipliers_scale_with_the_load(tmp_path, solver, force):
+    """The multipliers of a load F are those of a unit load over F. The load part of the
+    tangent was differenced at load factor 1 against the round-off of K0 (1e-15 of it): a
+    1e-12 N load lost it, the dense path gave the first multiplier 0.3 % off and the third
+    30 %, the Krylov path failed ('complex multipliers'). Now it is differenced at a load
+    factor that makes it at least 1e-5 of K0 (dynamics_buckling RESOLVED), so its round-off
+    is at most 1e-15 / 1e-5 = 1e-10 of it, and the multipliers move by as much: the three
+    lowest agree with the unit load's to that (observed 5e-13); bound 1e-9."""
+    def multipliers(f, name):
+        text = f"""&scene linear_solver = 'sparse' /
+&node label = 'root', x = 0, y = 0, fixed = .true. /
+&node label = 'tip', x = 1, y = 0 /
+&link label = 'arm', from = 'root', to = 'tip', n_elements = 8,
+      E = 2.0e11, A = 1.0e-4, I = 1.0e-9, rho = 7800 /
+&force node = 'tip', fx = {-f!r} /
+&buckling n_modes = 3, solver = '{solver}' /
+"""
+        with run(tmp_path, text, name) as h5:
+            return h5["buckling/load_factor"][:] * f
+    unit, scaled = multipliers(1.0, "unit"), multipliers(force, "scaled")
+    assert abs(unit[0] / (math.pi**2 * 2.0e11 * 1.0e-9 / 4) - 1) < 5e-3
+    assert scaled.shape == (3,) and np.max(np.abs(scaled / unit - 1)) < 1e-9, (scaled, unit)
+
+
+@pytest.mark.parametrize("solver", ["dense", "krylov"])
+def test_buckling_of_a_pendulum_is_refused(tmp_path, solver):
+    """A rigid pendulum on a free hinge has no structural stiffness (K0 = 0): one error line
+    (the load factor scaling of the load part must not divide by the size of K0)."""
+    text = f"""&scene gravity = 0, -9.81, linear_solver = 'sparse' /
+&node label = 'root', x = 0, y = 0, fixed = .true. /
+&node label = 'tip', x = 0, y = -1 /
+&link label = 'arm', from = 'root', to = 'tip', E = 2.0e11, A = 1.0e-4, I = 1.0e-9,
+      rho = 7800, elongation = 'rigid', bending = 'rigid' /
+&hinge label = 'j1', node = 'root', link = 'arm', mode = 'dynamic' /
+&mass node = 'tip', m = 1.0 /
+&buckling solver = '{solver}' /
+"""
+    proc, out = run_scene(tmp_path, text)
+    fragment = "not positive definite" if solver == "dense" else "singular"
+    assert_clean_error(proc, out, "buckling analysis", "K0", fragment, "mechanism")

@@ -116,6 +116,10 @@ def test_spatial_dc_gain(tmp_path):
     ("inputs = 'arm#1.e2', outputs = 'tip.y'", ["&linear", "'inputs'", "'arm#1.e2'",
                                                 "output only"]),
     ("inputs = 'tip.fy', outputs = 'tip.e'", ["&linear", "'tip.e'", "x, y, phi"]),
+    # The beam's elongation is rigid (the default): its axial force is a multiplier, and
+    # 'sigma1' = (S e)_1 read 0 under any axial load.
+    ("inputs = 'tip.fx', outputs = 'arm#1.sigma1'", ["&linear", "'arm#1.sigma1'", "rigid",
+                                                     "constraint force", "dynamic or elastic"]),
 ])
 def test_bad_linear_input(tmp_path, linear, fragments):
     text = ("&node label = 'root', x = 0, y = 0, fixed = .true. /\n"
