@@ -5,7 +5,7 @@ program test_integrators_status
   use core_kinds, only: wp, i8
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use integrators_system, only: integrator_options_t, integrator_stats_t, &
-    INTEGRATOR_BDF, INTEGRATOR_GALPHA, JACOBIAN_INTERNAL
+    INTEGRATOR_BDF, INTEGRATOR_GALPHA, INTEGRATOR_GALPHA_ADAPTIVE, JACOBIAN_INTERNAL
   use integrators_driver, only: integrate
   use test_oscillators, only: failing_oscillator_t
   use testing, only: suite_t
@@ -114,6 +114,11 @@ contains
       'rtol = 0')
     call expect_input_error(integrator_options_t(method=INTEGRATOR_BDF, atol=-1.0_wp), t_out, &
       'atol < 0')
+    ! Below what double precision can meet, or weights that overflow when squared.
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, &
+      rtol=1.0e-20_wp), t_out, 'rtol = 1e-20')
+    call expect_input_error(integrator_options_t(method=INTEGRATOR_BDF, atol=1.0e-200_wp), &
+      t_out, 'atol = 1e-200')
     call expect_input_error(integrator_options_t(method=INTEGRATOR_BDF, max_order=6), t_out, &
       'max_order 6')
     call expect_input_error(integrator_options_t(method=INTEGRATOR_BDF, jacobian=0), t_out, &

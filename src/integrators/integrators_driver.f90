@@ -2,9 +2,10 @@
 !> breakpoints, restarts the method at each breakpoint and hands every output to the system.
 module integrators_driver
   use core_kinds, only: wp
-  use core_strings, only: int_str, real_str
+  use core_strings, only: int_str, real_str, approx_str
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t, &
+    MIN_RTOL, MIN_ATOL, &
     INTEGRATOR_NAMES, INTEGRATOR_BDF, INTEGRATOR_GALPHA, INTEGRATOR_GALPHA_ADAPTIVE, &
     INTEGRATOR_ERK, JACOBIAN_LINEARISED, JACOBIAN_FD, JACOBIAN_INTERNAL
   use integrators_base, only: integrator_t
@@ -226,10 +227,11 @@ contains
     end if
     if (size(q0) /= size(v0) .or. size(q0) < 1) call err%set(ERR_INPUT, ctx // &
       'q0 and v0 must have the same, non-zero size')
-    if (.not. opts%rtol > 0) call err%set(ERR_INPUT, ctx // 'rtol must be > 0, got ' // &
+    if (.not. opts%rtol >= MIN_RTOL) call err%set(ERR_INPUT, ctx // 'rtol must be >= ' // &
+      approx_str(MIN_RTOL) // ' (double precision cannot meet a smaller one), got ' // &
       real_str(opts%rtol))
-    if (.not. opts%atol > 0) call err%set(ERR_INPUT, ctx // 'atol must be > 0, got ' // &
-      real_str(opts%atol))
+    if (.not. opts%atol >= MIN_ATOL) call err%set(ERR_INPUT, ctx // 'atol must be >= ' // &
+      approx_str(MIN_ATOL) // ', got ' // real_str(opts%atol))
     if (opts%max_steps < 1) call err%set(ERR_INPUT, ctx // 'max_steps must be >= 1')
     select case (opts%method)
     case (INTEGRATOR_BDF)

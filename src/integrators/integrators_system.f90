@@ -19,6 +19,10 @@ module integrators_system
     INTEGRATOR_GALPHA_ADAPTIVE = 4, INTEGRATOR_ERK = 5
   character(len=*), parameter, public :: INTEGRATOR_NAMES(5) = [character(len=15) :: 'auto', &
     'bdf', 'galpha', 'galpha_adaptive', 'erk']
+  !> The smallest tolerances: below MIN_RTOL double precision cannot meet the error test
+  !> (galpha_adaptive at rtol 1e-20 shrank its steps without end); below MIN_ATOL the error
+  !> weights 1 / atol overflow when squared (CVODE at atol 1e-200: a floating-point trap).
+  real(wp), parameter, public :: MIN_RTOL = 1.0e-14_wp, MIN_ATOL = 1.0e-100_wp
   !> The Jacobian of the implicit methods, in the order of &dynamic jacobian's choices. The
   !> integrators take the system's (ode2_system_t%jacobian) for any but JACOBIAN_INTERNAL
   !> (CVODE's difference quotients); which of the other two it is concerns the system: flexmor's

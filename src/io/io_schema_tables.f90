@@ -3,6 +3,7 @@
 !> in docs/input.md (tests/python/test_schema_docs.py compares them).
 module io_schema_tables
   use core_kinds, only: wp
+  use integrators_system, only: MIN_RTOL, MIN_ATOL
   use io_schema_types, only: var_spec_t, VK_REAL, VK_INT, VK_LOGICAL, VK_STRING, VK_CHOICE, &
     VK_REAL_LIST, VK_STRING_LIST, VK_CHOICE_LIST
   implicit none
@@ -445,10 +446,10 @@ module io_schema_tables
       -huge(1.0_wp), .false., huge(1.0_wp), .false., &
       'linearised|fd|internal', 'Jacobian of the implicit integrators'), &
     var_spec_t('dynamic', 'rtol', VK_REAL, '', '1e-6', .false., &
-      0.0_wp, .true., huge(1.0_wp), .false., &
+      MIN_RTOL, .false., huge(1.0_wp), .false., &
       '', 'relative tolerance'), &
     var_spec_t('dynamic', 'atol', VK_REAL, '', '1e-8', .false., &
-      0.0_wp, .true., huge(1.0_wp), .false., &
+      MIN_ATOL, .false., huge(1.0_wp), .false., &
       '', 'absolute tolerance'), &
     var_spec_t('dynamic', 'max_step', VK_REAL, 's', '0', .false., &
       0.0_wp, .false., huge(1.0_wp), .false., &
