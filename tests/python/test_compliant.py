@@ -461,3 +461,33 @@ def test_buckling_of_a_pendulum_is_refused(tmp_path, solver):
     proc, out = run_scene(tmp_path, text)
     fragment = "not positive definite" if solver == "dense" else "singular"
     assert_clean_error(proc, out, "buckling analysis", "K0", fragment, "mechanism")
+
+
+def test_buckling_with_elastic_modes_warns(tmp_path):
+    """Linearised buckling misses the geometric stiffness of load that elastic modes carry:
+    the leaf-spring guide under a shuttle load gives 18.36 N where 2 pi^2 EI / L^2 = 18.65 N
+    (converged in the mesh: 18.356 N at 16 elements per leaf), so a model with elastic modes
+    is told to check with &static n_frequencies; a determinate column is not."""
+    guide = (ROOT / "input" / "leaf_spring_guide.nml").read_text()
+    guide = guide.replace("&force node = 'shuttle', fx = 2.2 /", "&force node = 'shuttle', "
+                          "fy = -1 /").replace("&static n_steps = 11 /", "&buckling n_modes = 1 /")
+    guide = guide.replace(", compliance_nodes = 'shuttle'", "")
+    assert "fy = -1" in guide and "&buckling" in guide and "&static" not in guide
+    proc, out = run_scene(tmp_path, guide, "guide")
+    assert proc.returncode == 0, proc.stderr
+    assert "elastic (calculable) modes" in proc.stderr and "n_frequencies" in proc.stderr
+    with h5py.File(out) as f:
+        mu = f["buckling/load_factor"][0]
+    exact = 2 * math.pi**2 * 2.1e11 * 4.5e-14 / 0.1**2
+    # Within 5 % (1.6 % low measured): the warning's numbers stand until the load path is
+    # mended, and a mended one still passes.
+    assert abs(mu / exact - 1) < 0.05, (mu, exact)
+    column = """&node label = 'base', x = 0, y = 0, fixed = .true. /
+&node label = 'top', x = 0, y = 1 /
+&link label = 'col', from = 'base', to = 'top', n_elements = 4, E = 7.0e10, A = 1.0e-4,
+      I = 1.0e-9, rho = 2700 /
+&force node = 'top', fy = -1 /
+&buckling n_modes = 1 /
+"""
+    proc, _ = run_scene(tmp_path, column, "column")
+    assert proc.returncode == 0 and "elastic (calculable)" not in proc.stderr, proc.stderr
