@@ -181,7 +181,8 @@ contains
     call suite%check(index(err%message, 'dt must be > 0') > 0, 'dt = 0 refused: ' // err%message)
     opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, rtol=-1.0_wp)
     call run_oscillator(sys, opts, t_out, stats, err)
-    call suite%check(index(err%message, 'rtol must be > 0') > 0, 'rtol < 0 refused')
+    call suite%check(index(err%message, 'rtol must be >= 1.00E-14') > 0, 'rtol < 0 refused: ' // &
+      err%message)
     opts = integrator_options_t(method=INTEGRATOR_GALPHA_ADAPTIVE, max_step=-1.0_wp)
     call run_oscillator(sys, opts, t_out, stats, err)
     call suite%check(index(err%message, 'max_step') > 0, 'max_step < 0 refused')

@@ -444,13 +444,6 @@ contains
     call buckling_analysis(this%dyn, 0.0_wp, this%q_static, this%scene%buckling%n_modes, &
       this%scene%buckling%load_factor, this%buckling, err, solver=this%scene%buckling%solver)
     if (.not. err%ok()) return
-    ! Found by the static hunt, not mended (docs/theory.md section 12): the linearised problem
-    ! misses the geometric stiffness of load that elastic modes carry.
-    if (this%dyn%model%n_elastic > 0) call add_warning(this, 'buckling: the model has ' // &
-      'elastic (calculable) modes: where they carry load (an indeterminate load path) the ' // &
-      'multipliers miss their share of its geometric stiffness (the leaf-spring guide: ' // &
-      '18.36 N against 18.65 N; a column braced by a truss: none found): check with ' // &
-      '&static n_frequencies, whose lowest frequency falls to zero at the buckling load')
     if (size(this%buckling%load_factor) == 0) then
       call add_warning(this, 'buckling: no positive load multiplier: the loads compress ' // &
         'nothing (tension only?); /buckling is empty')

@@ -30,7 +30,7 @@ module dynamics_static
   implicit none
   private
   public :: tangent_stiffness, motion_tangent, static_solve, stable_tangent, STABILITY_MARGIN, &
-    has_loads
+    has_loads, load_force
 
   !> omega^2 above -STABILITY_MARGIN s counts as stable (see the module comment): above the
   !> round-off of the Cholesky factors and of the difference tangent, and below the lowest
