@@ -160,8 +160,10 @@ contains
       ratio = maxval(abs(kt - res%k0)) / maxval(abs(res%k0))
       lambda = lambda * rescale(ratio)
     end do
-    res%kg = (kt - res%k0) / lambda
-    if (err%ok()) call path_stiffness(dyn, t, q_dy, res%k0, res%kg, err)
+    if (err%ok()) then
+      res%kg = (kt - res%k0) / lambda
+      call path_stiffness(dyn, t, q_dy, res%k0, res%kg, err)
+    end if
     dyn%load_factor = saved
     if (.not. err%ok()) then
       call err%prefix('buckling analysis: ')
@@ -256,6 +258,8 @@ contains
           call tangent_stiffness(dyn, t, q_dy + e * dq, kp, err, accurate=.true.)
           if (err%ok()) call tangent_stiffness(dyn, t, q_dy - e * dq, km, err, accurate=.true.)
           if (err%ok()) kg = kg + (kp - km) / (2 * e)
+          ! Back at q_dy: the shapes take DF there.
+          if (err%ok()) call dyn%evaluate_dense(t, q_dy, 0.0_wp * q_dy, f0, err)
         end if
       end if
     end if
