@@ -87,8 +87,12 @@ contains
     folder = case_folder(spec, out_path)
     flag = 0
     if (rank == 0) then
-      if (len(folder) > 0) call make_folder(folder, err)
-      if (err%ok()) call open_results(spec, base, out_path, folder, file, pending, err)
+      ! The folder after the file: an -o that is no sweep file is refused leaving nothing.
+      call open_results(spec, base, out_path, folder, file, pending, err)
+      if (err%ok() .and. len(folder) > 0) then
+        call make_folder(folder, err)
+        if (.not. err%ok()) call file%close()
+      end if
       if (.not. err%ok()) flag = 1
     end if
     call MPI_Bcast(flag, 1, MPI_INTEGER, 0, comm)

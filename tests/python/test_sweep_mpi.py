@@ -351,6 +351,18 @@ def test_case_files(tmp_path, ranks):
         flexmor.read_sweep(tmp_path / "plain.h5").case_file(0)
 
 
+def test_refused_output_leaves_no_case_folder(tmp_path):
+    """-o naming a file that is no sweep result, with case_files: refused, and no
+    'notes_cases' folder left behind (it was made before the file was looked at)."""
+    write_inputs(tmp_path, SWEEP.replace("mode = 'product' /",
+                                         "mode = 'product', case_files = .true. /"))
+    (tmp_path / "notes.h5").write_text("not HDF5")
+    proc = run_sweep(tmp_path, out="notes.h5")
+    assert proc.returncode != 0 and "notes.h5" in proc.stderr, proc.stderr
+    assert not (tmp_path / "notes_cases").exists()
+    assert (tmp_path / "notes.h5").read_text() == "not HDF5"
+
+
 @pytest.mark.skipif(not PID_LAW.is_file(), reason="pid_law.so not built")
 def test_library_law_sweep(tmp_path):
     """examples/c/rigid_link_library.nml as the base scene, its law from the shared library
