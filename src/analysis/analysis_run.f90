@@ -351,7 +351,8 @@ contains
       if (arc) then
         call arc_length_solve(this%dyn, 0.0_wp, s%n_steps, s%arc_length, s%max_load_factor, &
           s%tol, s%max_iter, this%q_static, this%static_load_factor, this%x_static, q_steps, &
-          this%static_stable, n, this%static_iterations, err, this%progress)
+          this%static_stable, n, this%static_iterations, err, this%progress, s%solver, &
+          products)
         ! Fewer steps when max_load_factor was reached: keep those taken.
         this%x_static = this%x_static(:, 1:n)
         this%static_stable = this%static_stable(1:n)

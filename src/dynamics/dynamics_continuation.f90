@@ -11,6 +11,12 @@
 !> linear response to the full load, so that an arc of sqrt(2)/n is one load step's worth near
 !> the start whatever the units of q. A step that does not converge is halved (up to
 !> MAX_HALVINGS times) and grows back after easy steps.
+!>
+!> The two solves with K_T are either LU factors of the dense difference tangent (modified
+!> Newton, O(n^2) evaluations per refresh, O(n^3) factors) or, on the Newton-Krylov path of
+!> large models (dynamics_static_krylov), GMRES on products of the tangent preconditioned by
+!> the sparse structural stiffness: O(n) per product, so that long paths of large compliant
+!> mechanisms stay affordable. Krylov corrections are full Newton steps (no factors to keep).
 module dynamics_continuation
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC, ERR_INPUT
@@ -18,12 +24,19 @@ module dynamics_continuation
   use core_strings, only: int_str, real_str
   use core_progress, only: progress_t
   use dynamics_system, only: dynamics_t
-  use dynamics_static, only: tangent_stiffness, stable_tangent
+  use dynamics_static, only: tangent_stiffness, stable_tangent, static_uses_krylov
+  use dynamics_static_krylov, only: krylov_statics_t
   implicit none
   private
   public :: arc_length_solve
 
   integer, parameter :: MAX_HALVINGS = 12
+  !> `solver = 'auto'` takes the Krylov path above this many dynamic coordinates. Its GMRES
+  !> needs more products near limit points than load control's: measured, the leaf-spring
+  !> guide is faster with Krylov from 93 coordinates on (3x), the shallow arch only from about
+  !> 270 (at 93 and 189 it is 5x and 2x slower). The dense difference tangent also loses
+  !> accuracy as the mesh refines: the arch at 381 coordinates left its path with it.
+  integer, parameter :: KRYLOV_ABOVE = 150
   !> Pivots of K_T this much below the largest: the bordered solve treats K_T as singular,
   !> exactly at a bifurcation (not at a limit point, where the border keeps it regular).
   real(wp), parameter :: SINGULAR_PIVOT = 1.0e-14_wp
@@ -35,7 +48,8 @@ contains
   !> reaches `max_load_factor`. Per converged step: lambda_steps, x_steps, q_steps and
   !> stable. `n_done` is the number of steps taken.
   subroutine arc_length_solve(dyn, t, n_steps, arc, max_load_factor, tol, max_iter, q_dy, &
-      lambda_steps, x_steps, q_steps, stable, n_done, iterations, err, progress)
+      lambda_steps, x_steps, q_steps, stable, n_done, iterations, err, progress, solver, &
+      products)
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, arc, max_load_factor, tol
     integer, intent(in) :: n_steps, max_iter
@@ -45,20 +59,34 @@ contains
     integer, intent(out) :: n_done, iterations
     type(error_t), intent(out) :: err
     type(progress_t), intent(inout), optional :: progress
-    real(wp) :: k(size(q_dy), size(q_dy)), p(size(q_dy)), v(size(q_dy))
+    !> 'dense', 'krylov' or 'auto' (default), as for static_solve
+    character(len=*), intent(in), optional :: solver
+    !> Products with the tangent that the Krylov path took (0 on the dense path)
+    integer, intent(out), optional :: products
+    real(wp), allocatable :: k(:, :)
+    real(wp) :: p(size(q_dy)), v(size(q_dy))
     real(wp) :: tq(size(q_dy)), tl, q_pred(size(q_dy)), l_pred, lambda, c, ds, ds_max
     real(wp) :: q(size(q_dy)), l, scale
+    type(krylov_statics_t) :: kry
     integer :: halvings, it
-    logical :: converged
+    logical :: converged, krylov
     character(len=:), allocatable :: failure
     n_done = 0
     iterations = 0
+    if (present(products)) products = 0
+    call static_uses_krylov(dyn, size(q_dy), solver, krylov, err, KRYLOV_ABOVE)
+    if (.not. err%ok()) return
+    if (.not. krylov) allocate(k(size(q_dy), size(q_dy)))
     dyn%locked = .true.
     dyn%kin%keep_failed_guess = .true.
     lambda = 0.0_wp
     scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
     ! The scale of q: the linear response to the full load at the start.
-    call tangent_and_load(dyn, t, q_dy, lambda, k, p, err)
+    if (krylov) then
+      call krylov_load(q_dy, lambda, p, v, err)
+    else
+      call tangent_and_load(dyn, t, q_dy, lambda, k, p, err)
+    end if
     ! Without a load there is no path to follow: the tangent would be 0/0.
     if (err%ok() .and. .not. any(p /= 0)) then
       if (any(dyn%load /= 0) .or. size(dyn%model%moment_lambda) > 0) then
@@ -77,7 +105,12 @@ contains
       call finish(dyn)
       return
     end if
-    if (err%ok()) call solve_tangent(k, p, v, err)
+    if (err%ok() .and. krylov) then
+      call kry%precondition(dyn, t, q_dy, err)
+      if (err%ok()) call kry%solve(dyn, t, q_dy, p, v, err)
+    else if (err%ok()) then
+      call solve_tangent(k, p, v, err)
+    end if
     if (.not. err%ok()) then
       call err%prefix('arc-length start: ')
       call finish(dyn)
@@ -101,7 +134,11 @@ contains
         l_pred = lambda + ds * tl
         q = q_pred
         l = l_pred
-        call correct(q, l, converged)
+        if (krylov) then
+          call correct_krylov(q, l, v, converged)
+        else
+          call correct(q, l, converged)
+        end if
         if (.not. err%ok()) then
           if (err%code /= ERR_NUMERIC) exit
           ! Kept for the message if no halving helps: an arc far too long for the path ends
@@ -124,12 +161,20 @@ contains
           // failure)
         exit
       end if
-      ! The new tangent, oriented to continue in the direction just travelled.
-      call tangent_and_load(dyn, t, q, l, k, p, err)
-      if (err%ok()) call solve_tangent(k, p, v, err)
+      ! The new tangent, oriented to continue in the direction just travelled (Krylov: K_T^-1 P
+      ! of the last correction, at a state within tol of this one).
+      if (.not. krylov) then
+        call tangent_and_load(dyn, t, q, l, k, p, err)
+        if (err%ok()) call solve_tangent(k, p, v, err)
+      end if
       if (.not. err%ok()) exit
       n_done = n_done + 1
-      stable(n_done) = stable_tangent(k, dyn%mbar)
+      if (krylov) then
+        call krylov_stable(q, l, stable(n_done), err)
+        if (.not. err%ok()) exit
+      else
+        stable(n_done) = stable_tangent(k, dyn%mbar)
+      end if
       block
         real(wp) :: new_q(size(q_dy)), new_l
         new_q = v / c
@@ -150,9 +195,70 @@ contains
       if (halvings == 0) ds = min(ds_max, 2 * ds)
       if (lambda >= max_load_factor) exit
     end do
+    if (present(products)) products = kry%n_products
     call finish(dyn)
 
   contains
+
+    !> P and F at (q, l), leaving the model at load factor l.
+    subroutine krylov_load(q, l, p, f, err)
+      real(wp), intent(in) :: q(:), l
+      real(wp), intent(out) :: p(:), f(:)
+      type(error_t), intent(out) :: err
+      call load_and_force(dyn, t, q, l, p, f, err)
+      dyn%load_factor = l
+    end subroutine krylov_load
+
+    !> Newton as `correct`, each correction's two solves by GMRES (the preconditioner
+    !> factored at the predictor); v: K_T^-1 P of the last correction.
+    subroutine correct_krylov(q, l, v, converged)
+      real(wp), intent(inout) :: q(:), l
+      real(wp), intent(inout) :: v(:)
+      logical, intent(out) :: converged
+      real(wp) :: a(size(q)), b(size(q)), f(size(q)), g, dl, den
+      converged = .false.
+      do it = 1, max_iter
+        call krylov_load(q, l, p, f, err)
+        if (err%ok() .and. it == 1) call kry%precondition(dyn, t, q, err)
+        if (err%ok()) call kry%solve(dyn, t, q, f, a, err)
+        if (err%ok()) call kry%solve(dyn, t, q, p, b, err)
+        if (.not. err%ok()) return
+        g = dot_product(tq, (q - q_pred) / c) + tl * (l - l_pred)
+        den = dot_product(tq, b) / c + tl
+        if (abs(den) < tiny(1.0_wp)) then
+          call err%set(ERR_NUMERIC, 'static arc-length: the path is tangent to the constraint')
+          return
+        end if
+        dl = -(g + dot_product(tq, a) / c) / den
+        q = q + a + b * dl
+        l = l + dl
+        v = b
+        iterations = iterations + 1
+        if (maxval(abs(a + b * dl)) <= tol * scale .and. abs(dl) <= tol) then
+          converged = .true.
+          return
+        end if
+      end do
+    end subroutine correct_krylov
+
+    !> The stability of the equilibrium (q, l) as static_solve's Krylov path decides it (the
+    !> dense test where Arnoldi does not, and for moments fixed in space); leaves the
+    !> kinematics at (q, l).
+    subroutine krylov_stable(q, l, stable, err)
+      real(wp), intent(in) :: q(:), l
+      logical, intent(out) :: stable
+      type(error_t), intent(out) :: err
+      real(wp) :: f(size(q))
+      logical :: decided
+      decided = .false.
+      if (size(dyn%model%moment_lambda) == 0) call kry%stable(dyn, t, q, stable, decided, err)
+      if (err%ok() .and. .not. decided) then
+        if (.not. allocated(k)) allocate(k(size(q), size(q)))
+        call tangent_stiffness(dyn, t, q, k, err)
+        if (err%ok()) stable = stable_tangent(k, dyn%mbar)
+      end if
+      if (err%ok()) call dyn%generalised_force(t, q, 0.0_wp * q, f, err)
+    end subroutine krylov_stable
 
     !> Newton from (q, l) on F = 0 and the normal-plane condition through the predictor.
     subroutine correct(q, l, converged)

@@ -29,8 +29,8 @@ module dynamics_static
   use dynamics_static_krylov, only: krylov_statics_t, difference_step
   implicit none
   private
-  public :: tangent_stiffness, motion_tangent, static_solve, stable_tangent, STABILITY_MARGIN, &
-    has_loads, load_force
+  public :: tangent_stiffness, motion_tangent, static_solve, static_uses_krylov, stable_tangent, &
+    STABILITY_MARGIN, has_loads, load_force
 
   !> omega^2 above -STABILITY_MARGIN s counts as stable (see the module comment): above the
   !> round-off of the Cholesky factors and of the difference tangent, and below the lowest
@@ -259,17 +259,8 @@ contains
       call err%set(ERR_INPUT, 'group &static: n_steps and max_iter must be >= 1 and tol > 0')
       return
     end if
-    krylov = dyn%sparse .and. size(q_dy) > KRYLOV_ABOVE
-    if (present(solver)) then
-      if (solver == 'dense') krylov = .false.
-      if (solver == 'krylov') krylov = .true.
-    end if
-    if (krylov .and. .not. dyn%sparse) then
-      call err%set(ERR_INPUT, 'group &static: variable ''solver'' = ''krylov'' needs the ' // &
-        'sparse path (&scene linear_solver = ''sparse'' or ''auto'' with more than 12 ' // &
-        'nodal coordinates)')
-      return
-    end if
+    call static_uses_krylov(dyn, size(q_dy), solver, krylov, err)
+    if (.not. err%ok()) return
     if (.not. krylov) allocate(k(size(q_dy), size(q_dy)), kf(size(q_dy), size(q_dy)))
     v0 = 0.0_wp
     iterations = 0
@@ -392,4 +383,28 @@ contains
     dyn%ramp_prescribed = .false.
     dyn%load_factor = 1.0_wp
   end subroutine static_solve
+
+  !> Whether statics of n_dy coordinates takes the Newton-Krylov path: `solver` 'dense',
+  !> 'krylov' or 'auto' (absent: krylov on the sparse path above `above` coordinates, default
+  !> KRYLOV_ABOVE).
+  subroutine static_uses_krylov(dyn, n_dy, solver, krylov, err, above)
+    type(dynamics_t), intent(in) :: dyn
+    integer, intent(in) :: n_dy
+    character(len=*), intent(in), optional :: solver
+    logical, intent(out) :: krylov
+    type(error_t), intent(out) :: err
+    integer, intent(in), optional :: above
+    if (present(above)) then
+      krylov = dyn%sparse .and. n_dy > above
+    else
+      krylov = dyn%sparse .and. n_dy > KRYLOV_ABOVE
+    end if
+    if (present(solver)) then
+      if (solver == 'dense') krylov = .false.
+      if (solver == 'krylov') krylov = .true.
+    end if
+    if (krylov .and. .not. dyn%sparse) call err%set(ERR_INPUT, 'group &static: variable ' // &
+      '''solver'' = ''krylov'' needs the sparse path (&scene linear_solver = ''sparse'' or ' // &
+      '''auto'' with more than 12 nodal coordinates)')
+  end subroutine static_uses_krylov
 end module dynamics_static

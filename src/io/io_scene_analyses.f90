@@ -38,10 +38,6 @@ contains
     if (g%has('max_load_factor')) call rd_real(g, 'max_load_factor', &
       scene%static%max_load_factor, err)
     call rd_choice(g, 'solver', scene%static%solver, err)
-    if (err%ok() .and. scene%static%method == STATIC_ARC_LENGTH .and. &
-        scene%static%solver == 'krylov') call err%set(ERR_INPUT, trim(g%where()) // &
-      ': variable ''solver'' = ''krylov'' is for method = ''load'' (arc-length continuation ' &
-      // 'uses the dense tangent)')
   end subroutine read_static
 
   subroutine read_modal(g, scene, err)

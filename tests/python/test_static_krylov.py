@@ -76,8 +76,6 @@ def test_column_past_its_euler_load(tmp_path, n_elements):
 
 
 @pytest.mark.parametrize("text,fragments", [
-    (with_static((ROOT / "input" / "von_mises_truss.nml").read_text(), "solver = 'krylov'"),
-     ["&static", "'solver'", "'krylov'", "method = 'load'"]),
     (column(10, "krylov").replace("&scene title = 'column' /",
                                   "&scene title = 'column', linear_solver = 'dense' /"),
      ["&static", "'solver'", "'krylov'", "sparse path"]),
