@@ -15,7 +15,7 @@ module analysis_run
   use elements_base, only: MODE_DYNAMIC
   use model_build, only: build_model, unused_motions, build_rigid_model
   use dynamics_system, only: dynamics_t
-  use dynamics_static, only: static_solve
+  use dynamics_static, only: static_solve, static_uses_krylov
   use dynamics_continuation, only: arc_length_solve
   use dynamics_response, only: static_response_t
   use reduction_modal, only: modal_result_t, modal_analysis
@@ -406,6 +406,7 @@ contains
     type(error_t), intent(out) :: err
     integer, allocatable :: out_coords(:, :), comp_coords(:, :)
     integer :: i, k
+    logical :: krylov
     associate (m => this%dyn%model, sc => this%scene)
       allocate(out_coords(NODE_SLOTS, size(sc%output_nodes)), &
         comp_coords(NODE_SLOTS, size(sc%compliance_nodes)))
@@ -423,11 +424,13 @@ contains
       end if
       call this%static_response%init(out_coords, comp_coords, sc%static%n_frequencies, &
         size(q_steps, 2), m%dim)
+      call static_uses_krylov(this%dyn, m%n_dy, sc%static%solver, krylov, err)
+      if (.not. err%ok()) return
       this%dyn%ramp_prescribed = ramped
       do k = 1, size(q_steps, 2)
         this%dyn%load_factor = this%static_load_factor(k)
         call this%dyn%kin%restart_from(this%x_static(:, k))
-        call this%static_response%record(this%dyn, 0.0_wp, q_steps(:, k), k, err)
+        call this%static_response%record(this%dyn, 0.0_wp, q_steps(:, k), k, err, krylov)
         if (.not. err%ok()) exit
       end do
       this%dyn%ramp_prescribed = .false.

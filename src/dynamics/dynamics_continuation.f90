@@ -31,12 +31,6 @@ module dynamics_continuation
   public :: arc_length_solve
 
   integer, parameter :: MAX_HALVINGS = 12
-  !> `solver = 'auto'` takes the Krylov path above this many dynamic coordinates. Its GMRES
-  !> needs more products near limit points than load control's: measured, the leaf-spring
-  !> guide is faster with Krylov from 93 coordinates on (3x), the shallow arch only from about
-  !> 270 (at 93 and 189 it is 5x and 2x slower). The dense difference tangent also loses
-  !> accuracy as the mesh refines: the arch at 381 coordinates left its path with it.
-  integer, parameter :: KRYLOV_ABOVE = 150
   !> Pivots of K_T this much below the largest: the bordered solve treats K_T as singular,
   !> exactly at a bifurcation (not at a limit point, where the border keeps it regular).
   real(wp), parameter :: SINGULAR_PIVOT = 1.0e-14_wp
@@ -59,7 +53,7 @@ contains
     integer, intent(out) :: n_done, iterations
     type(error_t), intent(out) :: err
     type(progress_t), intent(inout), optional :: progress
-    !> 'dense', 'krylov' or 'auto' (default), as for static_solve
+    !> 'dense', 'krylov' or 'auto' (default), as static_solve chooses
     character(len=*), intent(in), optional :: solver
     !> Products with the tangent that the Krylov path took (0 on the dense path)
     integer, intent(out), optional :: products
@@ -74,7 +68,7 @@ contains
     n_done = 0
     iterations = 0
     if (present(products)) products = 0
-    call static_uses_krylov(dyn, size(q_dy), solver, krylov, err, KRYLOV_ABOVE)
+    call static_uses_krylov(dyn, size(q_dy), solver, krylov, err)
     if (.not. err%ok()) return
     if (.not. krylov) allocate(k(size(q_dy), size(q_dy)))
     dyn%locked = .true.

@@ -10,7 +10,9 @@
 !>
 !> Compliance: a force df on the node's coordinates does work DF_n^T df on q_dy, so
 !> dx_n = DF_n K_T^-1 DF_n^T df; rows of held coordinates of DF_n are zero, hence those rows
-!> and columns of the compliance are zero.
+!> and columns of the compliance are zero. On the Newton-Krylov path (large models) K_T^-1 is
+!> applied by GMRES on extrapolated products (dynamics_static_krylov), DF_n^T and DF_n by one
+!> transposed and one plain solve of the kinematics: O(n) per component, no dense tangent.
 !>
 !> Per node the components are (x, y, phi) in a planar model and (x, y, z, rotation about x,
 !> y, z) in a spatial one. There a node's small rotation in global axes is
@@ -24,12 +26,16 @@ module dynamics_response
   use core_linalg, only: lu_factor, lu_solve, sym_gen_eig
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: tangent_stiffness
+  use dynamics_static_krylov, only: krylov_statics_t
   use elements_rotation, only: euler_e
   implicit none
   private
   public :: static_response_t, node_rows
 
   real(wp), parameter :: PI = 4 * atan(1.0_wp)
+  !> GMRES's relative residual for a compliance: its stiff directions (a leaf's tension) are
+  !> 1e-4 of its soft one, so Newton's 1e-6 left them 1e-3 off.
+  real(wp), parameter :: COMPLIANCE_TOL = 1.0e-10_wp
 
   type :: static_response_t
     !> Coordinates (the model's node_coord columns: x, y, phi, z, first Euler parameter; 0 if
@@ -66,22 +72,45 @@ contains
   end subroutine response_init
 
   !> Step `step` at the equilibrium q_dy (dyn%load_factor and the prescribed values as the
-  !> static analysis left them at that step).
-  subroutine response_record(this, dyn, t, q_dy, step, err)
+  !> static analysis left them at that step). `krylov`: compliances without the dense tangent
+  !> (when no frequencies need it anyway).
+  subroutine response_record(this, dyn, t, q_dy, step, err, krylov)
     class(static_response_t), intent(inout) :: this
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     integer, intent(in) :: step
     type(error_t), intent(out) :: err
+    logical, intent(in), optional :: krylov
     real(wp), allocatable :: k(:, :)
     real(wp) :: r(dyn%model%n_x), acc(size(q_dy))
-    logical :: was_locked, need_compliance
+    logical :: was_locked, need_compliance, dense
     integer :: i
     was_locked = dyn%locked
     dyn%locked = .true.
     need_compliance = size(this%compliance_coords, 2) > 0
+    dense = this%n_frequencies > 0
+    if (present(krylov)) dense = dense .or. .not. krylov
     ! The tangent (2 or 4 n_dy evaluations) only when asked for; reactions need the nodal
     ! forces and kinematic factors of one evaluation (O(n): no dense mass matrix).
+    if (.not. dense) then
+      call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, acc, err)
+      if (.not. err%ok()) then
+        dyn%locked = was_locked
+        return
+      end if
+      r = reactions(dyn)
+      do i = 1, size(this%reaction_coords, 2)
+        this%reaction(:, i, step) = node_reaction(dyn, r, this%reaction_coords(:, i), &
+          this%n_comp)
+      end do
+      do i = 1, size(this%compliance_coords, 2)
+        call compliance_krylov(dyn, t, q_dy, this%compliance_coords(:, i), this%n_comp, &
+          this%compliance(:, :, i, step), err)
+        if (.not. err%ok()) exit
+      end do
+      dyn%locked = was_locked
+      return
+    end if
     if (need_compliance .or. this%n_frequencies > 0) then
       allocate(k(size(q_dy), size(q_dy)))
       call tangent_stiffness(dyn, t, q_dy, k, err, &
@@ -155,19 +184,74 @@ contains
     type(dynamics_t), intent(in) :: dyn
     integer, intent(in) :: ic(:), n_comp
     real(wp) :: d(n_comp, dyn%model%n_dy)
-    integer :: a, nr, il
-    nr = dyn%model%n_rh
-    d = 0.0_wp
+    real(wp) :: g(dyn%model%n_x, n_comp)
+    integer :: a
+    g = node_weights(dyn, ic, n_comp)
+    do a = 1, n_comp
+      d(a, :) = matmul(g(:, a), dyn%kin%df(:, dyn%model%n_rh + 1:))
+    end do
+  end function node_rows
+
+  !> The node's components as weights on the nodal coordinates, G with G^T dx = (its
+  !> translations, its small rotation): unit columns in the plane, 2 E(lambda)^T on the Euler
+  !> parameters in space (zero columns where the node has no such component).
+  function node_weights(dyn, ic, n_comp) result(g)
+    type(dynamics_t), intent(in) :: dyn
+    integer, intent(in) :: ic(:), n_comp
+    real(wp) :: g(dyn%model%n_x, n_comp)
+    integer :: a, il
+    g = 0.0_wp
     do a = 1, 3
-      if (first_three(ic, a, n_comp) > 0) d(a, :) = dyn%kin%df(first_three(ic, a, n_comp), &
-        nr + 1:)
+      if (first_three(ic, a, n_comp) > 0) g(first_three(ic, a, n_comp), a) = 1.0_wp
     end do
     if (n_comp == 6) then
       il = ic(5)
-      if (il > 0) d(4:6, :) = 2 * matmul(euler_e(dyn%kin%x(il:il + 3)), &
-        dyn%kin%df(il:il + 3, nr + 1:))
+      if (il > 0) g(il:il + 3, 4:6) = 2 * transpose(euler_e(dyn%kin%x(il:il + 3)))
     end if
-  end function node_rows
+  end function node_weights
+
+  !> A node's compliance DF_n K_T^-1 DF_n^T on the Newton-Krylov path: DF_n^T by transposed
+  !> solves of the kinematics at q_dy, K_T^-1 by GMRES on extrapolated products (the stiff
+  !> terms' O(h^2) error would show in the soft directions), DF_n by solves at q_dy again.
+  subroutine compliance_krylov(dyn, t, q_dy, ic, n_comp, c, err)
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: t, q_dy(:)
+    integer, intent(in) :: ic(:), n_comp
+    real(wp), intent(out) :: c(:, :)
+    type(error_t), intent(out) :: err
+    type(krylov_statics_t) :: kry
+    real(wp) :: g(dyn%model%n_x, n_comp), rq(dyn%model%n_q), y(size(q_dy), n_comp)
+    real(wp) :: dq(dyn%model%n_q, n_comp), dx(dyn%model%n_x, n_comp), f(size(q_dy))
+    integer :: a, nr
+    nr = dyn%model%n_rh
+    c = 0.0_wp
+    kry%extrapolate = .true.
+    kry%tol = COMPLIANCE_TOL
+    call kry%precondition(dyn, t, q_dy, err)
+    if (.not. err%ok()) return
+    g = node_weights(dyn, ic, n_comp)
+    do a = 1, n_comp
+      y(:, a) = 0.0_wp
+      if (.not. any(g(:, a) /= 0)) cycle
+      ! The products move the kinematics: DF^T is taken at q_dy each time.
+      call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, f, err)
+      if (.not. err%ok()) return
+      call dyn%kin%apply_dft(dyn%model, g(:, a), rq)
+      call kry%solve(dyn, t, q_dy, rq(nr + 1:), y(:, a), err)
+      if (.not. err%ok()) then
+        call err%prefix('static compliance: ')
+        return
+      end if
+    end do
+    call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, f, err)
+    if (.not. err%ok()) return
+    dq = 0.0_wp
+    dq(nr + 1:, :) = y
+    call dyn%kin%apply_df_many(dyn%model, dq, dx)
+    do a = 1, n_comp
+      c(a, :) = matmul(g(:, a), dx)
+    end do
+  end subroutine compliance_krylov
 
   !> Coordinate of a node's component a = 1..3: x, y, phi in the plane (n_comp = 3), x, y, z
   !> in space (node_coord rows 1, 2, 4); 0 if the node has none.

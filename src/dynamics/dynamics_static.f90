@@ -385,20 +385,14 @@ contains
   end subroutine static_solve
 
   !> Whether statics of n_dy coordinates takes the Newton-Krylov path: `solver` 'dense',
-  !> 'krylov' or 'auto' (absent: krylov on the sparse path above `above` coordinates, default
-  !> KRYLOV_ABOVE).
-  subroutine static_uses_krylov(dyn, n_dy, solver, krylov, err, above)
+  !> 'krylov' or 'auto' (absent: krylov on the sparse path above KRYLOV_ABOVE coordinates).
+  subroutine static_uses_krylov(dyn, n_dy, solver, krylov, err)
     type(dynamics_t), intent(in) :: dyn
     integer, intent(in) :: n_dy
     character(len=*), intent(in), optional :: solver
     logical, intent(out) :: krylov
     type(error_t), intent(out) :: err
-    integer, intent(in), optional :: above
-    if (present(above)) then
-      krylov = dyn%sparse .and. n_dy > above
-    else
-      krylov = dyn%sparse .and. n_dy > KRYLOV_ABOVE
-    end if
+    krylov = dyn%sparse .and. n_dy > KRYLOV_ABOVE
     if (present(solver)) then
       if (solver == 'dense') krylov = .false.
       if (solver == 'krylov') krylov = .true.
