@@ -76,13 +76,18 @@ contains
   !> tangent, '' when they can: they need the sparse factors of K0 and its stresses linear in
   !> q (no elastic modes), and the dense path takes the symmetric part of the tangent of a
   !> moment fixed in space, which products cannot give.
-  function krylov_tangent_unsupported(dyn) result(why_not)
+  function krylov_tangent_unsupported(dyn, elastic_ok) result(why_not)
     type(dynamics_t), intent(in) :: dyn
+    !> The caller differences the whole force (products of K_T, not K_L beside an exact K0)
+    logical, intent(in), optional :: elastic_ok
     character(len=:), allocatable :: why_not
+    logical :: elastic_refused
+    elastic_refused = .true.
+    if (present(elastic_ok)) elastic_refused = .not. elastic_ok
     why_not = ''
     if (.not. dyn%sparse) then
       why_not = 'the model is on the dense path (&scene linear_solver)'
-    else if (dyn%model%n_elastic > 0) then
+    else if (dyn%model%n_elastic > 0 .and. elastic_refused) then
       why_not = 'the model has elastic (calculable) modes'
     else if (size(dyn%model%moment_lambda) > 0) then
       why_not = 'the model has moments fixed in space'

@@ -13,9 +13,11 @@
 !> With loads the tangent is K_T = K0 + K_L, K_L the loads' (geometric) stiffness, and
 !> (K_T - sigma Mbar) y = b is solved as (I + P^-1 K_L) y = P^-1 b, P = K0 - sigma Mbar, by
 !> GMRES on products K_L z differenced along z (dynamics_static_krylov's load_product, two
-!> evaluations each), as the dense path differences K_T. Not for elastic (calculable) modes,
-!> moments fixed in space (the dense path takes their tangent's symmetric part) or modes
-!> along a motion.
+!> evaluations each), as the dense path differences K_T. With elastic (calculable) modes,
+!> whose stiffness is in P but comes from the configuration, the whole K_T z is differenced
+!> (extrapolated, as the dense tangent of such models is) and GMRES solves
+!> P^-1 (K_T - sigma Mbar) y = P^-1 b. Not for moments fixed in space (the dense path takes
+!> their tangent's symmetric part) or modes along a motion.
 module reduction_krylov
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC
@@ -47,6 +49,8 @@ module reduction_krylov
   !> again after them).
   type :: shifted_t
     logical :: loaded = .false.
+    logical :: elastic = .false.     !< whole products of K_T (elastic modes), see above
+    real(wp) :: sigma = 0.0_wp
     type(krylov_statics_t) :: kry
     real(wp) :: t = 0.0_wp
     real(wp), allocatable :: q_dy(:)
@@ -60,7 +64,7 @@ contains
     type(dynamics_t), intent(in) :: dyn
     logical, intent(in) :: along_motion
     character(len=:), allocatable :: why_not
-    why_not = krylov_tangent_unsupported(dyn)
+    why_not = krylov_tangent_unsupported(dyn, elastic_ok=.true.)
     if (why_not == '' .and. along_motion) why_not = 'modes along a motion need the dense tangent'
   end function krylov_modes_applies
 
@@ -82,10 +86,12 @@ contains
     n = size(q_dy)
     was_locked = dyn%locked
     dyn%locked = .true.
-    op%loaded = has_loads(dyn)
+    op%elastic = dyn%model%n_elastic > 0
+    op%loaded = has_loads(dyn) .or. op%elastic
     op%t = t
     op%q_dy = q_dy
     op%kry%h = difference_step(dyn)
+    op%kry%extrapolate = op%elastic
     call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, g, err)
     if (.not. err%ok()) then
       dyn%locked = was_locked
@@ -100,6 +106,7 @@ contains
       return
     end if
     sigma = -SHIFT_FACTOR * traces(1) / traces(2)
+    op%sigma = sigma
     call dyn%aug%factor_newton(dyn%model, dyn%mass, 1.0_wp, 0.0_wp, info, mass_scale=-sigma)
     if (info /= 0) then
       call err%set(ERR_NUMERIC, "eigensolver 'krylov': K0 - sigma Mbar is singular (a " // &
@@ -137,8 +144,12 @@ contains
     allocate(kv(n))
     do j = 1, nev
       v(:, j) = v(:, j) / sqrt(dot_product(v(:, j), mv(:, j)))
-      kv = stiffness_times(dyn, v(:, j))
-      if (op%loaded) kv = kv + load_times(op, dyn, v(:, j), err)
+      if (op%elastic) then
+        kv = tangent_times(op, dyn, v(:, j), err)
+      else
+        kv = stiffness_times(dyn, v(:, j))
+        if (op%loaded) kv = kv + load_times(op, dyn, v(:, j), err)
+      end if
       lambda(j) = dot_product(v(:, j), kv)
       if (v(maxloc(abs(v(:, j)), 1), j) < 0) v(:, j) = -v(:, j)
     end do
@@ -204,8 +215,21 @@ contains
     call op%kry%load_product(dyn, op%t, op%q_dy, z, kz, err)
   end function load_times
 
-  !> y with (I + P^-1 K_L) y = b by restarted GMRES (modified Gram-Schmidt, twice: the
-  !> products carry difference noise).
+  !> K_T z by differences of the whole force, and the kinematics solved at the state again.
+  function tangent_times(op, dyn, z, err) result(kz)
+    type(shifted_t), intent(inout) :: op
+    type(dynamics_t), intent(inout) :: dyn
+    real(wp), intent(in) :: z(:)
+    type(error_t), intent(inout) :: err
+    real(wp) :: kz(size(z)), g(size(z))
+    kz = 0.0_wp
+    if (.not. err%ok()) return
+    call op%kry%product(dyn, op%t, op%q_dy, z, kz, err)
+    if (err%ok()) call dyn%generalised_force(op%t, op%q_dy, 0.0_wp * op%q_dy, g, err)
+  end function tangent_times
+
+  !> y with (I + P^-1 K_L) y = b, or with elastic modes P^-1 (K_T - sigma Mbar) y = b, by
+  !> restarted GMRES (modified Gram-Schmidt, twice: the products carry difference noise).
   subroutine loaded_gmres(op, dyn, b, y, err)
     type(shifted_t), intent(inout) :: op
     type(dynamics_t), intent(inout) :: dyn
@@ -245,11 +269,18 @@ contains
       r = b - w(:, 1)
     end do
   contains
-    !> w = z + P^-1 K_L z
+    !> w = z + P^-1 K_L z, or P^-1 (K_T - sigma Mbar) z
     subroutine apply_loaded(z, w)
       real(wp), intent(in) :: z(:)
       real(wp), intent(out) :: w(:)
-      real(wp) :: pz(size(z), 1)
+      real(wp) :: pz(size(z), 1), kz(size(z), 1)
+      if (op%elastic) then
+        kz(:, 1) = tangent_times(op, dyn, z, err)
+        kz = kz - op%sigma * mbar_times(dyn, reshape(z, [size(z), 1]))
+        call shifted_solve(dyn, dyn%aug%nodal_equivalent(dyn%model, kz), pz)
+        w = pz(:, 1)
+        return
+      end if
       call shifted_solve(dyn, dyn%aug%nodal_equivalent(dyn%model, &
         reshape(load_times(op, dyn, z, err), [size(z), 1])), pz)
       w = z + pz(:, 1)

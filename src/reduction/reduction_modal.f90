@@ -82,6 +82,10 @@ contains
     if (need_dense) why_not = 'the held-joint basis needs the dense K0 and Mbar'
     if (present(for_basis)) then
       if (for_basis .and. has_loads(dyn) .and. name == 'auto') why_not = 'loads'
+      ! The Krylov basis's static correction and error estimate solve with K0 and refine
+      ! with the dynamic modes' stiffness alone, which misses the elastic modes'.
+      if (for_basis .and. dyn%model%n_elastic > 0) why_not = 'the model has elastic ' // &
+        '(calculable) modes, whose stiffness a reduced basis''s K0 solves do not hold'
     end if
     if (name == 'auto' .and. why_not == '' .and. n >= KRYLOV_AUTO_MIN_N .and. &
       nm <= n / 10) name = 'krylov'
