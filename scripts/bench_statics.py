@@ -4,7 +4,9 @@
 the dense difference tangent (&static solver = 'dense') and by Newton-Krylov ('krylov'),
 docs/theory.md 7.3; and the linearised lateral-torsional buckling of a narrow cantilever
 (input/lateral_buckling.nml's scene with n beams) by the dense eigenproblem and matrix-free
-(&buckling solver).
+(&buckling solver); and the leaf-spring guide (input/leaf_spring_guide.nml with n elements per
+leaf, elastic modes closing its loop) followed by arc-length continuation with the shuttle's
+compliance at each step, on both paths.
 
 Per mesh and solver: the processor time of the analysis (root attribute ``cpu_time_s``, the
 least of --repeat runs), the Newton iterations, the products with the tangent (Krylov), and the
@@ -14,9 +16,10 @@ least squares in log-log over the meshes of each solver from 16 beams on.
 Usage (the flexmor Python package installed, or PYTHONPATH=python):
 
     python3 scripts/bench_statics.py [--bin build/bin/flexmor] [--out-dir docs/bench] \\
-        [--meshes 8,16,32,64,128,256] [--dense-max 64] [--repeat 2]
+        [--meshes 8,16,32,64,128,256] [--dense-max 64] [--repeat 2] \\
+        [--guide-meshes 8,16,32,64,128]
 
-Writes statics.md and statics.csv into --out-dir with the command, date, machine, flexmor
+Writes statics.md, statics.csv and statics_guide.csv into --out-dir with the command, date, machine, flexmor
 version and commit. Bad arguments exit with 2, a failed run with 1.
 """
 from __future__ import annotations
@@ -35,6 +38,7 @@ import numpy as np
 
 from flexmor.bench import command_line, cpu_model, git_commit, usable_cores, write_csv
 from flexmor.results import run_attributes
+from compliant_examples import mesh as guide_mesh
 from spatial_examples import bend45_scene, lateral_buckling_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -75,6 +79,45 @@ def buckling_once(binary, folder, n, solver):
     return float(run_attributes(out)["cpu_time_s"]), mu
 
 
+def guide_once(binary, folder, n, solver):
+    """The leaf-spring guide with n elements per leaf, 11 arc-length steps with the shuttle's
+    compliance: cpu time [s], products, the last load factor and compliance x-x [m/N]."""
+    text = guide_mesh((ROOT / "input" / "leaf_spring_guide.nml").read_text(), n).replace(
+        "&static n_steps = 11 /", f"&static n_steps = 11, method = 'arc_length', "
+        f"solver = '{solver}' /")
+    if "method = 'arc_length'" not in text:
+        raise RuntimeError("the guide's &static line changed: update bench_statics.py")
+    nml, out = Path(folder) / f"guide_{solver}_{n}.nml", Path(folder) / f"guide_{solver}_{n}.h5"
+    nml.write_text(text)
+    proc = subprocess.run([str(binary), str(nml), "-o", str(out)], capture_output=True,
+                          text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{nml.name}: {proc.stderr.strip()}")
+    found = re.search(r"Newton-Krylov: (\d+) products", proc.stdout)
+    with h5py.File(out) as f:
+        lam = float(f["static/load_factor"][-1])
+        cxx = float(f["static/nodes/shuttle/compliance"][-1, 0, 0])
+    return float(run_attributes(out)["cpu_time_s"]), int(found.group(1)) if found else 0, \
+        lam, cxx
+
+
+def guide_section(rows):
+    """The guide's table (markdown lines)."""
+    lines = ["", "## Compliant mechanism: arc-length and compliance", "",
+             "The leaf-spring guide (input/leaf_spring_guide.nml with n elements per leaf), 11 "
+             "arc-length steps under its shuttle load, the shuttle's tangent compliance at each "
+             "step (docs/theory.md 7.1, 7.2). The load factor after 11 steps depends on each "
+             "path's scale c = |K_T^-1 P|; the compliance x-x at that step is the soft stroke "
+             "direction's.", "",
+             "| elements per leaf | dynamic coordinates | solver | cpu [s] | tangent products | "
+             "last load factor | compliance x-x [m/N] |", "| --- | --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        lines.append(f"| {r['elements']} | {6 * r['elements'] - 3} | {r['solver']} | "
+                     f"{r['cpu_s']:.3f} | {r['products'] or '-'} | {r['lambda']:.6f} | "
+                     f"{r['cxx']:.6e} |")
+    return lines
+
+
 def fit_exponent(ns, times):
     keep = [(n, t) for n, t in zip(ns, times) if n >= 16]
     if len(keep) < 2:
@@ -90,13 +133,17 @@ def main(argv=None):
     p.add_argument("--meshes", default="8,16,32,64,128,256")
     p.add_argument("--dense-max", type=int, default=64)
     p.add_argument("--repeat", type=int, default=2)
+    p.add_argument("--guide-meshes", default="8,16,32,64,128",
+                   help="elements per leaf of the leaf-spring guide (dense up to --dense-max)")
     args = p.parse_args(argv)
     try:
         meshes = [int(s) for s in args.meshes.split(",")]
+        guide_meshes = [int(s) for s in args.guide_meshes.split(",")]
     except ValueError:
-        p.error(f"--meshes: comma-separated integers expected, got {args.meshes!r}")
-    if any(n < 1 for n in meshes) or args.repeat < 1:
-        p.error("--meshes and --repeat must be >= 1")
+        p.error(f"--meshes, --guide-meshes: comma-separated integers expected, got "
+                f"{args.meshes!r}, {args.guide_meshes!r}")
+    if any(n < 1 for n in meshes) or any(n < 2 for n in guide_meshes) or args.repeat < 1:
+        p.error("--meshes and --repeat must be >= 1, --guide-meshes >= 2")
     if not args.bin.is_file():
         p.error(f"--bin: no flexmor binary at {args.bin}")
     rows, buckling = [], []
@@ -123,6 +170,17 @@ def main(argv=None):
                                      products=products, tip=tip))
                     print(f"{n:4d} beams {solver:6s} {cpu:8.3f} s  {iterations} Newton "
                           f"iterations, {products} products", flush=True)
+            guide = []
+            for n in guide_meshes:
+                for solver in ("dense", "krylov"):
+                    if solver == "dense" and n > args.dense_max:
+                        continue
+                    runs = [guide_once(args.bin, folder, n, solver) for _ in range(args.repeat)]
+                    _, products, lam, cxx = runs[0]
+                    guide.append(dict(elements=n, solver=solver, cpu_s=min(r[0] for r in runs),
+                                      products=products, **{"lambda": lam}, cxx=cxx))
+                    print(f"{n:4d} per leaf guide {solver:6s} {guide[-1]['cpu_s']:8.3f} s  "
+                          f"lambda {lam:.6f}  C_xx {cxx:.6e}", flush=True)
         except RuntimeError as e:
             print(f"bench_statics: {e}", file=sys.stderr)
             return 1
@@ -162,6 +220,9 @@ def main(argv=None):
              for s in ("dense", "krylov")}
     lines += ["", "Fitted exponent of the buckling cpu time from 16 beams on: "
               + ", ".join(f"{s} {e:.2f}" for s, e in bexps.items() if not math.isnan(e)) + "."]
+    lines += guide_section(guide)
+    gcols = ["elements", "solver", "cpu_s", "products", "lambda", "cxx"]
+    write_csv(guide, gcols, args.out_dir / "statics_guide.csv")
     (args.out_dir / "statics.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines[-1:]))
     return 0

@@ -97,10 +97,16 @@ def test_bench_statics_quick(tmp_path):
     """scripts/bench_statics.py on two small meshes writes its table and CSV: both solvers at
     each mesh, the Krylov rows with their products, the same tip from both solvers (the 4-beam
     dense run within 1e-6 m of the 4-beam Krylov one; the tips are 60 m from the start)."""
-    proc = run_bench("--bin", BIN, "--meshes", "2,4", "--repeat", "1", "--out-dir", tmp_path)
+    proc = run_bench("--bin", BIN, "--meshes", "2,4", "--repeat", "1", "--guide-meshes", "4",
+                     "--out-dir", tmp_path)
     assert proc.returncode == 0, proc.stderr
     text = (tmp_path / "statics.md").read_text()
     assert "| 4 | 24 | krylov |" in text and "| 2 | 12 | dense |" in text
+    # The guide on both paths: the same compliance (both extrapolated, about 1e-7 apart).
+    with open(tmp_path / "statics_guide.csv") as f:
+        guide = list(csv.DictReader(f))
+    assert [(r["elements"], r["solver"]) for r in guide] == [("4", "dense"), ("4", "krylov")]
+    assert abs(float(guide[1]["cxx"]) / float(guide[0]["cxx"]) - 1) < 1e-5
     with open(tmp_path / "statics.csv") as f:
         rows = list(csv.DictReader(f))
     assert [(r["beams"], r["solver"]) for r in rows] == [
@@ -109,7 +115,7 @@ def test_bench_statics_quick(tmp_path):
     assert float(rows[2]["tip_diff_m"]) < 1e-6
 
 
-@pytest.mark.parametrize("args", [["--meshes", "2,x"], ["--repeat", "0"],
+@pytest.mark.parametrize("args", [["--meshes", "2,x"], ["--repeat", "0"], ["--guide-meshes", "1"],
                                   ["--bin", "/nonexistent/flexmor"]])
 def test_bench_statics_bad_arguments(tmp_path, args):
     proc = run_bench(*args, "--out-dir", tmp_path)
