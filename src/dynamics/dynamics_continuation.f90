@@ -63,7 +63,7 @@ contains
     real(wp) :: q(size(q_dy)), l, scale
     type(krylov_statics_t) :: kry
     integer :: halvings, it
-    logical :: converged, krylov
+    logical :: converged, krylov, external
     character(len=:), allocatable :: failure
     n_done = 0
     iterations = 0
@@ -75,15 +75,23 @@ contains
     dyn%kin%keep_failed_guess = .true.
     lambda = 0.0_wp
     scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
+    external = any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0) .or. &
+      size(dyn%model%load_motion) > 0 .or. size(dyn%model%moment_lambda) > 0
+    ! Prescribed inputs are held at their full values: the start is the equilibrium without
+    ! loads there, which the reference need not be (a pivot turned by a prescribed angle).
+    if (external) call start_equilibrium(err)
     ! The scale of q: the linear response to the full load at the start.
-    if (krylov) then
+    if (.not. err%ok()) then
+      continue
+    else if (krylov) then
       call krylov_load(q_dy, lambda, p, v, err)
     else
       call tangent_and_load(dyn, t, q_dy, lambda, k, p, err)
     end if
-    ! Without a load there is no path to follow: the tangent would be 0/0.
-    if (err%ok() .and. .not. any(p /= 0)) then
-      if (any(dyn%load /= 0) .or. size(dyn%model%moment_lambda) > 0) then
+    ! Without a load there is no path to follow: the tangent would be 0/0. (Without any load
+    ! P is zero only up to the kinematics' round-off: decided by the model, not by P.)
+    if (err%ok() .and. (.not. external .or. .not. any(p /= 0))) then
+      if (external) then
         ! Loads that do no work on the dynamic coordinates at the start: a perfect column
         ! loaded along its axis, whose path leaves the start only by bifurcation.
         call err%set(ERR_INPUT, 'group &static: variable ''method'': arc-length ' // &
@@ -193,6 +201,32 @@ contains
     call finish(dyn)
 
   contains
+
+    !> Newton at load factor 0 from q_dy (the reference or the last static state).
+    subroutine start_equilibrium(err)
+      type(error_t), intent(out) :: err
+      real(wp) :: f(size(q_dy)), dq(size(q_dy)), lu(size(q_dy), size(q_dy))
+      integer :: ipiv(size(q_dy))
+      dyn%load_factor = 0.0_wp
+      if (krylov) then
+        call kry%equilibrium(dyn, t, q_dy, tol * scale, max_iter, iterations, err)
+      else
+        do it = 1, max_iter
+          call tangent_and_load(dyn, t, q_dy, 0.0_wp, k, p, err, f)
+          if (err%ok()) call factor(k, lu, ipiv, err)
+          if (.not. err%ok()) exit
+          call solve_factored(lu, ipiv, f, f, dq, p)
+          q_dy = q_dy + dq
+          iterations = iterations + 1
+          if (maxval(abs(dq)) <= tol * scale) exit
+        end do
+        if (err%ok() .and. it > max_iter) call err%set(ERR_NUMERIC, 'Newton did not ' // &
+          'converge in ' // int_str(max_iter) // ' iterations')
+      end if
+      if (.not. err%ok()) call err%prefix('Newton found no equilibrium without loads, with ' &
+        // 'the prescribed inputs at their full values (arc-length does not step them; for ' // &
+        'displacement control use method = ''load''): ')
+    end subroutine start_equilibrium
 
     !> P and F at (q, l), leaving the model at load factor l.
     subroutine krylov_load(q, l, p, f, err)

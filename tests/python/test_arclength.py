@@ -216,3 +216,52 @@ def test_large_compliant_path_is_on_the_krylov_path_and_in_equilibrium(tmp_path)
         with h5py.File(out_k) as f:
             x_load = f["static/nodes/shuttle/position"][-1, :2]
         assert np.max(np.abs(x_load - x_arc[k])) < 1e-9, k
+
+
+def pivot_arc(rotation, load):
+    """input/cross_spring_pivot.nml (body turned by a prescribed angle) by arc-length, with
+    a load on the body."""
+    text = (ROOT / "input" / "cross_spring_pivot.nml").read_text().replace(
+        "start = 0.3 /", f"start = {rotation!r} /").replace(
+        "&static n_steps = 30 /", "&static method = 'arc_length', n_steps = 4 /")
+    assert f"start = {rotation!r}" in text and "arc_length" in text
+    return text + (f"&force node = 'body', {load} /\n" if load else "")
+
+
+def test_arc_length_needs_loads_not_only_prescribed_inputs(tmp_path):
+    """Displacement control alone (the pivot turned by its prescribed angle, no load): the
+    arc-length scales loads only, so it is refused as having none (it used to take P's
+    round-off for a load and fail 12 halvings later, advising a smaller arc)."""
+    proc, out = run_scene(tmp_path, pivot_arc(0.3, ""))
+    assert_clean_error(proc, out, "&static", "'method'", "loads it scales are zero")
+
+
+def test_arc_length_start_too_far_from_the_reference_says_why(tmp_path):
+    """The pivot turned by 0.3 rad at once: the equilibrium without loads, from which the path
+    starts, is beyond Newton's reach from the reference; the message says so and points to
+    load stepping, not to a bifurcation."""
+    proc, out = run_scene(tmp_path, pivot_arc(0.3, "fx = 1.0"))
+    assert_clean_error(proc, out, "arc-length start", "without loads",
+                       "prescribed inputs at their full values", "method = 'load'")
+
+
+def test_arc_length_starts_from_the_prescribed_equilibrium(tmp_path):
+    """The pivot turned by 0.02 rad and pulled by fx = 1 N along 4 arc-length steps: each
+    point is the equilibrium at its load factor with the rotation held, as load stepping to a
+    force scaled to that factor finds it (2 steps, the rotation stepped with it). Both stop at
+    tol 1e-10 of the model size (0.035 m): agreement to about 1e-12 m (observed 2e-18 m);
+    bound 1e-9 m, against a body displaced 2e-6 m."""
+    proc, out = run_scene(tmp_path, pivot_arc(0.02, "fx = 1.0"))
+    assert proc.returncode == 0, proc.stderr
+    lam, _, _ = path(out, "body")
+    with h5py.File(out) as f:
+        x_arc = f["static/nodes/body/position"][:, :2]
+    assert len(lam) == 4 and np.all(np.diff(lam) > 0)
+    for k in (0, 3):
+        text = pivot_arc(0.02, f"fx = {float(lam[k])!r}").replace(
+            "method = 'arc_length', n_steps = 4", "n_steps = 2")
+        proc, out_k = run_scene(tmp_path, text, name=f"load{k}")
+        assert proc.returncode == 0, proc.stderr
+        with h5py.File(out_k) as f:
+            x_load = f["static/nodes/body/position"][-1, :2]
+        assert np.max(np.abs(x_load - x_arc[k])) < 1e-9, k
