@@ -63,7 +63,7 @@ contains
     real(wp) :: q(size(q_dy)), l, scale
     type(krylov_statics_t) :: kry
     integer :: halvings, it
-    logical :: converged, krylov, external
+    logical :: converged, krylov, loaded
     character(len=:), allocatable :: failure
     n_done = 0
     iterations = 0
@@ -75,11 +75,11 @@ contains
     dyn%kin%keep_failed_guess = .true.
     lambda = 0.0_wp
     scale = max(1.0e-3_wp, maxval(abs(dyn%model%x0)))
-    external = any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0) .or. &
+    loaded = any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0) .or. &
       size(dyn%model%load_motion) > 0 .or. size(dyn%model%moment_lambda) > 0
     ! Prescribed inputs are held at their full values: the start is the equilibrium without
     ! loads there, which the reference need not be (a pivot turned by a prescribed angle).
-    if (external) call start_equilibrium(err)
+    if (loaded) call start_equilibrium(err)
     ! The scale of q: the linear response to the full load at the start.
     if (.not. err%ok()) then
       continue
@@ -90,8 +90,8 @@ contains
     end if
     ! Without a load there is no path to follow: the tangent would be 0/0. (Without any load
     ! P is zero only up to the kinematics' round-off: decided by the model, not by P.)
-    if (err%ok() .and. (.not. external .or. .not. any(p /= 0))) then
-      if (external) then
+    if (err%ok() .and. (.not. loaded .or. .not. any(p /= 0))) then
+      if (loaded) then
         ! Loads that do no work on the dynamic coordinates at the start: a perfect column
         ! loaded along its axis, whose path leaves the start only by bifurcation.
         call err%set(ERR_INPUT, 'group &static: variable ''method'': arc-length ' // &
