@@ -44,36 +44,41 @@ from spatial_examples import bend45_scene, lateral_buckling_scene
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def run_scene(binary, folder, name, text, *options):
+    """Write the scene `name`.nml into folder and run it: (stdout, the result's path)."""
+    nml, out = Path(folder) / f"{name}.nml", Path(folder) / f"{name}.h5"
+    nml.write_text(text)
+    proc = subprocess.run([str(binary), str(nml), "-o", str(out), *options],
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{nml.name}: {proc.stderr.strip()}")
+    return proc.stdout, out
+
+
+def products_of(stdout):
+    """The tangent products a Newton-Krylov run reported (0 on the dense path)."""
+    found = re.search(r"Newton-Krylov: (\d+) products", stdout)
+    return int(found.group(1)) if found else 0
+
+
 def run_once(binary, folder, n, solver):
     """One run: cpu time [s], Newton iterations, tangent products, tip after the last step."""
     text = bend45_scene(n).replace("&static n_steps = 4 /",
                                    f"&static n_steps = 4, solver = '{solver}' /")
     if f"solver = '{solver}'" not in text:
         raise RuntimeError("the bend scene's &static line changed: update bench_statics.py")
-    nml, out = Path(folder) / f"bend_{solver}_{n}.nml", Path(folder) / f"bend_{solver}_{n}.h5"
-    nml.write_text(text)
-    proc = subprocess.run([str(binary), str(nml), "-o", str(out)], capture_output=True,
-                          text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"{nml.name}: {proc.stderr.strip()}")
-    line = next(s for s in proc.stdout.splitlines() if s.startswith("static:"))
+    stdout, out = run_scene(binary, folder, f"bend_{solver}_{n}", text)
+    line = next(s for s in stdout.splitlines() if s.startswith("static:"))
     iterations = int(re.search(r"(\d+) Newton iterations", line).group(1))
-    found = re.search(r"Newton-Krylov: (\d+) products", line)
     with h5py.File(out) as f:
         tip = f["static/nodes/tip/position"][-1]
-    return float(run_attributes(out)["cpu_time_s"]), iterations, \
-        int(found.group(1)) if found else 0, tip
+    return float(run_attributes(out)["cpu_time_s"]), iterations, products_of(line), tip
 
 
 def buckling_once(binary, folder, n, solver):
     """One buckling run: cpu time [s] and the lowest multiplier [N]."""
     text = lateral_buckling_scene(n).replace("&buckling ", f"&buckling solver = '{solver}', ")
-    nml, out = Path(folder) / f"ltb_{solver}_{n}.nml", Path(folder) / f"ltb_{solver}_{n}.h5"
-    nml.write_text(text)
-    proc = subprocess.run([str(binary), str(nml), "-o", str(out), "-q"], capture_output=True,
-                          text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"{nml.name}: {proc.stderr.strip()}")
+    _, out = run_scene(binary, folder, f"ltb_{solver}_{n}", text, "-q")
     with h5py.File(out) as f:
         mu = float(f["buckling/load_factor"][0])
     return float(run_attributes(out)["cpu_time_s"]), mu
@@ -87,18 +92,11 @@ def guide_once(binary, folder, n, solver):
         f"solver = '{solver}' /")
     if "method = 'arc_length'" not in text:
         raise RuntimeError("the guide's &static line changed: update bench_statics.py")
-    nml, out = Path(folder) / f"guide_{solver}_{n}.nml", Path(folder) / f"guide_{solver}_{n}.h5"
-    nml.write_text(text)
-    proc = subprocess.run([str(binary), str(nml), "-o", str(out)], capture_output=True,
-                          text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"{nml.name}: {proc.stderr.strip()}")
-    found = re.search(r"Newton-Krylov: (\d+) products", proc.stdout)
+    stdout, out = run_scene(binary, folder, f"guide_{solver}_{n}", text)
     with h5py.File(out) as f:
         lam = float(f["static/load_factor"][-1])
         cxx = float(f["static/nodes/shuttle/compliance"][-1, 0, 0])
-    return float(run_attributes(out)["cpu_time_s"]), int(found.group(1)) if found else 0, \
-        lam, cxx
+    return float(run_attributes(out)["cpu_time_s"]), products_of(stdout), lam, cxx
 
 
 def guide_section(rows):

@@ -243,7 +243,7 @@ contains
       real(wp), intent(inout) :: q(:), l
       real(wp), intent(inout) :: v(:)
       logical, intent(out) :: converged
-      real(wp) :: a(size(q)), b(size(q)), f(size(q)), g, dl, den
+      real(wp) :: a(size(q)), b(size(q)), f(size(q)), dl
       converged = .false.
       do it = 1, max_iter
         call krylov_load(q, l, p, f, err)
@@ -251,13 +251,8 @@ contains
         if (err%ok()) call kry%solve(dyn, t, q, f, a, err)
         if (err%ok()) call kry%solve(dyn, t, q, p, b, err)
         if (.not. err%ok()) return
-        g = dot_product(tq, (q - q_pred) / c) + tl * (l - l_pred)
-        den = dot_product(tq, b) / c + tl
-        if (abs(den) < tiny(1.0_wp)) then
-          call err%set(ERR_NUMERIC, 'static arc-length: the path is tangent to the constraint')
-          return
-        end if
-        dl = -(g + dot_product(tq, a) / c) / den
+        call load_increment(q, l, a, b, dl)
+        if (.not. err%ok()) return
         q = q + a + b * dl
         l = l + dl
         v = b
@@ -288,11 +283,27 @@ contains
       if (err%ok()) call dyn%generalised_force(t, q, 0.0_wp * q, f, err)
     end subroutine krylov_stable
 
+    !> The load factor's part dl of the bordered correction (a + b dl, dl): the one that keeps
+    !> (q, l) on the normal plane through the predictor.
+    subroutine load_increment(q, l, a, b, dl)
+      real(wp), intent(in) :: q(:), l, a(:), b(:)
+      real(wp), intent(out) :: dl
+      real(wp) :: g, den
+      dl = 0.0_wp
+      g = dot_product(tq, (q - q_pred) / c) + tl * (l - l_pred)
+      den = dot_product(tq, b) / c + tl
+      if (abs(den) < tiny(1.0_wp)) then
+        call err%set(ERR_NUMERIC, 'static arc-length: the path is tangent to the constraint')
+        return
+      end if
+      dl = -(g + dot_product(tq, a) / c) / den
+    end subroutine load_increment
+
     !> Newton from (q, l) on F = 0 and the normal-plane condition through the predictor.
     subroutine correct(q, l, converged)
       real(wp), intent(inout) :: q(:), l
       logical, intent(out) :: converged
-      real(wp) :: a(size(q)), b(size(q)), f(size(q)), g, dl, den, step, prev
+      real(wp) :: a(size(q)), b(size(q)), f(size(q)), dl, step, prev
       real(wp) :: lu(size(q), size(q))
       integer :: ipiv(size(q))
       logical :: refresh
@@ -311,13 +322,8 @@ contains
         end if
         if (.not. err%ok()) return
         call solve_factored(lu, ipiv, f, p, a, b)
-        g = dot_product(tq, (q - q_pred) / c) + tl * (l - l_pred)
-        den = dot_product(tq, b) / c + tl
-        if (abs(den) < tiny(1.0_wp)) then
-          call err%set(ERR_NUMERIC, 'static arc-length: the path is tangent to the constraint')
-          return
-        end if
-        dl = -(g + dot_product(tq, a) / c) / den
+        call load_increment(q, l, a, b, dl)
+        if (.not. err%ok()) return
         step = max(maxval(abs(a + b * dl)) / scale, abs(dl))
         if (.not. refresh .and. step > prev) then
           refresh = .true.
