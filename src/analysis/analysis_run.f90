@@ -15,7 +15,7 @@ module analysis_run
   use elements_base, only: MODE_DYNAMIC
   use model_build, only: build_model, unused_motions, build_rigid_model
   use dynamics_system, only: dynamics_t
-  use dynamics_static, only: static_solve, static_uses_krylov
+  use dynamics_static, only: static_solve
   use dynamics_continuation, only: arc_length_solve
   use dynamics_response, only: static_response_t
   use reduction_modal, only: modal_result_t, modal_analysis
@@ -172,6 +172,14 @@ module analysis_run
       type(run_t), intent(inout), target :: this
       type(error_t), intent(out) :: err
     end subroutine run_dynamic
+    !> Reactions, compliances and frequencies at each converged static step
+    !> (analysis_run_static).
+    module subroutine static_responses(this, q_steps, ramped, err)
+      type(run_t), intent(inout) :: this
+      real(wp), intent(in) :: q_steps(:, :)
+      logical, intent(in) :: ramped
+      type(error_t), intent(out) :: err
+    end subroutine static_responses
   end interface
 
 contains
@@ -396,48 +404,6 @@ contains
       ' products with the tangent)'
   end function krylov_note
 
-  !> Reactions and compliances at each converged static step, from the tangent there (the
-  !> prescribed coordinates stepped with the load when `ramped`, as static_solve has them;
-  !> held at their full values as arc_length_solve has them).
-  subroutine static_responses(this, q_steps, ramped, err)
-    type(run_t), intent(inout) :: this
-    real(wp), intent(in) :: q_steps(:, :)
-    logical, intent(in) :: ramped
-    type(error_t), intent(out) :: err
-    integer, allocatable :: out_coords(:, :), comp_coords(:, :)
-    integer :: i, k
-    logical :: krylov
-    associate (m => this%dyn%model, sc => this%scene)
-      allocate(out_coords(NODE_SLOTS, size(sc%output_nodes)), &
-        comp_coords(NODE_SLOTS, size(sc%compliance_nodes)))
-      do i = 1, size(sc%output_nodes)
-        out_coords(:, i) = m%node_coord(:, m%find_node(sc%output_nodes(i)%s))
-      end do
-      do i = 1, size(sc%compliance_nodes)
-        comp_coords(:, i) = m%node_coord(:, m%find_node(sc%compliance_nodes(i)%s))
-      end do
-      if (sc%static%n_frequencies > m%n_dy) then
-        call err%set(ERR_INPUT, 'group &static: variable ''n_frequencies'' = ' // &
-          int_str(sc%static%n_frequencies) // ' exceeds the ' // int_str(m%n_dy) // &
-          ' dynamic coordinates')
-        return
-      end if
-      call this%static_response%init(out_coords, comp_coords, sc%static%n_frequencies, &
-        size(q_steps, 2), m%dim)
-      call static_uses_krylov(this%dyn, m%n_dy, sc%static%solver, krylov, err)
-      if (.not. err%ok()) return
-      this%dyn%ramp_prescribed = ramped
-      do k = 1, size(q_steps, 2)
-        this%dyn%load_factor = this%static_load_factor(k)
-        call this%dyn%kin%restart_from(this%x_static(:, k))
-        call this%static_response%record(this%dyn, 0.0_wp, q_steps(:, k), k, err, krylov)
-        if (.not. err%ok()) exit
-      end do
-      this%dyn%ramp_prescribed = .false.
-      this%dyn%load_factor = 1.0_wp
-    end associate
-    if (.not. err%ok()) call err%prefix('static, load step ' // int_str(k) // ': ')
-  end subroutine static_responses
 
   !> Linearised buckling at the same state as &modal (the &static equilibrium, else the
   !> reference), prescribed modes held at t = 0 as in &static. Loads that compress nothing

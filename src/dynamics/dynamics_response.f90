@@ -73,22 +73,25 @@ contains
 
   !> Step `step` at the equilibrium q_dy (dyn%load_factor and the prescribed values as the
   !> static analysis left them at that step). `krylov`: compliances without the dense tangent
-  !> (when no frequencies need it anyway).
-  subroutine response_record(this, dyn, t, q_dy, step, err, krylov)
+  !> (when no frequencies need it anyway). `frequencies` false: the caller has them (the
+  !> Krylov modes of a stable step), so they do not call for the dense tangent.
+  subroutine response_record(this, dyn, t, q_dy, step, err, krylov, frequencies)
     class(static_response_t), intent(inout) :: this
     type(dynamics_t), intent(inout) :: dyn
     real(wp), intent(in) :: t, q_dy(:)
     integer, intent(in) :: step
     type(error_t), intent(out) :: err
-    logical, intent(in), optional :: krylov
+    logical, intent(in), optional :: krylov, frequencies
     real(wp), allocatable :: k(:, :)
     real(wp) :: r(dyn%model%n_x), acc(size(q_dy))
-    logical :: was_locked, need_compliance, dense
+    logical :: was_locked, need_compliance, dense, need_frequencies
     integer :: i
     was_locked = dyn%locked
     dyn%locked = .true.
     need_compliance = size(this%compliance_coords, 2) > 0
-    dense = this%n_frequencies > 0
+    need_frequencies = this%n_frequencies > 0
+    if (present(frequencies)) need_frequencies = need_frequencies .and. frequencies
+    dense = need_frequencies
     if (present(krylov)) dense = dense .or. .not. krylov
     ! The tangent (2 or 4 n_dy evaluations) only when asked for; reactions need the nodal
     ! forces and kinematic factors of one evaluation (O(n): no dense mass matrix).
@@ -111,7 +114,7 @@ contains
       dyn%locked = was_locked
       return
     end if
-    if (need_compliance .or. this%n_frequencies > 0) then
+    if (need_compliance .or. need_frequencies) then
       allocate(k(size(q_dy), size(q_dy)))
       call tangent_stiffness(dyn, t, q_dy, k, err, &
         accurate=need_compliance .or. dyn%model%n_elastic > 0)
@@ -127,7 +130,7 @@ contains
       if (need_compliance) call compliance(dyn, k, this%compliance_coords, this%n_comp, &
         this%compliance(:, :, :, step), err)
     end if
-    if (err%ok() .and. this%n_frequencies > 0) &
+    if (err%ok() .and. need_frequencies) &
       call lowest_frequencies(k, dyn%mbar, this%frequency_hz(:, step), err)
     dyn%locked = was_locked
   end subroutine response_record
