@@ -22,6 +22,7 @@ module sweep_spec
     !> The entry of a list variable, 'scene.gravity(2)'; 0 for a variable that is one number.
     integer :: entry = 0
     logical :: is_int = .false.
+    integer :: spec = 0                          ! the variable's entry in the scene schema
     real(wp), allocatable :: list(:)             ! product/zip
     real(wp) :: lo = 0, hi = 0                   ! random/lhs (integer variables: integral)
     logical :: log = .false.
@@ -70,6 +71,11 @@ module sweep_spec
       type(param_t), intent(inout) :: p
       type(error_t), intent(inout) :: err
     end subroutine split_name
+    !> Every case's values within the schema's ranges of the variables they set.
+    module subroutine check_ranges(this, err)
+      type(sweep_spec_t), intent(in) :: this
+      type(error_t), intent(inout) :: err
+    end subroutine check_ranges
     pure module logical function same_target(a, b)
       type(param_t), intent(in) :: a, b
     end function same_target
@@ -164,6 +170,9 @@ contains
     case default
       call gen_sampled(this, err)
     end select
+    ! Here rather than when a case runs: a value the scene reader refuses would only fail its
+    ! cases one by one, after the others had run for hours.
+    if (err%ok()) call check_ranges(this, err)
   end subroutine spec_parse
 
   subroutine reset(this)

@@ -2,8 +2,8 @@
 !> against the scene schema before the base scene is read.
 submodule (sweep_spec) sweep_spec_names
   use io_namelist_lexer, only: is_name
-  use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS, SCHEMA, find_spec, kind_name, VK_REAL, &
-    VK_INT, VK_REAL_LIST
+  use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS, SCHEMA, find_spec, kind_name, &
+    bound_problem, VK_REAL, VK_INT, VK_REAL_LIST
   implicit none
 
 contains
@@ -84,7 +84,33 @@ contains
         'it cannot be swept')
     end select
     p%is_int = SCHEMA(k)%kind == VK_INT
+    p%spec = k
   end procedure split_name
+
+  module procedure check_ranges
+    integer :: i, j, k
+    do j = 1, size(this%params)
+      do i = 1, size(this%values, 1)
+        call check_one(this%params(j), i, this%values(i, j), err)
+        do k = 1, size(this%params(j)%tied)
+          call check_one(this%params(j)%tied(k), i, this%values(i, j), err)
+        end do
+        if (.not. err%ok()) return
+      end do
+    end do
+  contains
+    subroutine check_one(p, icase, x, err)
+      type(param_t), intent(in) :: p
+      integer, intent(in) :: icase
+      real(wp), intent(in) :: x
+      type(error_t), intent(inout) :: err
+      character(len=:), allocatable :: msg
+      if (.not. err%ok()) return
+      msg = bound_problem(SCHEMA(p%spec), x)
+      if (len(msg) > 0) call err%set(ERR_INPUT, p%origin // ': case ' // int_str(icase) // &
+        ": '" // trim(SCHEMA(p%spec)%name) // "' of &" // p%group // ' ' // msg)
+    end subroutine check_one
+  end procedure check_ranges
 
   !> A trailing '(k)' of the name into p%entry, and the name without it; p%entry = 0 without.
   subroutine split_entry(p, name, err)

@@ -1,0 +1,77 @@
+!> Groups with very many variables parse in time linear in their number: the name index grows
+!> geometrically and finds every name, and a group of 100,000 variables parses (at the old
+!> O(n^2), 20,000 took 45 s, so this one would take about 19 min and hit the CTest timeout).
+program test_namelist_large
+  use core_error, only: error_t
+  use io_namelist, only: nml_file_t
+  use io_name_index, only: name_index_t
+  use testing, only: suite_t
+  implicit none
+  character(*), parameter :: NL = new_line('a')
+  type(suite_t) :: t
+
+  call t%init('namelist: large groups')
+  call test_index_growth()
+  call test_large_group()
+  call t%finish()
+
+contains
+
+  subroutine test_index_growth()
+    type(name_index_t) :: idx
+    integer, parameter :: N = 200000
+    integer :: i, worst_capacity, misses
+    misses = 0
+    worst_capacity = 0
+    do i = 1, N
+      call idx%add(name(i))
+      ! Room is at most 8 slots per name beyond the first allocation: names (doubling, at
+      ! most 2 per name) and slots (at most a quarter full after doubling, at most 8).
+      worst_capacity = max(worst_capacity, idx%capacity() - 10 * idx%size())
+    end do
+    call t%check(idx%size() == N, 'every name added')
+    call t%check(worst_capacity <= 80, 'room grows in proportion to the names')
+    do i = 1, N
+      if (idx%find(name(i)) /= i) misses = misses + 1
+    end do
+    call t%check(misses == 0, 'every name found at its position')
+    call t%check(idx%find('absent') == 0 .and. idx%find('v') == 0, 'an absent name is 0')
+  end subroutine test_index_growth
+
+  subroutine test_large_group()
+    integer, parameter :: N = 100000
+    character(:), allocatable :: text, line
+    type(nml_file_t) :: f
+    type(error_t) :: err
+    integer :: i, pos
+    ! Written into a buffer of its final size: appending line by line is O(N^2) itself.
+    allocate(character(16 * N) :: text)
+    text(1:3) = '&g' // NL
+    pos = 4
+    do i = 1, N
+      line = name(i) // ' = 1' // NL
+      text(pos:pos + len(line) - 1) = line
+      pos = pos + len(line)
+    end do
+    text = text(:pos - 1)
+    call f%parse(text // '/' // NL, 'big.nml', err)
+    call t%check(err%ok(), '100,000 variables parse')
+    if (err%ok()) then
+      call t%check(f%groups(1)%has(name(1)) .and. f%groups(1)%has(name(N)) .and. &
+        .not. f%groups(1)%has('v0'), 'all kept')
+    end if
+    call err%clear()
+    call f%parse(text // name(N / 2) // ' = 2 /' // NL, 'big.nml', err)
+    call t%check(index(err%message, "variable '" // name(N / 2) // "' assigned twice " // &
+      '(first on line 50001)') > 0, 'a repeat among them is found')
+    if (.not. err%ok()) write(*, '(a)') '        -> ' // err%message
+  end subroutine test_large_group
+
+  pure function name(i) result(s)
+    integer, intent(in) :: i
+    character(:), allocatable :: s
+    character(16) :: buf
+    write(buf, '(i0)') i
+    s = 'v' // trim(buf)
+  end function name
+end program test_namelist_large
