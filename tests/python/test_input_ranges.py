@@ -58,6 +58,17 @@ REFUSED = {
     "linear times unsorted": (GOOD + "&linear inputs = 'tip.fy', outputs = 'tip.y', "
                               "times = 0.01, 0.005 /\n",
                               ["&linear #1", "'times'", "strictly increasing", "entry 2"]),
+    # Accepted up to 1e9 steps while the integrators stop at 1e7: this one ran for minutes
+    # into 'max_steps reached'.
+    "fixed steps beyond the step limit": (GOOD.replace("t_end = 0.02, output_dt = 1e-3",
+                                                       "t_end = 20, output_dt = 1, "
+                                                       "integrator = 'galpha', dt = 1e-6"),
+                                          ["&dynamic", "'dt'", "2.00E+07 fixed steps",
+                                           "10000000 a run may take"]),
+    "fixed steps of the error check beyond the step limit": (
+        GOOD.replace("t_end = 0.02, output_dt = 1e-3", "t_end = 2, output_dt = 1, "
+                     "integrator = 'galpha', dt = 1e-6, error_check = 'tolerance'"),
+        ["&dynamic", "'dt'", "2.00E+07 fixed steps (with the error check)"]),
     "linear times repeated": (GOOD + "&linear inputs = 'tip.fy', outputs = 'tip.y', "
                               "times = 0.01, 0.01 /\n",
                               ["&linear #1", "'times'", "strictly increasing"]),
