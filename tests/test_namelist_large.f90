@@ -12,6 +12,7 @@ program test_namelist_large
 
   call t%init('namelist: large groups')
   call test_index_growth()
+  call test_many_small_indices()
   call test_large_group()
   call t%finish()
 
@@ -37,6 +38,38 @@ contains
     call t%check(misses == 0, 'every name found at its position')
     call t%check(idx%find('absent') == 0 .and. idx%find('v') == 0, 'an absent name is 0')
   end subroutine test_index_growth
+
+  !> Fresh indices on reused memory: the slots of the first allocation were not cleared, so
+  !> that a group parsed after others probed garbage (a segmentation fault in test_kinematics).
+  subroutine test_many_small_indices()
+    integer :: round, i, misses, k
+    type :: dirt_t
+      integer, allocatable :: a(:)
+    end type dirt_t
+    type(dirt_t) :: dirt(8)
+    misses = 0
+    do round = 1, 300
+      ! Dirty the blocks an index allocates first (its slots, and its names' descriptors).
+      do k = 1, size(dirt)
+        allocate(dirt(k)%a(16 * (1 + mod(k - 1, 4))))
+        dirt(k)%a = 7 + round
+      end do
+      do k = 1, size(dirt)
+        deallocate(dirt(k)%a)
+      end do
+      block
+        type(name_index_t) :: idx
+        do i = 1, 1 + mod(round, 40)
+          if (idx%find(name(i)) /= 0) misses = misses + 1
+          call idx%add(name(i))
+        end do
+        do i = 1, 1 + mod(round, 40)
+          if (idx%find(name(i)) /= i) misses = misses + 1
+        end do
+      end block
+    end do
+    call t%check(misses == 0, 'fresh indices start empty')
+  end subroutine test_many_small_indices
 
   subroutine test_large_group()
     integer, parameter :: N = 100000

@@ -46,7 +46,10 @@ contains
     class(name_index_t), intent(inout) :: this
     character(*), intent(in) :: name
     type(key_t), allocatable :: tmp(:)
-    if (.not. allocated(this%keys)) allocate(this%keys(16), this%slot(64))
+    if (.not. allocated(this%keys)) then
+      allocate(this%keys(16), this%slot(64))
+      this%slot = 0
+    end if
     ! Capacity doubles, so the copies add up to O(n) over n additions.
     if (this%n == size(this%keys)) then
       allocate(tmp(2 * this%n))

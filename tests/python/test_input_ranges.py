@@ -142,3 +142,16 @@ def test_extreme_inputs_run_or_fail_cleanly(tmp_path, name, analyses):
             if isinstance(obj, h5py.Dataset) and obj.dtype.kind == "f":
                 assert np.all(np.isfinite(obj[()])), name
         f.visititems(finite)
+
+
+def test_link_too_long_for_its_units(tmp_path):
+    """A link of 1e13 length units: rotations (rad) and lengths 13 decades apart make the
+    kinematic Jacobian's pivots look singular, which blamed the mode classes ('coordinate
+    ... is not determined'); scaled to unit rows and columns it is regular, and the message
+    says to take a larger unit. A link of 1e3 units runs."""
+    proc, out = run_scene(tmp_path, GOOD.replace("x = 1, y = 0", "x = 1e13, y = 0"))
+    assert proc.returncode == 2, proc.stderr
+    assert_clean_error(proc, out, "singular only in the units of the scene", "larger unit")
+    assert "not determined" not in proc.stderr
+    proc, out = run_scene(tmp_path, GOOD.replace("x = 1, y = 0", "x = 1e3, y = 0"))
+    assert proc.returncode == 0, proc.stderr
