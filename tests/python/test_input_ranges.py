@@ -58,6 +58,11 @@ REFUSED = {
     "linear times unsorted": (GOOD + "&linear inputs = 'tip.fy', outputs = 'tip.y', "
                               "times = 0.01, 0.005 /\n",
                               ["&linear #1", "'times'", "strictly increasing", "entry 2"]),
+    # Two times nearest to one output sample gave the same model twice.
+    "linear times on one output sample": (GOOD + "&linear inputs = 'tip.fy', outputs = 'tip.y', "
+                                          "times = 0.0101, 0.0102 /\n",
+                                          ["scene.nml:", "group &linear", "'times'",
+                                           "entries 1 and 2", "both pick the output sample"]),
     # Accepted up to 1e9 steps while the integrators stop at 1e7: this one ran for minutes
     # into 'max_steps reached'.
     "fixed steps beyond the step limit": (GOOD.replace("t_end = 0.02, output_dt = 1e-3",
