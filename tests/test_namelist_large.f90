@@ -3,6 +3,7 @@
 !> O(n^2), 20,000 took 45 s, so this one would take about 19 min and hit the CTest timeout).
 program test_namelist_large
   use core_error, only: error_t
+  use core_strings, only: int_str
   use io_namelist, only: nml_file_t
   use io_name_index, only: name_index_t
   use testing, only: suite_t
@@ -103,8 +104,6 @@ contains
   pure function name(i) result(s)
     integer, intent(in) :: i
     character(:), allocatable :: s
-    character(16) :: buf
-    write(buf, '(i0)') i
-    s = 'v' // trim(buf)
+    s = 'v' // int_str(i)
   end function name
 end program test_namelist_large
