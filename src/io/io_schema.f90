@@ -60,9 +60,13 @@ contains
       msg = range_text(spec)
       if (msg(1:1) /= '0') msg = 'in ' // msg
       ! 'positive' first where 0 and below are out: the usual slip is a 0 or a sign.
-      if (x <= 0 .and. (spec%lower > 0 .or. (spec%lower == 0 .and. spec%lower_open))) &
-        msg = 'positive, ' // msg
-      msg = 'must be ' // msg
+      if (x <= 0 .and. (spec%lower > 0 .or. (spec%lower == 0 .and. spec%lower_open))) then
+        msg = 'must be positive, ' // msg
+      else if (x < 0 .and. spec%lower >= 0) then
+        msg = 'must not be negative (' // msg // ')'
+      else
+        msg = 'must be ' // msg
+      end if
     else if (spec%lower == 0 .and. spec%lower_open) then
       msg = 'must be positive'
     else if (spec%lower == 0) then
