@@ -297,6 +297,18 @@ contains
       'magnitude in [1e-30, 1e30]'], 'sampled list entry out of range')
     call parse_ok(s, SWEEP // "&parameter name = 'link.l1.G', values = 0, 1e-30, 1e30 /", &
       'the ends of a range and 0')
+    ! A variable set twice through tied names: the later value silently won.
+    call parse_fails(SWEEP // "&parameter name = 'link.l1.E', 'link.l1.E', values = 1 /", &
+      [character(40) :: "'link.l1.E'", 'named twice in this &parameter'], &
+      'a tied name twice in one &parameter')
+    call parse_fails(SWEEP // "&parameter name = 'link.l1.E', values = 1 /" // NL // &
+      "&parameter name = 'link.l2.E', 'link.l1.E', values = 2 /", &
+      [character(40) :: "#2 'link.l1.E'", "as &parameter #1 'link.l1.E'"], &
+      'a tied name of another &parameter')
+    call parse_fails(SWEEP // "&parameter name = 'link.l2.E', 'link.l1.E', values = 1 /" // NL &
+      // "&parameter name = 'link.l1.E', values = 2 /", &
+      [character(40) :: "#2 'link.l1.E'", "as &parameter #1 'link.l1.E'"], &
+      'a name another &parameter ties')
     ! Unknown variables are refused up front, from the scene schema.
     call parse_fails(SWEEP // "&parameter name = 'dynamic.rtoll', values = 1e-6 /", &
       [character(40) :: "'dynamic.rtoll'", "no variable 'rtoll'"], 'typo')

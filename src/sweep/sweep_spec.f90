@@ -71,6 +71,12 @@ module sweep_spec
       type(param_t), intent(inout) :: p
       type(error_t), intent(inout) :: err
     end subroutine split_name
+    !> The variables the last of `params` sets (its name and tied names) differ from each
+    !> other and from those the earlier ones set.
+    module subroutine check_targets(params, err)
+      type(param_t), intent(in) :: params(:)
+      type(error_t), intent(inout) :: err
+    end subroutine check_targets
     !> Every case's values within the schema's ranges of the variables they set.
     module subroutine check_ranges(this, err)
       type(sweep_spec_t), intent(in) :: this
@@ -122,7 +128,7 @@ contains
     character(len=*), intent(in) :: text, path
     type(error_t), intent(out) :: err
     type(nml_file_t) :: f
-    integer :: i, j, n_par
+    integer :: j, n_par
 
     call reset(this)
     this%path = path
@@ -152,14 +158,8 @@ contains
       call read_parameter(f%groups(f%group_index('parameter', j)), this%mode, this%params(j), err)
       if (.not. err%ok()) return
       this%names(j)%s = this%params(j)%name
-      ! The same variable twice would let the second silently overwrite the first.
-      do i = 1, j - 1
-        if (same_target(this%params(i), this%params(j))) then
-          call err%set(ERR_INPUT, this%params(j)%origin // ': the same scene variable as ' // &
-            '&parameter #' // int_str(i) // " '" // this%params(i)%name // "'")
-          return
-        end if
-      end do
+      call check_targets(this%params(1:j), err)
+      if (.not. err%ok()) return
     end do
 
     select case (this%mode)

@@ -87,6 +87,64 @@ contains
     p%spec = k
   end procedure split_name
 
+  ! The same variable twice would let the second silently overwrite the first: two
+  ! &parameter groups, or a tied name (&parameter name = 'a', 'b') that another group or the
+  ! same one also sets.
+  module procedure check_targets
+    integer :: i, k, m, n
+    n = size(params)
+    do k = 0, size(params(n)%tied)
+      do i = 1, n
+        do m = 0, size(params(i)%tied)
+          if (i == n .and. m >= k) exit
+          if (.not. same(i, m, n, k)) cycle
+          if (i == n) then
+            call err%set(ERR_INPUT, origin_of(n, k) // ': the same scene variable is ' // &
+              'named twice in this &parameter')
+          else
+            call err%set(ERR_INPUT, origin_of(n, k) // ': the same scene variable as ' // &
+              '&parameter #' // int_str(i) // " '" // name_of(i, m) // "'")
+          end if
+          return
+        end do
+      end do
+    end do
+  contains
+    ! Entry m of parameter i: the parameter itself (m = 0) or its tied name m. Compared in
+    ! place: with copies of param_t (tied names nested in it) the spec's names came out wrong
+    ! afterwards (test_sweep_spec 'names as given', gfortran 12).
+    logical function same(i, m, j, k)
+      integer, intent(in) :: i, m, j, k
+      if (m == 0 .and. k == 0) then
+        same = same_target(params(i), params(j))
+      else if (m == 0) then
+        same = same_target(params(i), params(j)%tied(k))
+      else if (k == 0) then
+        same = same_target(params(i)%tied(m), params(j))
+      else
+        same = same_target(params(i)%tied(m), params(j)%tied(k))
+      end if
+    end function same
+    function origin_of(i, m) result(s)
+      integer, intent(in) :: i, m
+      character(len=:), allocatable :: s
+      if (m == 0) then
+        s = params(i)%origin
+      else
+        s = params(i)%tied(m)%origin
+      end if
+    end function origin_of
+    function name_of(i, m) result(s)
+      integer, intent(in) :: i, m
+      character(len=:), allocatable :: s
+      if (m == 0) then
+        s = params(i)%name
+      else
+        s = params(i)%tied(m)%name
+      end if
+    end function name_of
+  end procedure check_targets
+
   module procedure check_ranges
     integer :: i, j, k
     do j = 1, size(this%params)
