@@ -99,11 +99,11 @@ contains
           if (i == n .and. m >= k) exit
           if (.not. same(i, m, n, k)) cycle
           if (i == n) then
-            call err%set(ERR_INPUT, origin_of(n, k) // ': the same scene variable is ' // &
+            call err%set(ERR_INPUT, text_of(n, k, .false.) // ': the same scene variable is ' // &
               'named twice in this &parameter')
           else
-            call err%set(ERR_INPUT, origin_of(n, k) // ': the same scene variable as ' // &
-              '&parameter #' // int_str(i) // " '" // name_of(i, m) // "'")
+            call err%set(ERR_INPUT, text_of(n, k, .false.) // ': the same scene variable ' // &
+              'as &parameter #' // int_str(i) // " '" // text_of(i, m, .true.) // "'")
           end if
           return
         end do
@@ -125,24 +125,20 @@ contains
         same = same_target(params(i)%tied(m), params(j)%tied(k))
       end if
     end function same
-    function origin_of(i, m) result(s)
+    !> Its origin (where it is written) or, `name_only`, its name.
+    function text_of(i, m, name_only) result(s)
       integer, intent(in) :: i, m
+      logical, intent(in) :: name_only
       character(len=:), allocatable :: s
       if (m == 0) then
-        s = params(i)%origin
+        s = merge(params(i)%name // repeat(' ', len(params(i)%origin)), &
+          params(i)%origin // repeat(' ', len(params(i)%name)), name_only)
       else
-        s = params(i)%tied(m)%origin
+        s = merge(params(i)%tied(m)%name // repeat(' ', len(params(i)%tied(m)%origin)), &
+          params(i)%tied(m)%origin // repeat(' ', len(params(i)%tied(m)%name)), name_only)
       end if
-    end function origin_of
-    function name_of(i, m) result(s)
-      integer, intent(in) :: i, m
-      character(len=:), allocatable :: s
-      if (m == 0) then
-        s = params(i)%name
-      else
-        s = params(i)%tied(m)%name
-      end if
-    end function name_of
+      s = trim(s)
+    end function text_of
   end procedure check_targets
 
   module procedure check_ranges
