@@ -88,7 +88,7 @@ RUN_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
            "OMP_NUM_THREADS": "1"}
 #: Rank 0's sleep between two bursts of probes for results (src/sweep/sweep_run.f90).
 PROBE_SLEEP_S = 0.0005
-#: A case of the probe fails in the scene reader: flexmor exit code 1 (input).
+#: A case of the probe is refused before its model is built: flexmor exit code 1 (input).
 PROBE_STATUS = 1
 
 PI = math.pi
@@ -105,8 +105,9 @@ QUICK_PARAMETERS: tuple[tuple[str, tuple[float, ...]], ...] = (
 )
 
 PROBE_SCENE = """\
-! bench_sweep.py probe: one link, 1 element; every case fails in the scene reader (E < 0), so a
-! case costs reading its scene and writing its row, nothing else.
+! bench_sweep.py probe: one link, 1 element; every case is refused before its model is built
+! (n_elements of 5000 and more: too large), so a case costs reading its scene and writing its
+! row, nothing else.
 &node label = 'base', x = 0, y = 0, fixed = .true. /
 &node label = 'tip', x = 1, y = 0 /
 &link label = 'arm', from = 'base', to = 'tip', n_elements = 1,
@@ -149,10 +150,12 @@ def reduced_sweep_text(parameters: Sequence[tuple[str, Sequence[float]]]) -> str
 
 
 def probe_sweep_text(n: int) -> str:
-    """``n`` cases, every one an input error (E from -1 down to -2)."""
+    """``n`` cases, every one an input error (n_elements = 5000, 5001, ...: too large). Not a
+    value beyond a variable's range (E < 0): the sweep refuses those before any case runs."""
     return ("&sweep base = 'probe_base.nml', mode = 'product', node = 'tip',\n"
             "       title = 'bench_sweep: dispatch probe' /\n"
-            f"&parameter name = 'link.arm.E', start = -1.0, stop = -2.0, n = {n} /\n")
+            f"&parameter name = 'link.arm.n_elements', start = 5000, stop = {5000 + n - 1}, "
+            f"n = {n} /\n")
 
 
 def n_product(parameters: Sequence[tuple[str, Sequence[float]]]) -> int:

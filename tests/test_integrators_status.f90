@@ -103,6 +103,9 @@ contains
     call integrate(sys, limited, t_out, [1.0_wp], [0.0_wp], none, stats, err)
     call suite%check(err%code == ERR_NUMERIC .and. stats%n_steps <= limited%max_steps, &
       name // ': max_steps limits the whole run')
+    ! Where it stopped was all it said (t_end = 1e30 ran into it): it says why.
+    call suite%check(index(err%message, 'the 30 steps a run may take did not reach t = ') > 0 &
+      .and. index(err%message, 't_end far beyond') > 0, name // ': the limit is named')
     if (.not. err%ok()) write(*, '(4x,a)') 'message: ' // err%message
   end subroutine check_step_limit
 

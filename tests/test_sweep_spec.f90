@@ -100,7 +100,7 @@ contains
   subroutine test_ranges()
     type(sweep_spec_t) :: s
     call parse_ok(s, SWEEP // &
-      "&parameter name = 'link.l1.E', start = 0, stop = 1, n = 5 /" // NL // &
+      "&parameter name = 'motion.m1.end', start = 0, stop = 1, n = 5 /" // NL // &
       "&parameter name = 'dynamic.rtol', start = 1e-8, stop = 1e-4, n = 3, log = .true. /" // NL &
       // "&parameter name = 'mass.c.m', start = 7, stop = 9, n = 1 /", 'start/stop/n')
     call t%check(s%n_cases() == 15, 'range: 5 x 3 x 1 cases')
@@ -283,17 +283,36 @@ contains
     call read_scene(base, scene, err)
     call t%check(err%ok() .and. scene%links(2)%n_elements == 1 .and. &
       scene%links(1)%e_modulus == 2.0e11_wp, 'base unchanged')
-    ! A value the scene reader rejects fails that case, named as an override.
+    ! A value beyond the schema's range is refused with the sweep, naming the parameter and the
+    ! first case that has it (before, each such case failed when it ran).
     call base%parse(BASE_SCENE, 'base.nml', err)
-    call parse_ok(s, SWEEP // "&parameter name = 'link.l1.E', values = -1 /", 'negative E')
-    call apply_case(s, base, 1, case_file, err)
-    call t%check(err%ok(), 'apply_case writes a bad value')
-    call read_scene(case_file, scene, err)
-    call expect_error(err, [character(20) :: "'E'", 'positive'], 'the scene reader rejects it')
+    call parse_fails(SWEEP // "&parameter name = 'link.l1.E', values = 1e9, -1 /", &
+      [character(40) :: "'link.l1.E'", 'case 2:', "'E' of &link", &
+      'must be positive, in [1e-30, 1e30]', 'got -1'], 'negative E')
+    call parse_fails(SWEEP // "&parameter name = 'mass.c.m', 'link.l1.E', values = 0, 1 /", &
+      [character(40) :: "'link.l1.E'", 'case 1:', 'got 0'], 'tied name out of range')
+    call parse_fails("&sweep base = 'base.nml', mode = 'random', n_samples = 5 /" // NL // &
+      "&parameter name = 'scene.gravity(2)', min = -1e35, max = -1e34 /", &
+      [character(40) :: "'scene.gravity(2)'", 'case 1:', "'gravity' of &scene", &
+      'magnitude in [1e-30, 1e30]'], 'sampled list entry out of range')
+    call parse_ok(s, SWEEP // "&parameter name = 'link.l1.G', values = 0, 1e-30, 1e30 /", &
+      'the ends of a range and 0')
+    ! A variable set twice through tied names: the later value silently won.
+    call parse_fails(SWEEP // "&parameter name = 'link.l1.E', 'link.l1.E', values = 1 /", &
+      [character(40) :: "'link.l1.E'", 'named twice in this &parameter'], &
+      'a tied name twice in one &parameter')
+    call parse_fails(SWEEP // "&parameter name = 'link.l1.E', values = 1 /" // NL // &
+      "&parameter name = 'link.l2.E', 'link.l1.E', values = 2 /", &
+      [character(40) :: "#2 'link.l1.E'", "as &parameter #1 'link.l1.E'"], &
+      'a tied name of another &parameter')
+    call parse_fails(SWEEP // "&parameter name = 'link.l2.E', 'link.l1.E', values = 1 /" // NL &
+      // "&parameter name = 'link.l1.E', values = 2 /", &
+      [character(40) :: "#2 'link.l1.E'", "as &parameter #1 'link.l1.E'"], &
+      'a name another &parameter ties')
     ! Unknown variables are refused up front, from the scene schema.
     call parse_fails(SWEEP // "&parameter name = 'dynamic.rtoll', values = 1e-6 /", &
       [character(40) :: "'dynamic.rtoll'", "no variable 'rtoll'"], 'typo')
-    call apply_case(s, base, 2, case_file, err)
+    call apply_case(s, base, 4, case_file, err)
     call t%check(.not. err%ok(), 'case number out of range: ' // err%message)
     ! One &parameter, several variables: both take the case's value.
     call parse_ok(s, SWEEP // "&parameter name = 'link.l1.E', 'link.l2.E', values = 1e9, 2e9 /", &

@@ -1,23 +1,34 @@
 !> What a scene may ask, checked before its analyses run: output nodes that exist, memory
 !> and time within limits (a failed allocation or a run that cannot end is no message).
 submodule (analysis_run) analysis_run_limits
+  use model_scene, only: ERROR_CHECK_TOLERANCE
   implicit none
 
 contains
 
   module procedure check_history_size
-    real(wp), parameter :: MAX_HISTORY_BYTES = 4.0e9_wp, MAX_FIXED_STEPS = 1.0e9_wp
-    real(wp) :: n_out, bytes
+    real(wp), parameter :: MAX_HISTORY_BYTES = 4.0e9_wp
+    type(integrator_options_t) :: defaults
+    real(wp) :: n_out, bytes, n_fixed, max_steps
     n_out = d%t_end / d%output_dt + 2.0_wp
+    ! A fixed-step run takes t_end / dt steps (its check run error_check_factor times more):
+    ! beyond the integrators' step limit it failed only when the limit was reached, minutes
+    ! later (the limit was 1e9 here, 1e7 there).
+    max_steps = real(defaults%max_steps, wp)
+    n_fixed = d%t_end / d%dt
+    if (d%error_check == ERROR_CHECK_TOLERANCE) n_fixed = n_fixed * d%error_check_factor
     ! Per output time: all coordinates, q and qd, energies (8 bytes each).
     bytes = 8.0_wp * n_out * real(model%n_x + 2 * model%n_q + 4, wp)
     if (bytes > MAX_HISTORY_BYTES) then
       call err%set(ERR_INPUT, 'group &dynamic: variable ''output_dt'': t_end / output_dt ' // &
         'gives ' // approx_str(n_out) // ' output times, whose histories would need ' // &
         approx_str(bytes / 1.0e9_wp) // ' GB (limit 4 GB): increase output_dt or shorten t_end')
-    else if (d%integrator == INTEGRATOR_GALPHA .and. d%t_end / d%dt > MAX_FIXED_STEPS) then
+    else if (d%integrator == INTEGRATOR_GALPHA .and. n_fixed > max_steps) then
       call err%set(ERR_INPUT, 'group &dynamic: variable ''dt'': t_end / dt gives ' // &
-        approx_str(d%t_end / d%dt) // ' fixed steps (limit 1e9): increase dt')
+        approx_str(n_fixed) // ' fixed steps' // trim(merge(' (with the error check)', &
+        '                       ', d%error_check == ERROR_CHECK_TOLERANCE)) // &
+        ', more than the ' // int_str(int(defaults%max_steps)) // ' a run may take: ' // &
+        'increase dt or shorten t_end')
     end if
   end procedure check_history_size
 

@@ -56,6 +56,16 @@ contains
           do i = 1, size(lin%times)
             ! The stored output sample nearest to the time asked for (its time is written).
             k = minloc(abs(this%time - lin%times(i)), 1)
+            ! Two times of one sample would give the same model twice without a word.
+            if (i > 1) then
+              if (k == minloc(abs(this%time - lin%times(i - 1)), 1)) then
+                call err%set(ERR_INPUT, 'group &linear: variable ''times'': entries ' // &
+                  int_str(i - 1) // ' and ' // int_str(i) // ' (' // real_str(lin%times(i - 1)) &
+                  // ', ' // real_str(lin%times(i)) // ' s) both pick the output sample at ' // &
+                  real_str(this%time(k)) // ' s: give times at least output_dt apart')
+                exit
+              end if
+            end if
             call linearise_sample(this, k, inputs, outputs, this%linear(i), err)
             if (.not. err%ok()) exit
           end do

@@ -4,6 +4,7 @@
 !> `err%ok()` is true when nothing went wrong. The message is a single line naming the file,
 !> namelist group and variable where that applies.
 module core_error
+  use core_strings, only: printable
   implicit none
   private
   public :: error_t
@@ -40,7 +41,8 @@ contains
     character(len=*), intent(in) :: message
     if (this%code /= ERR_NONE) return
     this%code = code
-    this%message = message
+    ! One line on a terminal whatever the input held: control characters shown escaped.
+    this%message = printable(message)
   end subroutine error_set
 
   !> Add context in front of an existing message ("file.nml: " // message).
@@ -48,7 +50,7 @@ contains
     class(error_t), intent(inout) :: this
     character(len=*), intent(in) :: context
     if (this%code == ERR_NONE) return
-    this%message = context // this%message
+    this%message = printable(context) // this%message
   end subroutine error_prefix
 
   subroutine error_clear(this)

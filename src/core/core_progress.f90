@@ -105,8 +105,8 @@ contains
     ! Four significant digits of t_end.
     d = 4
     if (abs(this%t_end) > 0) d = min(12, max(1, 3 - floor(log10(abs(this%t_end)))))
-    line = 'flexmor: ' // this%kind // ' t = ' // fixed(this%t_shown, d) // ' of ' // &
-      fixed(this%t_end, d) // ' s (' // fixed(100 * frac, 1) // ' %), ' // &
+    line = 'flexmor: ' // this%kind // ' t = ' // time_str(this%t_shown, d) // ' of ' // &
+      time_str(this%t_end, d) // ' s (' // fixed(100 * frac, 1) // ' %), ' // &
       count_str(this%steps_done + n_steps) // ' steps, '
     if (this%n_updates >= 0) line = line // int_str(this%n_updates) // ' basis updates, '
     steps = this%steps_done + n_steps
@@ -197,7 +197,7 @@ contains
     if (h >= CRAWL * span) return
     write(buf, '(es9.2)') h
     s = ', steps of about ' // trim(adjustl(buf)) // ' s (under 1e-7 of the run: too small ' // &
-      'to finish; a singular configuration?)'
+      'to finish; a singular configuration, or t_end too long?)'
   end function crawl_text
 
   !> Seconds below two minutes, then minutes, then hours; beyond 10,000 h only that.
@@ -230,6 +230,21 @@ contains
       if (s(1:2) == '-.') s = '-0' // s(2:)
     end if
   end function fixed
+
+  !> A time of the line: fixed with d decimals, or with an exponent from 1e7 s on (t_end =
+  !> 1e30 printed 31 digits).
+  pure function time_str(v, d) result(s)
+    real(wp), intent(in) :: v
+    integer, intent(in) :: d
+    character(len=:), allocatable :: s
+    character(len=24) :: buf
+    if (abs(v) < 1.0e7_wp) then
+      s = fixed(v, d)
+    else
+      write(buf, '(es11.4e3)') v
+      s = trim(adjustl(buf))
+    end if
+  end function time_str
 
   function count_str(i) result(s)
     integer(i8), intent(in) :: i

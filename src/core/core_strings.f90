@@ -3,7 +3,7 @@ module core_strings
   use core_kinds, only: wp
   implicit none
   private
-  public :: int_str, real_str, approx_str, lower_case, after_bom
+  public :: int_str, real_str, approx_str, lower_case, after_bom, printable
 
 contains
 
@@ -74,4 +74,37 @@ contains
     if (len(text) < 3) return
     if (text(1:3) == char(239) // char(187) // char(191)) pos = 4
   end function after_bom
+
+  !> Text with its control characters escaped (\t, \n, \r, \f, \v, else <0xNN>): messages
+  !> quote what the user wrote, and a raw form feed, carriage return or escape byte from an
+  !> input file garbles the terminal line or hides the message's start.
+  pure function printable(text) result(s)
+    character(len=*), intent(in) :: text
+    character(len=:), allocatable :: s
+    character(len=*), parameter :: HEX = '0123456789ABCDEF'
+    integer :: i, c, n
+    n = 0
+    do i = 1, len(text)
+      c = iachar(text(i:i))
+      if (c < 32 .or. c == 127) n = n + 1
+    end do
+    if (n == 0) then
+      s = text
+      return
+    end if
+    s = ''
+    do i = 1, len(text)
+      c = iachar(text(i:i))
+      select case (c)
+      case (9); s = s // '\t'
+      case (10); s = s // '\n'
+      case (11); s = s // '\v'
+      case (12); s = s // '\f'
+      case (13); s = s // '\r'
+      case (0:8, 14:31, 127)
+        s = s // '<0x' // HEX(c / 16 + 1:c / 16 + 1) // HEX(mod(c, 16) + 1:mod(c, 16) + 1) // '>'
+      case default; s = s // text(i:i)
+      end select
+    end do
+  end function printable
 end module core_strings

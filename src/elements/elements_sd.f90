@@ -60,7 +60,10 @@ contains
     s%g = (b%f * a%g - a%f * b%g) / r2
     num1 = b%f * a%d1 - a%f * b%d1
     s%d1 = num1 / r2
-    s%d2 = (b%f * a%d2 - a%f * b%d2) / r2 - num1 * 2 * (a%f * a%d1 + b%f * b%d1) / r2**2
+    ! Divided by r2 twice rather than by r2**2: a runaway iterate (a 1e30 load on a spatial
+    ! beam, its Euler parameters at 1e25) gave r2 of 1e200 and r2**2 overflowed, a
+    ! floating-point trap before Newton could see that it diverged.
+    s%d2 = (b%f * a%d2 - a%f * b%d2) / r2 - num1 / r2 * 2 * (a%f * a%d1 + b%f * b%d1) / r2
   end function sd_atan2
 
   !> sqrt(a), a > 0 (floored like sd_atan2's radius).

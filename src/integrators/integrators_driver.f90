@@ -1,7 +1,7 @@
 !> One entry point for all time integrators: checks the options, walks the output times and
 !> breakpoints, restarts the method at each breakpoint and hands every output to the system.
 module integrators_driver
-  use core_kinds, only: wp
+  use core_kinds, only: wp, i8
   use core_strings, only: int_str, real_str, approx_str
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use integrators_system, only: ode2_system_t, integrator_options_t, integrator_stats_t, &
@@ -48,6 +48,14 @@ contains
       breakpoints_inside(breakpoints, t_out(1), t_out(size(t_out))), q, v, err)
     call stepper%get_stats(stats)
     call stepper%finish()
+    ! The integrators say where they stopped; the run's user needs why (t_end = 1e30 ran
+    ! 2 minutes into 'max_steps reached at t = 2377.9').
+    if (.not. err%ok() .and. stats%n_steps >= opts%max_steps) err%message = err%message // &
+      ': the ' // int_str(int(min(opts%max_steps, int(huge(1), i8)))) // ' steps a run may ' // &
+      'take did not ' // &
+      'reach t = ' // approx_str(t_out(size(t_out))) // ' (t_end far beyond the time ' // &
+      'scale of the motions and vibrations: shorten it; or steps made tiny by a singular ' // &
+      'configuration)'
     ! The next integration (a reduced run's next segment) counts on from here.
     if (associated(opts%progress)) opts%progress%steps_done = opts%progress%steps_done + &
       stats%n_steps

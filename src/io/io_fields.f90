@@ -4,14 +4,16 @@
 module io_fields
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT, ERR_INTERNAL
-  use core_strings, only: lower_case, int_str
+  use core_strings, only: lower_case, int_str, real_str
   use io_namelist, only: nml_group_t, string_t
   use io_schema, only: var_spec_t, SCHEMA, find_spec, bound_problem, choice_list, has_choice
+  use io_name_index, only: name_index_t
   use model_scene, only: label_t
   implicit none
   private
   public :: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_enum, rd_choices, rd_classes, &
-    rd_label, only_with, rd_fixed_list, rd_labels, first_given
+    rd_label, only_with, rd_fixed_list, rd_labels, first_given, rd_reals, check_entries, &
+    check_unique, check_increasing
 
   !> Longest label: the longest name the model derives from one, 'node ''<label>'' rotation',
   !> then fills the 64 characters it keeps names in (model_system).
@@ -71,8 +73,51 @@ contains
       call g%get_real(var, value, e, fallback)
     end if
     if (.not. e%ok()) err = e
-    call check_bounds(g, spec, value, err)
+    ! Only a value the scene gives: a default stands for 'none' where it is (u_min = -huge).
+    if (g%has(var)) call check_bounds(g, spec, value, err)
   end subroutine rd_real
+
+  !> A list of reals, each entry in the schema's range of the variable (an entry beyond it is
+  !> named by its position: the list's product with other inputs overflows like a scalar's).
+  subroutine rd_reals(g, var, values, err, default)
+    type(nml_group_t), intent(inout) :: g
+    character(len=*), intent(in) :: var
+    real(wp), allocatable, intent(out) :: values(:)
+    type(error_t), intent(inout) :: err
+    real(wp), intent(in), optional :: default(:)
+    type(error_t) :: e
+    allocate(values(0))
+    if (.not. err%ok()) return
+    call g%get_real_array(var, values, e, default)
+    if (.not. e%ok()) then
+      err = e
+      return
+    end if
+    call check_entries(g, var, values, err)
+  end subroutine rd_reals
+
+  !> Range check of the entries of a list of var (read from the group or, `source`, from a
+  !> file it names).
+  subroutine check_entries(g, var, values, err, source)
+    type(nml_group_t), intent(in) :: g
+    character(len=*), intent(in) :: var
+    real(wp), intent(in) :: values(:)
+    type(error_t), intent(inout) :: err
+    character(len=*), intent(in), optional :: source
+    type(var_spec_t) :: spec
+    character(len=:), allocatable :: msg
+    integer :: i
+    if (.not. err%ok()) return
+    spec = spec_of(g, var, err)
+    do i = 1, size(values)
+      if (.not. err%ok()) return
+      msg = bound_problem(spec, values(i))
+      if (len(msg) == 0) cycle
+      if (present(source)) msg = source // ' ' // msg
+      call err%set(ERR_INPUT, g%where() // ': variable ''' // trim(spec%name) // ''': value ' &
+        // int_str(i) // ' ' // msg)
+    end do
+  end subroutine check_entries
 
   subroutine rd_int(g, var, value, err, default)
     type(nml_group_t), intent(inout) :: g
@@ -194,12 +239,14 @@ contains
     value = findloc([(trim(names(i)) == word, i = 1, size(names))], .true., 1)
   end subroutine rd_enum
 
-  !> Keywords, each checked against the schema's choices (default: the schema's, if any).
-  subroutine rd_choices(g, var, values, err)
+  !> Keywords, each checked against the schema's choices (default: the schema's, if any);
+  !> `unique`: each at most once.
+  subroutine rd_choices(g, var, values, err, unique)
     type(nml_group_t), intent(inout) :: g
     character(len=*), intent(in) :: var
     type(string_t), allocatable, intent(out) :: values(:)
     type(error_t), intent(inout) :: err
+    logical, intent(in), optional :: unique
     type(var_spec_t) :: spec
     type(string_t), allocatable :: fallback(:)
     type(error_t) :: e
@@ -223,6 +270,9 @@ contains
         return
       end if
     end do
+    if (present(unique)) then
+      if (unique) call check_unique(g, var, values, err)
+    end if
   end subroutine rd_choices
 
   !> Mode classes of a link: one keyword for every element, one per element (n of them) or,
@@ -301,6 +351,7 @@ contains
     type(error_t) :: e
     if (.not. g%has(name) .or. .not. err%ok()) return
     call g%get_real_array(name, values, e)
+    if (e%ok()) call check_entries(g, name, values, e)
     if (.not. e%ok()) then
       err = e
     else if (size(values) /= n) then
@@ -328,8 +379,50 @@ contains
       err = e
       return
     end if
+    call check_unique(g, name, values, err)
     labels = as_labels(values)
   end subroutine rd_labels
+
+  !> Each entry of a list of names at most once: a node output twice, an input or actuator
+  !> named twice, a motion added to itself by `terms = 'a', 'a'` is a slip, never meant (the
+  !> sum would double the term without a word). Hashed: lists may be long.
+  subroutine check_unique(g, var, values, err)
+    type(nml_group_t), intent(in) :: g
+    character(len=*), intent(in) :: var
+    type(string_t), intent(in) :: values(:)
+    type(error_t), intent(inout) :: err
+    type(name_index_t) :: seen
+    integer :: i, k
+    if (.not. err%ok()) return
+    do i = 1, size(values)
+      k = seen%find(values(i)%s)
+      if (k > 0) then
+        call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''': ''' // &
+          values(i)%s // ''' is given twice (entries ' // int_str(k) // ' and ' // &
+          int_str(i) // '); each entry must be different')
+        return
+      end if
+      call seen%add(values(i)%s)
+    end do
+  end subroutine check_unique
+
+  !> A list of times strictly increasing (what is done at each, in order, would otherwise
+  !> silently come out in another order than the time or twice).
+  subroutine check_increasing(g, var, values, err)
+    type(nml_group_t), intent(in) :: g
+    character(len=*), intent(in) :: var
+    real(wp), intent(in) :: values(:)
+    type(error_t), intent(inout) :: err
+    integer :: i
+    if (.not. err%ok()) return
+    do i = 2, size(values)
+      if (values(i) > values(i - 1)) cycle
+      call err%set(ERR_INPUT, g%where() // ': variable ''' // var // ''' must be strictly ' // &
+        'increasing: entry ' // int_str(i) // ' (' // real_str(values(i)) // ') is not ' // &
+        'after entry ' // int_str(i - 1) // ' (' // real_str(values(i - 1)) // ')')
+      return
+    end do
+  end subroutine check_increasing
 
   pure function as_labels(values) result(labels)
     type(string_t), intent(in) :: values(:)

@@ -10,7 +10,7 @@ module io_scene
   use io_namelist, only: nml_file_t, nml_group_t, string_t
   use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_choices, &
-    rd_classes, rd_label, only_with, rd_fixed_list, first_given
+    rd_classes, rd_label, only_with, rd_fixed_list, first_given, rd_reals
   use io_scene_analyses, only: read_static, read_modal, read_buckling, read_controller, &
     read_linear, read_dynamic, read_reduction, read_output
   use model_scene, only: scene_t, node_rec_t, link_rec_t, hinge_rec_t, truss_rec_t, mass_rec_t, &
@@ -149,7 +149,7 @@ contains
     call rd_choice(g, 'linear_solver', scene%linear_solver, err)
     call rd_int(g, 'dimension', scene%dimension, err)
     if (.not. err%ok()) return
-    call g%get_real_array('gravity', gravity, e, default=[(0.0_wp, i = 1, scene%dimension)])
+    call rd_reals(g, 'gravity', gravity, e, default=[(0.0_wp, i = 1, scene%dimension)])
     if (.not. e%ok()) then
       err = e
     else if (size(gravity) /= scene%dimension) then
@@ -199,7 +199,7 @@ contains
     logical :: fixed(4)
     integer :: i, k
     if (.not. err%ok()) return
-    call rd_choices(g, 'dynamic', dyn, err)
+    call rd_choices(g, 'dynamic', dyn, err, unique=.true.)
     if (.not. err%ok()) return
     do i = 1, size(dyn)
       do k = 1, 4
@@ -365,7 +365,7 @@ contains
     call rd_real(g, 'stiffness', r%stiffness, err)
     call rd_real(g, 'damping', r%damping, err)
     if (.not. err%ok()) return
-    call g%get_real_array('direction', direction, e)
+    call rd_reals(g, 'direction', direction, e)
     if (.not. e%ok()) then
       err = e
     else if (size(direction) /= 2 .and. size(direction) /= 3) then

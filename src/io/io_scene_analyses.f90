@@ -7,7 +7,7 @@ module io_scene_analyses
   use core_strings, only: approx_str
   use io_namelist, only: nml_group_t
   use io_fields, only: rd_real, rd_int, rd_logical, rd_string, rd_choice, rd_enum, rd_label, &
-    only_with, rd_labels
+    only_with, rd_labels, rd_reals, check_increasing
   use io_table, only: relative_to
   use model_scene, only: auto_integrator, scene_t, controller_rec_t, UPDATE_NAMES, UPDATE_NONE, &
     UPDATE_INTERVAL, UPDATE_MAC, JOINTS_NAMES, JOINTS_HELD, EVALUATION_NAMES, &
@@ -141,7 +141,8 @@ contains
     call rd_labels(g, 'inputs', scene%linear%inputs, err)
     call rd_labels(g, 'outputs', scene%linear%outputs, err)
     if (g%has('times') .and. err%ok()) then
-      call g%get_real_array('times', scene%linear%times, e)
+      call rd_reals(g, 'times', scene%linear%times, e)
+      call check_increasing(g, 'times', scene%linear%times, e)
       if (.not. e%ok()) then
         err = e
       else if (g%has('time') .or. g%has('along_motion')) then
@@ -243,7 +244,7 @@ contains
       end if
       call rd_real(g, 'basis_time', r%basis_time, err)
       if (g%has('basis_prescribed') .and. err%ok()) then
-        call g%get_real_array('basis_prescribed', r%basis_prescribed, e)
+        call rd_reals(g, 'basis_prescribed', r%basis_prescribed, e)
         if (.not. e%ok()) err = e
       end if
       call rd_logical(g, 'static_correction', r%static_correction, err)

@@ -3,7 +3,8 @@
 module io_scene_motion
   use core_error, only: error_t, ERR_INPUT
   use io_namelist, only: nml_group_t, string_t
-  use io_fields, only: rd_real, rd_string, rd_choice, rd_label, only_with
+  use io_fields, only: rd_real, rd_string, rd_choice, rd_label, only_with, rd_reals, &
+    check_entries, check_unique
   use model_scene, only: motion_rec_t
   use motion_law, only: table_problem
   use io_table, only: read_table_csv, relative_to
@@ -58,6 +59,7 @@ contains
     case ('sum')
       if (.not. err%ok()) return
       call g%get_string_array('terms', terms, e)
+      if (e%ok()) call check_unique(g, 'terms', terms, e)
       if (.not. e%ok()) then
         err = e
       else if (size(terms) == 0) then
@@ -95,10 +97,16 @@ contains
       if (.not. err%ok()) return
       call read_table_csv(relative_to(g%path, path), r%times, r%values, e)
       if (.not. e%ok()) e%message = g%where() // ': variable ''file'': ' // e%message
+      if (e%ok()) then
+        call check_entries(g, 'times', r%times, e, source='of file ''' // path // &
+          ''' (column 1)')
+        call check_entries(g, 'values', r%values, e, source='of file ''' // path // &
+          ''' (column 2)')
+      end if
     else
       var = 'times'', ''values'
-      call g%get_real_array('times', r%times, e)
-      if (e%ok()) call g%get_real_array('values', r%values, e)
+      call rd_reals(g, 'times', r%times, e)
+      call rd_reals(g, 'values', r%values, e)
     end if
     if (.not. e%ok()) then
       err = e

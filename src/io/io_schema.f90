@@ -12,7 +12,7 @@ module io_schema
   implicit none
   private
   public :: var_spec_t, SCHEMA, SCENE_GROUPS, SINGLE_GROUPS, find_spec, kind_name, &
-    bound_problem, choice_list, has_choice, write_schema
+    bound_problem, range_text, choice_list, has_choice, write_schema
   public :: VK_REAL, VK_INT, VK_LOGICAL, VK_STRING, VK_CHOICE, VK_REAL_LIST, VK_STRING_LIST, &
     VK_CHOICE_LIST
 
@@ -50,14 +50,23 @@ contains
     type(var_spec_t), intent(in) :: spec
     real(wp), intent(in) :: x
     character(len=:), allocatable :: msg
-    logical :: low, high
+    logical :: low, high, tiny_x
     msg = ''
     low = x < spec%lower .or. (spec%lower_open .and. x == spec%lower)
     high = x > spec%upper .or. (spec%upper_open .and. x == spec%upper)
-    if (.not. (low .or. high)) return
-    if (spec%upper < huge(1.0_wp)) then
-      msg = 'must be in ' // merge('(', '[', spec%lower_open) // real_str(spec%lower) // ', ' // &
-        real_str(spec%upper) // merge(')', ']', spec%upper_open)
+    tiny_x = x /= 0 .and. abs(x) < spec%min_magnitude
+    if (.not. (low .or. high .or. tiny_x)) return
+    if (spec%min_magnitude > 0 .or. spec%upper < huge(1.0_wp)) then
+      msg = range_text(spec)
+      if (msg(1:1) /= '0') msg = 'in ' // msg
+      ! 'positive' first where 0 and below are out: the usual slip is a 0 or a sign.
+      if (x <= 0 .and. (spec%lower > 0 .or. (spec%lower == 0 .and. spec%lower_open))) then
+        msg = 'must be positive, ' // msg
+      else if (x < 0 .and. spec%lower >= 0) then
+        msg = 'must not be negative (' // msg // ')'
+      else
+        msg = 'must be ' // msg
+      end if
     else if (spec%lower == 0 .and. spec%lower_open) then
       msg = 'must be positive'
     else if (spec%lower == 0) then
@@ -65,8 +74,57 @@ contains
     else
       msg = 'must be at least ' // real_str(spec%lower)
     end if
-    msg = msg // ', got ' // real_str(x)
+    msg = msg // ', got ' // bound_str(x)
   end function bound_problem
+
+  !> The declared range as text ('' for none): '[1e-30, 1e30]', '0 or in [1e-30, 1e30]',
+  !> '0 or of magnitude in [1e-30, 1e30]', '(0, inf)'. Messages and `--schema` show the same.
+  pure function range_text(spec) result(text)
+    type(var_spec_t), intent(in) :: spec
+    character(len=:), allocatable :: text
+    real(wp) :: lo
+    text = ''
+    if (.not. (spec%lower > -huge(1.0_wp) .or. spec%upper < huge(1.0_wp))) return
+    lo = spec%lower
+    if (spec%min_magnitude > 0) then
+      if (spec%lower < 0 .and. -spec%lower == spec%upper) then
+        text = '0 or of magnitude in [' // bound_str(spec%min_magnitude) // ', ' // &
+          bound_str(spec%upper) // ']'
+        return
+      end if
+      if (spec%lower <= 0 .and. spec%upper >= 0) text = '0 or in '
+      lo = max(spec%lower, spec%min_magnitude)
+    end if
+    text = text // merge('(', '[', spec%lower_open .and. lo == spec%lower) // bound_str(lo) // &
+      ', ' // trim(merge('inf        ', bound_str_pad(spec%upper), spec%upper >= huge(1.0_wp))) &
+      // merge(')', ']', spec%upper_open .or. spec%upper >= huge(1.0_wp))
+  contains
+    pure function bound_str_pad(x) result(t)
+      real(wp), intent(in) :: x
+      character(len=11) :: t
+      t = bound_str(x)
+    end function bound_str_pad
+  end function range_text
+
+  !> A bound as the schema writes it: 1e30, 1e-30, 0.5, 10000.
+  pure function bound_str(x) result(s)
+    real(wp), intent(in) :: x
+    character(len=:), allocatable :: s
+    character(len=32) :: buf
+    integer :: e, m, ex
+    if (x == 0 .or. (abs(x) >= 1.0e-3_wp .and. abs(x) < 1.0e6_wp)) then
+      s = real_str(x)
+      return
+    end if
+    write(buf, '(es22.14e3)') x
+    s = trim(adjustl(buf))
+    e = scan(s, 'Ee')
+    read(s(e + 1:), *) ex
+    m = verify(s(:e - 1), '0', back=.true.)
+    if (s(m:m) == '.') m = m - 1
+    write(buf, '(i0)') ex
+    s = s(:m) // 'e' // trim(buf)
+  end function bound_str
 
   !> The choices as text for messages: 'a, b or c'.
   pure function choice_list(spec) result(text)
@@ -104,21 +162,11 @@ contains
       achar(9) // 'doc'
     do i = 1, size(SCHEMA)
       s = SCHEMA(i)
-        range = ''
-        if (s%lower > -huge(1.0_wp) .or. s%upper < huge(1.0_wp)) range = &
-          merge('(', '[', s%lower_open) // real_str(s%lower) // ', ' // &
-          trim(merge('inf        ', real_str_pad(s%upper), s%upper >= huge(1.0_wp))) // &
-          merge(')', ']', s%upper_open .or. s%upper >= huge(1.0_wp))
-        write(unit, '(a)') trim(s%group) // achar(9) // trim(s%name) // achar(9) // &
+      range = range_text(s)
+      write(unit, '(a)') trim(s%group) // achar(9) // trim(s%name) // achar(9) // &
           kind_name(s%kind) // achar(9) // trim(s%units) // achar(9) // &
           trim(merge('required        ', s%default, s%required)) // achar(9) // range // &
           achar(9) // trim(s%choices) // achar(9) // trim(s%doc)
     end do
-  contains
-    pure function real_str_pad(x) result(t)
-      real(wp), intent(in) :: x
-      character(len=11) :: t
-      t = real_str(x)
-    end function real_str_pad
   end subroutine write_schema
 end module io_schema

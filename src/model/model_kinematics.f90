@@ -4,7 +4,7 @@ module model_kinematics
   use core_linalg, only: lu_factor, lu_solve
   use core_strings, only: approx_str
   use core_sparse, only: sparse_lu_t, entries_t
-  use model_system, only: model_t
+  use model_system, only: model_t, COORD_EULER
   implicit none
   private
   public :: kinematics_t, kin_state_t
@@ -12,6 +12,8 @@ module model_kinematics
   integer, parameter :: MAX_NEWTON = 25
   !> Pivots this much smaller than the largest mean a singular kinematic Jacobian.
   real(wp), parameter :: SINGULAR_PIVOT = 1.0e-12_wp
+  !> Iterates of the kinematic Newton that have run away (kin_newton).
+  real(wp), parameter :: X_DIVERGED = 1.0e50_wp, EULER_DIVERGED = 1.0e6_wp
 
   !> What a caller keeps to go on from a kinematic solution after evaluating elsewhere (a basis
   !> computation); the factors are not kept: the next solve makes new ones.
@@ -371,7 +373,7 @@ contains
     real(wp) :: r(model%n_c), dx(model%n_c, 1), rmax, rprev
     real(wp) :: x_start(model%n_x), x_last(model%n_x)
     integer :: it, info, worst
-    logical :: stale
+    logical :: stale, diverged
     character(len=200) :: msg
     call model%check_limits(q, err)
     if (.not. err%ok()) return
@@ -394,7 +396,18 @@ contains
     this%has_df = .false.
     this%has_factors = .false.
     rprev = huge(1.0_wp)
+    diverged = .false.
     do it = 1, MAX_NEWTON
+      ! A scene's coordinates and motions stay within 1e30 (the schema's ranges), Euler
+      ! parameters near 1: iterates beyond X_DIVERGED, or Euler parameters beyond
+      ! EULER_DIVERGED, have run away (loads of 1e30 on a spatial beam), and evaluating the
+      ! elements there overflowed (the beam's rotation entries are squares of the parameters,
+      ! its twist squares of their products: a floating-point trap in Debug) before the
+      ! residual could say so.
+      if (runaway(model, this%x)) then
+        diverged = .true.
+        exit
+      end if
       ! Sparse: the Jacobian's values go into the matrix while KLU's stale factors stay
       ! usable, so where the predictor has already converged this element pass is the only
       ! one. Dense factors overwrite the matrix: there the stale pass skips the Jacobian.
@@ -448,6 +461,8 @@ contains
     end do
     write(msg, '(a,i0,a,es10.3)') 'kinematic Newton iteration did not converge in ', it - 1, &
       ' iterations, residual ', rmax
+    if (diverged) write(msg, '(a,i0,a)') 'kinematic Newton iteration diverged in ', it - 1, &
+      ' iterations (coordinates beyond 1e50 or Euler parameters beyond 1e6)'
     this%x = merge(x_start, x_last, this%keep_failed_guess)
     ! The hint refactors at the last solution (not with a kept guess: arc-length's retries).
     if (this%keep_failed_guess) then
@@ -457,6 +472,19 @@ contains
     end if
   end subroutine kin_newton
 
+
+  !> Whether a kinematic iterate has run away (see kin_newton).
+  pure logical function runaway(model, x)
+    type(model_t), intent(in) :: model
+    real(wp), intent(in) :: x(:)
+    integer :: i
+    runaway = .true.
+    do i = 1, size(x)
+      if (abs(x(i)) > X_DIVERGED) return
+      if (model%coord_kind(i) == COORD_EULER .and. abs(x(i)) > EULER_DIVERGED) return
+    end do
+    runaway = .false.
+  end function runaway
 
   !> x := x + dx on the calculable coordinates (a loop: the vector-subscripted sum makes a
   !> temporary).

@@ -10,18 +10,51 @@ contains
   module procedure kin_singular_message
     type(kinematics_t) :: dense
     real(wp) :: r(model%n_c), rcond
+    real(wp), allocatable :: jac(:, :)
     integer :: info, worst
     call dense%init(model, sparse=.false.)
     dense%x = this%x
     call dense%residual(model, q, r, jacobian=.true.)
+    jac = dense%lu
     call lu_factor(dense%lu, dense%ipiv, info, rcond, worst)
     msg = 'the kinematic Jacobian is singular'
+    if (units_only(jac)) then
+      msg = msg // ' only in the units of the scene: its lengths and its rotations (rad) ' // &
+        'differ by about 12 orders of magnitude or more (links of 1e12 length units or ' // &
+        'longer), beyond what double precision tells from a singular matrix; give the ' // &
+        'lengths in a larger unit'
+      return
+    end if
     if (worst < 1) return
     msg = msg // ': coordinate ' // trim(model%coord_name(model%calc_coord(worst))) // &
       ' is not determined by the rigid, prescribed and dynamic modes (check the mode ' // &
       'classes and supports; elastic and released modes follow from the others and ' // &
       'determine nothing)' // dense%free_modes_moved(model, worst)
   end procedure kin_singular_message
+
+  !> Whether J is regular once its rows and columns are scaled to a largest entry of 1: its
+  !> pivots then compare constraints and coordinates of one size, so that only units (a link
+  !> of 3e12 m: rotations and translations 12 decades apart) made it look singular. A
+  !> structurally singular J (a mode class that determines nothing, a dead point) stays so.
+  logical function units_only(jac)
+    real(wp), intent(inout) :: jac(:, :)
+    real(wp) :: rcond, big
+    integer :: ipiv(size(jac, 1)), info, i
+    units_only = .false.
+    if (size(jac, 1) == 0 .or. size(jac, 1) /= size(jac, 2)) return
+    do i = 1, size(jac, 1)
+      big = maxval(abs(jac(i, :)))
+      if (.not. big > 0) return
+      jac(i, :) = jac(i, :) / big
+    end do
+    do i = 1, size(jac, 2)
+      big = maxval(abs(jac(:, i)))
+      if (.not. big > 0) return
+      jac(:, i) = jac(:, i) / big
+    end do
+    call lu_factor(jac, ipiv, info, rcond)
+    units_only = info == 0 .and. rcond >= SINGULAR_PIVOT
+  end function units_only
 
   module procedure kin_configuration_hint
     real(wp), parameter :: NEAR_SINGULAR = 1.0e3_wp

@@ -22,6 +22,7 @@ module sweep_spec
     !> The entry of a list variable, 'scene.gravity(2)'; 0 for a variable that is one number.
     integer :: entry = 0
     logical :: is_int = .false.
+    integer :: spec = 0                          ! the variable's entry in the scene schema
     real(wp), allocatable :: list(:)             ! product/zip
     real(wp) :: lo = 0, hi = 0                   ! random/lhs (integer variables: integral)
     logical :: log = .false.
@@ -70,6 +71,17 @@ module sweep_spec
       type(param_t), intent(inout) :: p
       type(error_t), intent(inout) :: err
     end subroutine split_name
+    !> The variables the last of `params` sets (its name and tied names) differ from each
+    !> other and from those the earlier ones set.
+    module subroutine check_targets(params, err)
+      type(param_t), intent(in) :: params(:)
+      type(error_t), intent(inout) :: err
+    end subroutine check_targets
+    !> Every case's values within the schema's ranges of the variables they set.
+    module subroutine check_ranges(this, err)
+      type(sweep_spec_t), intent(in) :: this
+      type(error_t), intent(inout) :: err
+    end subroutine check_ranges
     pure module logical function same_target(a, b)
       type(param_t), intent(in) :: a, b
     end function same_target
@@ -116,7 +128,7 @@ contains
     character(len=*), intent(in) :: text, path
     type(error_t), intent(out) :: err
     type(nml_file_t) :: f
-    integer :: i, j, n_par
+    integer :: j, n_par
 
     call reset(this)
     this%path = path
@@ -146,14 +158,8 @@ contains
       call read_parameter(f%groups(f%group_index('parameter', j)), this%mode, this%params(j), err)
       if (.not. err%ok()) return
       this%names(j)%s = this%params(j)%name
-      ! The same variable twice would let the second silently overwrite the first.
-      do i = 1, j - 1
-        if (same_target(this%params(i), this%params(j))) then
-          call err%set(ERR_INPUT, this%params(j)%origin // ': the same scene variable as ' // &
-            '&parameter #' // int_str(i) // " '" // this%params(i)%name // "'")
-          return
-        end if
-      end do
+      call check_targets(this%params(1:j), err)
+      if (.not. err%ok()) return
     end do
 
     select case (this%mode)
@@ -164,6 +170,9 @@ contains
     case default
       call gen_sampled(this, err)
     end select
+    ! Here rather than when a case runs: a value the scene reader refuses would only fail its
+    ! cases one by one, after the others had run for hours.
+    if (err%ok()) call check_ranges(this, err)
   end subroutine spec_parse
 
   subroutine reset(this)

@@ -2,8 +2,8 @@
 !> against the scene schema before the base scene is read.
 submodule (sweep_spec) sweep_spec_names
   use io_namelist_lexer, only: is_name
-  use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS, SCHEMA, find_spec, kind_name, VK_REAL, &
-    VK_INT, VK_REAL_LIST
+  use io_schema, only: SCENE_GROUPS, SINGLE_GROUPS, SCHEMA, find_spec, kind_name, &
+    bound_problem, VK_REAL, VK_INT, VK_REAL_LIST
   implicit none
 
 contains
@@ -84,7 +84,87 @@ contains
         'it cannot be swept')
     end select
     p%is_int = SCHEMA(k)%kind == VK_INT
+    p%spec = k
   end procedure split_name
+
+  ! The same variable twice would let the second silently overwrite the first: two
+  ! &parameter groups, or a tied name (&parameter name = 'a', 'b') that another group or the
+  ! same one also sets.
+  module procedure check_targets
+    integer :: i, k, m, n
+    n = size(params)
+    do k = 0, size(params(n)%tied)
+      do i = 1, n
+        do m = 0, size(params(i)%tied)
+          if (i == n .and. m >= k) exit
+          if (.not. same(i, m, n, k)) cycle
+          if (i == n) then
+            call err%set(ERR_INPUT, text_of(n, k, .false.) // ': the same scene variable is ' // &
+              'named twice in this &parameter')
+          else
+            call err%set(ERR_INPUT, text_of(n, k, .false.) // ': the same scene variable ' // &
+              'as &parameter #' // int_str(i) // " '" // text_of(i, m, .true.) // "'")
+          end if
+          return
+        end do
+      end do
+    end do
+  contains
+    ! Entry m of parameter i: the parameter itself (m = 0) or its tied name m. Compared in
+    ! place: with copies of param_t (tied names nested in it) the spec's names came out wrong
+    ! afterwards (test_sweep_spec 'names as given', gfortran 12).
+    logical function same(i, m, j, k)
+      integer, intent(in) :: i, m, j, k
+      if (m == 0 .and. k == 0) then
+        same = same_target(params(i), params(j))
+      else if (m == 0) then
+        same = same_target(params(i), params(j)%tied(k))
+      else if (k == 0) then
+        same = same_target(params(i)%tied(m), params(j))
+      else
+        same = same_target(params(i)%tied(m), params(j)%tied(k))
+      end if
+    end function same
+    !> Its origin (where it is written) or, `name_only`, its name.
+    function text_of(i, m, name_only) result(s)
+      integer, intent(in) :: i, m
+      logical, intent(in) :: name_only
+      character(len=:), allocatable :: s
+      if (m == 0) then
+        s = merge(params(i)%name // repeat(' ', len(params(i)%origin)), &
+          params(i)%origin // repeat(' ', len(params(i)%name)), name_only)
+      else
+        s = merge(params(i)%tied(m)%name // repeat(' ', len(params(i)%tied(m)%origin)), &
+          params(i)%tied(m)%origin // repeat(' ', len(params(i)%tied(m)%name)), name_only)
+      end if
+      s = trim(s)
+    end function text_of
+  end procedure check_targets
+
+  module procedure check_ranges
+    integer :: i, j, k
+    do j = 1, size(this%params)
+      do i = 1, size(this%values, 1)
+        call check_one(this%params(j), i, this%values(i, j), err)
+        do k = 1, size(this%params(j)%tied)
+          call check_one(this%params(j)%tied(k), i, this%values(i, j), err)
+        end do
+        if (.not. err%ok()) return
+      end do
+    end do
+  contains
+    subroutine check_one(p, icase, x, err)
+      type(param_t), intent(in) :: p
+      integer, intent(in) :: icase
+      real(wp), intent(in) :: x
+      type(error_t), intent(inout) :: err
+      character(len=:), allocatable :: msg
+      if (.not. err%ok()) return
+      msg = bound_problem(SCHEMA(p%spec), x)
+      if (len(msg) > 0) call err%set(ERR_INPUT, p%origin // ': case ' // int_str(icase) // &
+        ": '" // trim(SCHEMA(p%spec)%name) // "' of &" // p%group // ' ' // msg)
+    end subroutine check_one
+  end procedure check_ranges
 
   !> A trailing '(k)' of the name into p%entry, and the name without it; p%entry = 0 without.
   subroutine split_entry(p, name, err)

@@ -179,7 +179,8 @@ def test_sampled_converges_to_continuous(tmp_path):
      ["&controller 'c1'", "'u_min'", "'u_max'"]),
     ("actuator = 'j1.torque', measure = 'j1.angle', kp = 1.0, reference = 'nope'",
      ["&controller 'c1'", "'reference'", "'nope'"]),
-    ("measure = 'j1.angle', kp = 1.0", ["&controller 'c1'", "'actuator'"]),    ("actuator = 'j1.torque', 'j1.torque', measure = 'j1.angle', kp = 1.0",
+    ("measure = 'j1.angle', kp = 1.0", ["&controller 'c1'", "'actuator'"]),    # Two different actuators ('j1.torque' twice is refused by the reader as a repeat).
+    ("actuator = 'j1.torque', 'tip.fx', measure = 'j1.angle', kp = 1.0",
      ["&controller 'c1'", "law = 'pid'", "one 'actuator'"]),
     ("actuator = 'j1.torque', measure = 'j1.angle', 'tip.x', kp = 1.0",
      ["&controller 'c1'", "one 'measure'"]),

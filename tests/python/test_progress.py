@@ -57,7 +57,7 @@ DURATION = r"(\d+\.\d) (s|min|h)"
 # A line whose fraction has hardly moved (a reduced run's first line after a basis update) may
 # promise 'more than 10000 h'; steps too small to finish would be named before the ETA.
 ETA = (r"(?:, steps of about \S+ s \(under 1e-7 of the run: too small to finish; a singular "
-       r"configuration\?\))?"
+       r"configuration, or t_end too long\?\))?"
        r"(?:, ETA " + DURATION + r"|, ETA more than 10000 h"
        r"|, ETA unknown: no progress since the last line)?$")
 TIME_LINE = re.compile(

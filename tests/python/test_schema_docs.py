@@ -52,3 +52,22 @@ def test_units_agree():
     wrong = {k: (declared[k][3], docs[k]) for k in declared
              if norm(declared[k][3]) != norm(docs[k])}
     assert wrong == {}
+
+
+def documented_ranges():
+    """(group, name) -> range text, from the table of the 'Value ranges' section."""
+    text = (ROOT / "docs" / "input.md").read_text()
+    section = text.split("\n## Value ranges\n", 1)[1].split("\n## ", 1)[0]
+    found = {}
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 3 and cells[0].startswith("`"):
+            found[(cells[0].strip("`"), cells[1].strip("`"))] = cells[2]
+    return found
+
+
+def test_ranges_agree():
+    """Every declared range is in the table with the same text, and nothing else is."""
+    declared = {k: r[5] for k, r in schema().items() if r[5]}
+    assert len(declared) > 60
+    assert documented_ranges() == declared

@@ -33,7 +33,7 @@ BASE = """
 SWEEP = """
 &sweep base = 'base.nml', mode = 'product' /
 &parameter name = 'motion.m1.end', values = 0.3, 0.6, 0.9 /
-&parameter name = 'link.arm.E', values = 7.0e10, -1.0 /
+&parameter name = 'link.arm.n_elements', values = 2, 5000 /
 """
 
 
@@ -75,9 +75,11 @@ def serial(tmp_path_factory):
 
 def test_serial_sweep_records_every_case(serial):
     _, res, proc = serial
-    assert list(res["status"][::2]) == [0, 0, 0]          # E = 7e10
-    assert all(s == 1 for s in res["status"][1::2])       # E = -1: input error, recorded
-    assert all("'E'" in m and "positive" in m for m in res["message"][1::2])
+    assert list(res["status"][::2]) == [0, 0, 0]          # n_elements = 2
+    # n_elements = 5000: an input error of the case (too large), recorded. A value beyond
+    # the schema's range (E = -1) is refused before any case runs: test_out_of_range_value.
+    assert all(s == 1 for s in res["status"][1::2])
+    assert all("too large" in m for m in res["message"][1::2])
     assert all(m == "" for m in res["message"][::2])
     ok = res["status"] == 0
     for name in ("max_tip_deflection", "residual_vibration", "n_steps", "n_model_evals"):
@@ -207,6 +209,24 @@ def test_bad_sweep_input(tmp_path, name):
     for fragment in fragments:
         assert fragment in err
     assert not (tmp_path / "out.h5").exists()
+
+
+def test_out_of_range_value(tmp_path):
+    """A value the scene schema refuses (E = -1, rho = 1e-40 below its 1e-30) stops the sweep
+    before any case runs, naming the parameter and the first case that has it."""
+    for extra, fragments in [
+            ("&parameter name = 'link.arm.E', values = 7.0e10, -1.0 /",
+             ["link.arm.E", "case 2", "'E' of &link", "must be positive, in [1e-30, 1e30]",
+              "-1"]),
+            ("&parameter name = 'link.arm.rho', min = 1e-40, max = 1e-35 /",
+             ["link.arm.rho", "case 1", "'rho' of &link", "1e-30"])]:
+        mode = "random', n_samples = 3" if "min" in extra else "product'"
+        write_inputs(tmp_path, sweep=f"&sweep base = 'base.nml', mode = '{mode} /\n{extra}\n")
+        proc = run_sweep(tmp_path)
+        assert proc.returncode == 1, proc.stdout + proc.stderr
+        for fragment in fragments:
+            assert fragment in proc.stderr
+        assert not (tmp_path / "out.h5").exists()
 
 
 def test_zero_samples(tmp_path):
@@ -340,7 +360,7 @@ def test_case_files(tmp_path, ranks):
         result = flexmor.read_result(sweep.case_file(i))
         assert result.attrs["n_steps"] == sweep.metric("n_steps")[i]
         overrides = result.attrs["input_overrides"]
-        assert overrides.startswith("motion.m1.end = ") and ", link.arm.E = " in overrides
+        assert overrides.startswith("motion.m1.end = ") and ", link.arm.n_elements = " in overrides
         assert float(overrides.split(",")[0].split("=")[1]) == pytest.approx(
             sweep.parameter("motion.m1.end")[i], rel=1e-9)
     with pytest.raises(flexmor.SweepFileError, match="has no result file"):
