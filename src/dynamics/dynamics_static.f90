@@ -27,6 +27,7 @@ module dynamics_static
   use core_progress, only: progress_t
   use core_strings, only: int_str, real_str
   use dynamics_static_krylov, only: krylov_statics_t, difference_step
+  use dynamics_frequencies, only: is_symmetric, stability_scale
   implicit none
   private
   public :: tangent_stiffness, motion_tangent, static_solve, stable_tangent, STABILITY_MARGIN, &
@@ -207,12 +208,9 @@ contains
     real(wp), intent(in) :: k(:, :), m(:, :)
     real(wp), allocatable :: a(:, :)
     real(wp) :: s, wr(size(k, 1)), wi(size(k, 1))
-    integer :: i, info
-    s = 0
-    do i = 1, size(k, 1)
-      if (m(i, i) > 0) s = max(s, abs(k(i, i)) / m(i, i))
-    end do
-    if (maxval(abs(k - transpose(k))) <= 1.0e-12_wp * maxval(abs(k))) then
+    integer :: info
+    s = stability_scale(k, m)
+    if (is_symmetric(k)) then
       allocate(a, source=k + (STABILITY_MARGIN * s) * m)
       call chol_factor(a, info)
       stable = info == 0
