@@ -14,7 +14,7 @@
 !> (K_T - sigma Mbar) y = b is solved as (I + P^-1 K_L) y = P^-1 b, P = K0 - sigma Mbar, by
 !> GMRES on products K_L z differenced along z (dynamics_static_krylov's load_product, two
 !> evaluations each), as the dense path differences K_T. Not for elastic (calculable) modes,
-!> moments fixed in space (the dense path takes their tangent's symmetric part) or modes
+!> moments fixed in space (an unsymmetric tangent: the dense path's full problem) or modes
 !> along a motion.
 module reduction_krylov
   use core_kinds, only: wp
