@@ -24,7 +24,7 @@ module analysis_run
   use integrators_system, only: integrator_options_t, integrator_stats_t, INTEGRATOR_GALPHA
   use core_progress, only: progress_t
   use integrators_driver, only: integrate
-  use core_strings, only: int_str, real_str, approx_str
+  use core_strings, only: int_str, real_str, approx_str, hz_list
   use reduction_basis, only: basis_t, held_joints
   use reduction_system, only: reduced_t
   use reduction_expansion, only: expansion_unsupported
@@ -305,8 +305,8 @@ contains
           call err%prefix('group &modal: variable ''time'': ')
         return
       end if
-      if (this%verbose) write(*, '(a,*(f0.3,:,", "))') 'modal: frequencies [Hz]: ', &
-        this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz)))
+      if (this%verbose) write(*, '(a)') 'modal: frequencies [Hz]: ' // &
+        hz_list(this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz))))
       flush(output_unit)
     end if
     if (this%scene%buckling%active) then

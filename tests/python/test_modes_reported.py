@@ -111,7 +111,13 @@ def test_rigid_body_frequencies_come_lowest_first_with_their_shapes(tmp_path):
 &modal /
 &linear inputs = 'b.fy', outputs = 'b.y' /
 """
-    with h5py.File(run_ok(tmp_path, text, "free")) as f:
+    proc, out = run_scene(tmp_path, text, name="free", quiet=False)
+    assert proc.returncode == 0, proc.stderr
+    # The progress line printed the rounding zeros as '.000' (f0.3 drops the leading zero).
+    line = next(l for l in proc.stdout.splitlines() if l.startswith("modal: frequencies"))
+    assert line.split("]: ", 1)[1].startswith("0.000, 0.000"), line
+    assert " .000" not in line and "-.000" not in line, line
+    with h5py.File(out) as f:
         f_modal = f["modal/frequency_hz"][:]
         shapes = f["modal/shapes"][:]
         a = f["linear/A"][0]
