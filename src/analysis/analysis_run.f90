@@ -444,7 +444,11 @@ contains
     call buckling_analysis(this%dyn, 0.0_wp, this%q_static, this%scene%buckling%n_modes, &
       this%scene%buckling%load_factor, this%buckling, err, solver=this%scene%buckling%solver)
     if (.not. err%ok()) return
-    if (size(this%buckling%load_factor) == 0) then
+    if (size(this%buckling%load_factor) == 0 .and. this%buckling%n_complex > 0) then
+      call add_warning(this, 'buckling: no real positive load multiplier: the moments ' // &
+        'fixed in space make K_G unsymmetric, and its ' // int_str(this%buckling%n_complex) &
+        // ' complex ones are no static critical loads (no divergence); /buckling is empty')
+    else if (size(this%buckling%load_factor) == 0) then
       call add_warning(this, 'buckling: no positive load multiplier: the loads compress ' // &
         'nothing (tension only?); /buckling is empty')
     else if (this%verbose) then

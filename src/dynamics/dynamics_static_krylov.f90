@@ -69,7 +69,7 @@ contains
   !> Why the Krylov eigenproblems (buckling, modes) cannot reproduce this model's dense
   !> tangent, '' when they can: they need the sparse factors of K0 and its stresses linear in
   !> q (no elastic modes), and the tangent of a moment fixed in space is not symmetric (the
-  !> dense paths take its full problem for modes, its symmetric part for buckling).
+  !> dense paths solve its full, unsymmetric problem).
   function krylov_tangent_unsupported(dyn) result(why_not)
     type(dynamics_t), intent(in) :: dyn
     character(len=:), allocatable :: why_not
