@@ -324,9 +324,8 @@ contains
           kf = k
           call lu_factor(kf, ipiv, info, rcond)
           if (info /= 0 .or. rcond < 1.0e-12_wp) then
-            write(msg, '(a,f8.5,a)') 'static analysis: the tangent stiffness is singular at ' &
-              // 'load factor ', lambda, ' (buckling or a mechanism)'
-            call err%set(ERR_NUMERIC, trim(msg))
+            call err%set(ERR_NUMERIC, 'static analysis: the tangent stiffness is singular ' &
+              // 'at load factor ' // real_str(lambda) // ' (buckling or a mechanism)')
             exit
           end if
           refresh = .false.
@@ -359,9 +358,10 @@ contains
         r_prev = maxval(abs(r))
       end do
       if (err%ok() .and. it > max_iter) then
-        write(msg, '(a,i0,a,f8.5,a,es10.3)') 'static analysis: Newton did not converge in ', &
-          max_iter, ' iterations at load factor ', lambda, ', last correction ', maxval(abs(r))
-        call err%set(ERR_NUMERIC, trim(msg))
+        write(msg, '(es10.3)') maxval(abs(r))
+        call err%set(ERR_NUMERIC, 'static analysis: Newton did not converge in ' // &
+          int_str(max_iter) // ' iterations at load factor ' // real_str(lambda) // &
+          ', last correction ' // trim(adjustl(msg)))
       end if
       if (.not. err%ok()) exit
       ! The stability of the equilibrium needs the tangent at it (within tol).

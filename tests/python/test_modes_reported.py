@@ -7,7 +7,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import ROOT, run_scene
+from helpers import ROOT, assert_clean_error, run_scene
 
 #: Aluminium strip of input/roll_up.nml: E I about z (in the x-y plane), E Iy about y.
 STRIP = dict(E=7.0e10, A=1.0e-4, I=0.8e-9, Iy=2.0e-9, rho=2700.0, L=1.5)
@@ -156,3 +156,16 @@ def test_fixed_end_moment_gives_no_divergence_buckling(tmp_path):
     euler = [math.pi**2 * STRIP["E"] * i / (4 * STRIP["L"] ** 2)
              for i in (STRIP["I"], STRIP["Iy"])]
     assert mu == pytest.approx(euler, rel=1e-3)
+
+
+def test_singular_static_tangent_message(tmp_path):
+    """A free body under a load in statics is a mechanism: the error names the load factor as
+    a number, 'load factor 0.5 (' (it read 'load factor  0.50000', f8.5 with its blank)."""
+    text = """&scene dimension = 3 /
+&node label = 'body', x = 0, y = 0, z = 0, dynamic = 'x', 'y', 'z', 'rotation' /
+&mass node = 'body', m = 2.0, inertia = 1.0, 2.0, 3.0, 0.0, 0.0, 0.0 /
+&force node = 'body', fx = 1.0 /
+&static n_steps = 2 /
+"""
+    proc, out = run_scene(tmp_path, text, name="free_static")
+    assert_clean_error(proc, out, "singular at load factor 0.5 (buckling or a mechanism)")
