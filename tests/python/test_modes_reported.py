@@ -169,3 +169,19 @@ def test_singular_static_tangent_message(tmp_path):
 """
     proc, out = run_scene(tmp_path, text, name="free_static")
     assert_clean_error(proc, out, "singular at load factor 0.5 (buckling or a mechanism)")
+
+
+@pytest.mark.parametrize("solver", ["dense", "krylov"])
+def test_static_newton_failure_message(tmp_path, solver):
+    """One Newton iteration cannot bend a cantilever 0.13 rad: both static solvers say so
+    with the load factor as a number and no padding ('load factor 1, last correction 2.257E-03';
+    the Krylov path read 'load factor  1.00000, last correction  2.257E-03')."""
+    text = cantilever_scene(8, 0.0).replace("&scene dimension = 3 /",
+                                            "&scene dimension = 3, linear_solver = 'sparse' /")
+    text = text.replace("mz = 0.0", "fy = 5.0").replace(
+        "&static n_steps = 1, n_frequencies = 2 /",
+        f"&static n_steps = 1, max_iter = 1, solver = '{solver}' /")
+    proc, out = run_scene(tmp_path, text, name=f"newton_{solver}")
+    assert_clean_error(proc, out, "did not converge in 1 iterations at load factor 1, last "
+                       "correction ")
+    assert "  " not in proc.stderr.strip(), proc.stderr
