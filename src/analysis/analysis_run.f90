@@ -448,6 +448,11 @@ contains
       call add_warning(this, 'buckling: no real positive load multiplier: the moments ' // &
         'fixed in space make K_G unsymmetric, and its ' // int_str(this%buckling%n_complex) &
         // ' complex ones are no static critical loads (no divergence); /buckling is empty')
+    else if (size(this%buckling%load_factor) == 0 .and. &
+        size(this%dyn%model%load_motion) > 0) then
+      call add_warning(this, 'buckling: no positive load multiplier: the loads compress ' // &
+        'nothing (tension only? loads with a time_law count at their value at t = 0); ' // &
+        '/buckling is empty')
     else if (size(this%buckling%load_factor) == 0) then
       call add_warning(this, 'buckling: no positive load multiplier: the loads compress ' // &
         'nothing (tension only?); /buckling is empty')

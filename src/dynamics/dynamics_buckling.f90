@@ -118,8 +118,10 @@ contains
         '(everything is fixed or prescribed), so nothing can buckle')
       return
     end if
+    ! A &force with a time_law is a load too (held in load_motion, not in force): statics
+    ! and buckling take it at its value at t = 0.
     if (.not. (any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0) .or. &
-        size(dyn%model%moment_lambda) > 0)) then
+        size(dyn%model%moment_lambda) > 0 .or. size(dyn%model%load_motion) > 0)) then
       call err%set(ERR_INPUT, 'group &buckling: the scene has no load (no &force and no ' // &
         'gravity) to take the buckling multipliers of')
       return
