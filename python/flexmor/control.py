@@ -49,7 +49,8 @@ def frequency_response(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarra
 
     Solves (i w I - A) X = B for each w rather than inverting: the inverse of a matrix with
     eigenvalues near i w loses the digits the solve keeps. The solves are batched in chunks
-    that keep the stacked matrices to about 64 MB."""
+    that keep the stacked matrices to about 64 MB. ``ValueError`` at a ``w`` where i w I - A is
+    singular: i w is a pole (w = 0 with rigid-body modes), where G is infinite."""
     a, b, c, d = (np.asarray(m, dtype=float) for m in (a, b, c, d))
     w = np.atleast_1d(np.asarray(w, dtype=float))
     n = a.shape[0]
@@ -59,9 +60,24 @@ def frequency_response(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarra
     for start in range(0, w.size, chunk):
         ws = w[start:start + chunk]
         m = 1j * ws[:, None, None] * eye - a
-        x = np.linalg.solve(m, np.broadcast_to(b, (ws.size, *b.shape)))
+        try:
+            x = np.linalg.solve(m, np.broadcast_to(b, (ws.size, *b.shape)))
+        except np.linalg.LinAlgError:
+            # numpy names no matrix of the batch: find the first singular one for the message.
+            bad = next((wk for wk, mk in zip(ws, m) if _singular(mk)), ws[0])
+            raise ValueError(f"the frequency response is infinite at w = {bad:g} rad/s: i w "
+                             f"is an eigenvalue of A (a pole on the imaginary axis; rigid-body "
+                             f"modes have their poles at 0)") from None
         out[start:start + chunk] = c @ x + d
     return out
+
+
+def _singular(m: np.ndarray) -> bool:
+    try:
+        np.linalg.solve(m, np.ones(m.shape[0]))
+    except np.linalg.LinAlgError:
+        return True
+    return False
 
 
 def transmission_zeros(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: float = 0.0
@@ -181,14 +197,18 @@ class Linear:
                            input: str | int | None = None,
                            output: str | int | None = None) -> np.ndarray:
         """G(i w) at angular frequencies ``w`` [rad/s] (see :func:`frequency_response`):
-        (n_w, n_y, n_u), or (n_w,) for one ``input`` and ``output`` (give both or neither)."""
+        (n_w, n_y, n_u), or (n_w,) for one ``input`` and ``output`` (give both or neither).
+        ``ValueError`` naming the file at a pole on the imaginary axis (G infinite)."""
         a, b, c, d = self.matrices(k)
         if (input is None) != (output is None):
             raise ValueError("give both input and output, or neither")
-        if input is None:
-            return frequency_response(a, b, c, d, w)
-        i, j = self.input_index(input), self.output_index(output)
-        return frequency_response(a, b[:, [i]], c[[j], :], d[[j]][:, [i]], w)[:, 0, 0]
+        try:
+            if input is None:
+                return frequency_response(a, b, c, d, w)
+            i, j = self.input_index(input), self.output_index(output)
+            return frequency_response(a, b[:, [i]], c[[j], :], d[[j]][:, [i]], w)[:, 0, 0]
+        except ValueError as e:
+            raise ValueError(f"{self.path}: linearisation {k}: {e}") from None
 
     def dc_gain(self, k: int = 0) -> np.ndarray:
         """-C A^-1 B + D (n_y, n_u). ``ValueError`` when A is singular: a model with

@@ -24,7 +24,7 @@ module analysis_run
   use integrators_system, only: integrator_options_t, integrator_stats_t, INTEGRATOR_GALPHA
   use core_progress, only: progress_t
   use integrators_driver, only: integrate
-  use core_strings, only: int_str, real_str, approx_str
+  use core_strings, only: int_str, real_str, approx_str, hz_list
   use reduction_basis, only: basis_t, held_joints
   use reduction_system, only: reduced_t
   use reduction_expansion, only: expansion_unsupported
@@ -313,8 +313,8 @@ contains
           call err%prefix('group &modal: variable ''time'': ')
         return
       end if
-      if (this%verbose) write(*, '(a,*(f0.3,:,", "))') 'modal: frequencies [Hz]: ', &
-        this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz)))
+      if (this%verbose) write(*, '(a)') 'modal: frequencies [Hz]: ' // &
+        hz_list(this%modal%frequency_hz(1:min(6, size(this%modal%frequency_hz))))
       flush(output_unit)
     end if
     if (this%scene%buckling%active) then
@@ -414,7 +414,16 @@ contains
     call buckling_analysis(this%dyn, 0.0_wp, this%q_static, this%scene%buckling%n_modes, &
       this%scene%buckling%load_factor, this%buckling, err, solver=this%scene%buckling%solver)
     if (.not. err%ok()) return
-    if (size(this%buckling%load_factor) == 0) then
+    if (size(this%buckling%load_factor) == 0 .and. this%buckling%n_complex > 0) then
+      call add_warning(this, 'buckling: no real positive load multiplier: the moments ' // &
+        'fixed in space make K_G unsymmetric, and its ' // int_str(this%buckling%n_complex) &
+        // ' complex ones are no static critical loads (no divergence); /buckling is empty')
+    else if (size(this%buckling%load_factor) == 0 .and. &
+        size(this%dyn%model%load_motion) > 0) then
+      call add_warning(this, 'buckling: no positive load multiplier: the loads compress ' // &
+        'nothing (tension only? loads with a time_law count at their value at t = 0); ' // &
+        '/buckling is empty')
+    else if (size(this%buckling%load_factor) == 0) then
       call add_warning(this, 'buckling: no positive load multiplier: the loads compress ' // &
         'nothing (tension only?); /buckling is empty')
     else if (this%verbose) then

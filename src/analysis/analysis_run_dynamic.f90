@@ -193,9 +193,9 @@ contains
       TWO_PI * maxval(this%red%basis%frequency_hz))
     if (run_opts%method == INTEGRATOR_ERK) call warn_explicit_on_stiff(this, &
       TWO_PI * maxval(this%red%basis%frequency_hz))
-    if (this%verbose) write(*, '(a,i0,a,*(f0.3,:,", "))') 'reduction: ', &
-      this%red%basis%k(), ' modes (' // this%red%basis%reason // '), [Hz]: ', &
-      this%red%basis%frequency_hz
+    if (this%verbose) write(*, '(a,i0,a)') 'reduction: ', &
+      this%red%basis%k(), ' modes (' // this%red%basis%reason // '), [Hz]: ' // &
+      hz_list(this%red%basis%frequency_hz)
     flush(output_unit)
     call this%red%allocate_history(size(this%time))
     this%red%dyn%controls_on = this%dyn%controls_on

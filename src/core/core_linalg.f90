@@ -212,21 +212,29 @@ contains
 
   !> Eigenvalues of the general (unsymmetric) problem k v = lambda m v: real parts wr,
   !> imaginary parts wi; an infinite eigenvalue (m singular in its direction) has
-  !> wr = huge and wi = 0.
-  subroutine gen_eig_values(k, m, wr, wi, info)
+  !> wr = huge and wi = 0. With vr, the right eigenvectors as dggev stores them: a real
+  !> eigenvalue's in its column, a complex pair's (wi(j) > 0, wi(j + 1) < 0) real part in
+  !> column j and imaginary part in column j + 1.
+  subroutine gen_eig_values(k, m, wr, wi, info, vr)
     real(wp), intent(in) :: k(:, :), m(:, :)
     real(wp), intent(out) :: wr(:), wi(:)
     integer, intent(out) :: info
-    real(wp), allocatable :: a(:, :), b(:, :), work(:)
-    real(wp) :: beta(size(wr)), wq(1), vl(1, 1), vr(1, 1)
+    real(wp), intent(out), optional :: vr(:, :)
+    real(wp), allocatable :: a(:, :), b(:, :), work(:), v(:, :)
+    real(wp) :: beta(size(wr)), wq(1), vl(1, 1)
     integer :: n, i
+    character :: jobvr
     n = size(k, 1)
     allocate(a, source=k)
     allocate(b, source=m)
-    call dggev('N', 'N', n, a, n, b, n, wr, wi, beta, vl, 1, vr, 1, wq, -1, info)
+    jobvr = 'N'
+    if (present(vr)) jobvr = 'V'
+    allocate(v(max(n, 1), merge(n, 1, present(vr))))
+    call dggev('N', jobvr, n, a, n, b, n, wr, wi, beta, vl, 1, v, size(v, 1), wq, -1, info)
     allocate(work(int(wq(1))))
-    call dggev('N', 'N', n, a, n, b, n, wr, wi, beta, vl, 1, vr, 1, work, size(work), &
-      info)
+    call dggev('N', jobvr, n, a, n, b, n, wr, wi, beta, vl, 1, v, size(v, 1), work, &
+      size(work), info)
+    if (present(vr)) vr = v(1:n, 1:n)
     do i = 1, n
       if (abs(beta(i)) > tiny(1.0_wp) * max(abs(wr(i)), abs(wi(i)), 1.0_wp)) then
         wr(i) = wr(i) / beta(i)

@@ -3,7 +3,7 @@ module core_strings
   use core_kinds, only: wp
   implicit none
   private
-  public :: int_str, real_str, approx_str, lower_case, after_bom, printable
+  public :: int_str, real_str, approx_str, hz_list, lower_case, after_bom, printable
 
 contains
 
@@ -41,6 +41,29 @@ contains
     if (s(m:m) == '.') m = m - 1
     s = s(:m) // s(e:)
   end function real_str
+
+  !> Frequencies for the progress lines, three decimals, comma-separated: '0.000, 4.866'.
+  !> The f0.3 edit descriptor leaves the leading zero out ('.000', '-.000' for the rounding
+  !> of a rigid-body mode), which read like a lost digit.
+  pure function hz_list(f) result(s)
+    real(wp), intent(in) :: f(:)
+    character(len=:), allocatable :: s
+    character(len=48) :: buf
+    integer :: i, dot
+    s = ''
+    do i = 1, size(f)
+      write(buf, '(f0.3)') f(i)
+      dot = index(buf, '.')
+      ! f0.3 of a frequency is far shorter than buf: the prefixed digit drops only blanks.
+      if (dot == 1) then
+        buf = '0' // buf(:len(buf) - 1)
+      else if (dot == 2 .and. buf(1:1) == '-') then
+        buf = '-0' // buf(2:len(buf) - 1)
+      end if
+      if (i > 1) s = s // ', '
+      s = s // trim(buf)
+    end do
+  end function hz_list
 
   !> About three significant digits, for estimates in messages: 192, 13.3, 0.0441, 1.20E+09.
   pure function approx_str(x) result(s)

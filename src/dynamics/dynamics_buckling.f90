@@ -11,6 +11,8 @@
 !> reversed load, and a theta of zero (a direction the loads do not soften or stiffen, e.g.
 !> axial stretching) a multiplier at infinity. Only positive multipliers are reported, lowest
 !> first: a load that only pulls (tension everywhere) has none, and the result is then empty.
+!> Moments fixed in space make K_G unsymmetric: then only real theta of that full problem count
+!> (divergence, as the static stability test; divergence_multipliers).
 !> Since the load part is linear in the load at a fixed configuration, lambda_ref matters only
 !> through the round-off of the difference tangent. Load that elastic (calculable) modes carry
 !> (an indeterminate load path) deforms the configuration before it stresses them: its share
@@ -25,7 +27,7 @@
 module dynamics_buckling
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_INPUT, ERR_MODEL, ERR_NUMERIC
-  use core_linalg, only: sym_gen_eig, chol_factor, chol_solve
+  use core_linalg, only: sym_gen_eig, chol_factor, chol_solve, gen_eig_values
   use core_strings, only: int_str
   use core_sort, only: sort_by_value
   use dynamics_system, only: dynamics_t
@@ -66,6 +68,8 @@ module dynamics_buckling
     real(wp), allocatable :: k0(:, :), kg(:, :) !< K0 and K_G (per unit load factor)
     !> multipliers of the reversed load left out (-1: not counted, the matrix-free path)
     integer :: n_negative = 0
+    !> complex theta left out (moments fixed in space: no divergence in their directions)
+    integer :: n_complex = 0
     !> the load factor K_G was differenced at: &buckling load_factor, or above it where the
     !> load part would have been lost in the round-off of K0 (RESOLVED)
     real(wp) :: reference_load_factor = 1.0_wp
@@ -93,6 +97,8 @@ contains
     real(wp) :: saved, big, lambda, ratio
     integer :: n, info, i, nk, nz, attempt
     integer, allocatable :: keep(:)
+    logical, allocatable :: real_theta(:)
+    logical :: unsymmetric
     n = dyn%model%n_dy
     if (n_modes < 1) then
       call err%set(ERR_INPUT, 'group &buckling: variable ''n_modes'' must be at least 1')
@@ -112,8 +118,10 @@ contains
         '(everything is fixed or prescribed), so nothing can buckle')
       return
     end if
+    ! A &force with a time_law is a load too (held in load_motion, not in force): statics
+    ! and buckling take it at its value at t = 0.
     if (.not. (any(dyn%model%force /= 0) .or. any(dyn%model%gravity /= 0) .or. &
-        size(dyn%model%moment_lambda) > 0)) then
+        size(dyn%model%moment_lambda) > 0 .or. size(dyn%model%load_motion) > 0)) then
       call err%set(ERR_INPUT, 'group &buckling: the scene has no load (no &force and no ' // &
         'gravity) to take the buckling multipliers of')
       return
@@ -169,10 +177,13 @@ contains
       call err%prefix('buckling analysis: ')
       return
     end if
-    ! Symmetric for conservative loads; of a moment fixed in space only the symmetric part
-    ! enters (the linearised problem of a non-conservative load is not symmetric).
+    ! Symmetric for conservative loads (the symmetrisation removes difference noise). Of a
+    ! moment fixed in space, not conservative in 3D, the whole K_G enters: its symmetric part
+    ! gave the roll-up by an end moment a multiplier of 0.664 where the load path stays stable
+    ! to the full load (divergence_multipliers).
     res%reference_load_factor = lambda
-    res%kg = 0.5_wp * (res%kg + transpose(res%kg))
+    unsymmetric = size(dyn%model%moment_lambda) > 0
+    if (.not. unsymmetric) res%kg = 0.5_wp * (res%kg + transpose(res%kg))
     z = identity(n)
     if (present(held)) then
       do i = 1, size(held)
@@ -191,26 +202,35 @@ contains
         'released hinge or a free rigid-body motion)')
       return
     end if
-    allocate(theta(nz), v(nz, nz))
-    call sym_gen_eig(-kgz, k0z, theta, v, info)
+    allocate(theta(nz), v(nz, nz), real_theta(nz))
+    real_theta = .true.
+    if (unsymmetric) then
+      call divergence_multipliers(kgz, k0z, theta, v, real_theta, big, info)
+      res%n_complex = count(.not. real_theta)
+    else
+      call sym_gen_eig(-kgz, k0z, theta, v, info)
+    end if
     if (info /= 0) then
-      call err%set(ERR_NUMERIC, 'buckling analysis: LAPACK dsygvd failed (info = ' // &
+      call err%set(ERR_NUMERIC, 'buckling analysis: LAPACK ' // &
+        trim(merge('dggev ', 'dsygvd', unsymmetric)) // ' failed (info = ' // &
         int_str(info) // ')')
       return
     end if
-    ! Rayleigh quotients of dsygvd's vectors: second-order accurate in the vector, free of the
-    ! rounding of dsygvd's reduction with the Cholesky factor of an ill-conditioned K0.
-    do i = 1, nz
-      theta(i) = -dot_product(v(:, i), matmul(kgz, v(:, i))) / &
-        dot_product(v(:, i), matmul(k0z, v(:, i)))
-    end do
-    big = maxval(abs(theta))
+    if (.not. unsymmetric) then
+      ! Rayleigh quotients of dsygvd's vectors: second-order accurate in the vector, free of
+      ! the rounding of dsygvd's reduction with the Cholesky factor of an ill-conditioned K0.
+      do i = 1, nz
+        theta(i) = -dot_product(v(:, i), matmul(kgz, v(:, i))) / &
+          dot_product(v(:, i), matmul(k0z, v(:, i)))
+      end do
+      big = maxval(abs(theta))
+    end if
     allocate(keep(0))
     ! Largest theta first = lowest mu first (the polish may swap close neighbours: sort).
     do i = 1, nz
-      if (theta(i) > THETA_CUTOFF * big) keep = [keep, i]
+      if (real_theta(i) .and. theta(i) > THETA_CUTOFF * big) keep = [keep, i]
     end do
-    res%n_negative = count(theta < -THETA_CUTOFF * big)
+    res%n_negative = count(real_theta .and. theta < -THETA_CUTOFF * big)
     call sort_by_value(keep, -theta)
     nk = min(n_modes, size(keep))
     keep = keep(1:nk)
@@ -219,6 +239,25 @@ contains
     res%node_shapes = matmul(dyn%kin%df(:, dyn%model%n_rh + 1:), res%shapes)
     call normalise(dyn, res)
   end subroutine buckling_analysis
+
+  !> theta = 1/mu of -K_G v = theta K0 v with K_G unsymmetric (moments fixed in space), by
+  !> LAPACK dggev. Buckling is then divergence, a real theta, as the static stability test
+  !> decides it (dynamics_static's stable_tangent); a complex theta (is_real false) is no
+  !> static critical load and is left out. big: the largest |theta|; a theta whose imaginary
+  !> part is below THETA_CUTOFF of it counts as real (the round-off of the difference K_G).
+  !> v: real eigenvectors (a complex pair's real and imaginary parts, unused).
+  subroutine divergence_multipliers(kg, k0, theta, v, is_real, big, info)
+    real(wp), intent(in) :: kg(:, :), k0(:, :)
+    real(wp), intent(out) :: theta(:), v(:, :), big
+    logical, intent(out) :: is_real(:)
+    integer, intent(out) :: info
+    real(wp) :: wi(size(theta))
+    call gen_eig_values(-kg, k0, theta, wi, info, v)
+    big = 0
+    if (info /= 0) return
+    big = maxval(abs(cmplx(theta, wi, wp)))
+    is_real = abs(wi) <= THETA_CUTOFF * big
+  end subroutine divergence_multipliers
 
   !> Adds to kg the change of the unloaded tangent along the linear pre-buckling response
   !> dq = K0^-1 (F(1) - F(0)) per unit load factor (F the loads' and elastic modes'

@@ -11,7 +11,7 @@
 !>
 !> It needs K0 = K_T(0) exactly as the factors hold it: no elastic (calculable) modes, whose
 !> stresses at a loaded state would add a geometric term to K_T(0); no moments fixed in space
-!> (the dense path takes their tangent's symmetric part, which products cannot give); no extra
+!> (their K_G is unsymmetric: the dense path keeps its real multipliers only); no extra
 !> supports of the buckling problem alone; and K0 regular (the dense path requires it too).
 module dynamics_buckling_krylov
   use core_kinds, only: wp

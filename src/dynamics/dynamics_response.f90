@@ -25,8 +25,9 @@ module dynamics_response
   use core_error, only: error_t, ERR_NUMERIC
   use core_linalg, only: lu_factor, lu_solve, sym_gen_eig
   use dynamics_system, only: dynamics_t
-  use dynamics_static, only: tangent_stiffness
+  use dynamics_static, only: tangent_stiffness, STABILITY_MARGIN
   use dynamics_static_krylov, only: krylov_statics_t
+  use dynamics_frequencies, only: general_modes, is_symmetric, stability_scale
   use elements_rotation, only: euler_e
   implicit none
   private
@@ -288,16 +289,23 @@ contains
     end do
   end subroutine compliance
 
-  !> Lowest natural frequencies of K_T v = omega^2 Mbar v [Hz]; a negative omega^2 (an unstable
-  !> equilibrium) is reported as a negative frequency, -sqrt(-omega^2)/(2 pi).
+  !> Lowest natural frequencies of K_T v = omega^2 Mbar v [Hz], lowest first; a negative
+  !> omega^2 (an unstable equilibrium) is reported as a negative frequency,
+  !> -sqrt(-omega^2)/(2 pi). An unsymmetric K_T (moments fixed in space) gives the full
+  !> problem's modes (dynamics_frequencies), on which the stability test decides too.
   subroutine lowest_frequencies(k, mbar, f, err)
     real(wp), intent(in) :: k(:, :), mbar(:, :)
     real(wp), intent(out) :: f(:)
     type(error_t), intent(inout) :: err
-    real(wp) :: lambda(size(k, 1)), v(size(k, 1), size(k, 1))
+    real(wp), allocatable :: lambda(:), v(:, :)
     integer :: info
-    ! Symmetric part: the tangent of a moment fixed in space is not symmetric (dynamics_static).
-    call sym_gen_eig(0.5_wp * (k + transpose(k)), mbar, lambda, v, info)
+    if (is_symmetric(k)) then
+      allocate(lambda(size(k, 1)), v(size(k, 1), size(k, 1)))
+      call sym_gen_eig(k, mbar, lambda, v, info)
+    else
+      call general_modes(k, mbar, size(f), STABILITY_MARGIN * stability_scale(k, mbar), &
+        lambda, v, info)
+    end if
     if (info /= 0) then
       call err%set(ERR_NUMERIC, 'static frequencies: the eigenvalue problem failed (is the ' // &
         'mass matrix positive definite?)')

@@ -27,6 +27,7 @@ module dynamics_static
   use core_progress, only: progress_t
   use core_strings, only: int_str, real_str
   use dynamics_static_krylov, only: krylov_statics_t, difference_step
+  use dynamics_frequencies, only: is_symmetric, stability_scale
   implicit none
   private
   public :: tangent_stiffness, motion_tangent, static_solve, static_uses_krylov, stable_tangent, &
@@ -221,12 +222,9 @@ contains
     real(wp), intent(in) :: k(:, :), m(:, :)
     real(wp), allocatable :: a(:, :)
     real(wp) :: s, wr(size(k, 1)), wi(size(k, 1))
-    integer :: i, info
-    s = 0
-    do i = 1, size(k, 1)
-      if (m(i, i) > 0) s = max(s, abs(k(i, i)) / m(i, i))
-    end do
-    if (maxval(abs(k - transpose(k))) <= 1.0e-12_wp * maxval(abs(k))) then
+    integer :: info
+    s = stability_scale(k, m)
+    if (is_symmetric(k)) then
       allocate(a, source=k + (STABILITY_MARGIN * s) * m)
       call chol_factor(a, info)
       stable = info == 0
@@ -331,9 +329,8 @@ contains
           kf = k
           call lu_factor(kf, ipiv, info, rcond)
           if (info /= 0 .or. rcond < 1.0e-12_wp) then
-            write(msg, '(a,f8.5,a)') 'static analysis: the tangent stiffness is singular at ' &
-              // 'load factor ', lambda, ' (buckling or a mechanism)'
-            call err%set(ERR_NUMERIC, trim(msg))
+            call err%set(ERR_NUMERIC, 'static analysis: the tangent stiffness is singular ' &
+              // 'at load factor ' // real_str(lambda) // ' (buckling or a mechanism)')
             exit
           end if
           refresh = .false.
@@ -366,9 +363,10 @@ contains
         r_prev = maxval(abs(r))
       end do
       if (err%ok() .and. it > max_iter) then
-        write(msg, '(a,i0,a,f8.5,a,es10.3)') 'static analysis: Newton did not converge in ', &
-          max_iter, ' iterations at load factor ', lambda, ', last correction ', maxval(abs(r))
-        call err%set(ERR_NUMERIC, trim(msg))
+        write(msg, '(es10.3)') maxval(abs(r))
+        call err%set(ERR_NUMERIC, 'static analysis: Newton did not converge in ' // &
+          int_str(max_iter) // ' iterations at load factor ' // real_str(lambda) // &
+          ', last correction ' // trim(adjustl(msg)))
       end if
       if (.not. err%ok()) exit
       ! The stability of the equilibrium needs the tangent at it (within tol).

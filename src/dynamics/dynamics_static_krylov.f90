@@ -17,6 +17,7 @@
 !> dnaupd, smallest real part) on the same products and solves.
 module dynamics_static_krylov
   use core_kinds, only: wp
+  use core_strings, only: real_str
   use core_error, only: error_t, ERR_NUMERIC
   use core_gmres, only: gmres_step, gmres_correct
   use dynamics_system, only: dynamics_t
@@ -74,8 +75,8 @@ contains
 
   !> Why the Krylov eigenproblems (buckling, modes) cannot reproduce this model's dense
   !> tangent, '' when they can: they need the sparse factors of K0 and its stresses linear in
-  !> q (no elastic modes), and the dense path takes the symmetric part of the tangent of a
-  !> moment fixed in space, which products cannot give.
+  !> q (no elastic modes), and the tangent of a moment fixed in space is not symmetric (the
+  !> dense paths solve its full, unsymmetric problem).
   function krylov_tangent_unsupported(dyn, elastic_ok) result(why_not)
     type(dynamics_t), intent(in) :: dyn
     !> The caller differences the whole force (products of K_T, not K_L beside an exact K0)
@@ -120,8 +121,8 @@ contains
       if (.not. err%ok()) return
       if (maxval(abs(dq)) <= tol_abs) return
     end do
-    write(msg, '(a,i0,a,f8.5,a,es10.3)') 'static analysis (krylov): Newton did not converge in ', &
-      max_iter, ' iterations at load factor ', dyn%load_factor, ', last correction ', &
+    write(msg, '(a,i0,a,a,a,es9.3)') 'static analysis (krylov): Newton did not converge in ', &
+      max_iter, ' iterations at load factor ', real_str(dyn%load_factor), ', last correction ', &
       maxval(abs(dq))
     call err%set(ERR_NUMERIC, trim(msg))
   end subroutine kry_equilibrium

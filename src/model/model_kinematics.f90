@@ -459,7 +459,8 @@ contains
       rprev = rmax
       call add_calculable(this, model, dx(:, 1))
     end do
-    write(msg, '(a,i0,a,es10.3)') 'kinematic Newton iteration did not converge in ', it - 1, &
+    ! es10.3 pads with a blank: 'residual  2.091E+02' read like a missing number.
+    write(msg, '(a,i0,a,es9.3)') 'kinematic Newton iteration did not converge in ', it - 1, &
       ' iterations, residual ', rmax
     if (diverged) write(msg, '(a,i0,a)') 'kinematic Newton iteration diverged in ', it - 1, &
       ' iterations (coordinates beyond 1e50 or Euler parameters beyond 1e6)'

@@ -14,10 +14,11 @@ module reduction_eigen
   use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use core_linalg, only: sym_gen_eig, chol_factor
   use core_strings, only: int_str
+  use core_sort, only: sort_by_value
   use reduction_lanczos, only: lanczos_t, LZ_OP, LZ_OP_BX, LZ_B
   implicit none
   private
-  public :: lowest_modes, eigen_solver_choice
+  public :: lowest_modes, eigen_solver_choice, sort_modes
   public :: EIGEN_AUTO_DENSE_MAX_N, EIGEN_AUTO_NEV_DIVISOR
 
   !> solver = 'auto' takes LAPACK when n <= EIGEN_AUTO_DENSE_MAX_N or
@@ -156,7 +157,21 @@ contains
     do j = 1, nev
       if (v(maxloc(abs(v(:, j)), 1), j) < 0) v(:, j) = -v(:, j)
     end do
+    call sort_modes(lambda, v)
   end subroutine lowest_modes
+
+  !> Eigenvalues ascending, the vectors' columns with them. The Rayleigh quotients replace the
+  !> solvers' ascending eigenvalues, and where several are equal in exact arithmetic (the
+  !> zero eigenvalues of rigid-body modes: 1e-40 and -1e-43 in rad^2/s^2) they come out in
+  !> the order of their rounding, not ascending.
+  subroutine sort_modes(lambda, v)
+    real(wp), intent(inout) :: lambda(:), v(:, :)
+    integer :: order(size(lambda)), j
+    order = [(j, j = 1, size(lambda))]
+    call sort_by_value(order, lambda)
+    lambda = lambda(order)
+    v = v(:, order)
+  end subroutine sort_modes
 
   !> Eigenvalues as Rayleigh quotients v^T K v of the M-normalised vectors. Their error is
   !> of second order in the vector error, while dsygvd's eigenvalues carry the rounding of

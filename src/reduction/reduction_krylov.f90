@@ -16,12 +16,13 @@
 !> evaluations each), as the dense path differences K_T. With elastic (calculable) modes,
 !> whose stiffness is in P but comes from the configuration, the whole K_T z is differenced
 !> (extrapolated, as the dense tangent of such models is) and GMRES solves
-!> P^-1 (K_T - sigma Mbar) y = P^-1 b. Not for moments fixed in space (the dense path takes
-!> their tangent's symmetric part) or modes along a motion.
+!> P^-1 (K_T - sigma Mbar) y = P^-1 b. Not for moments fixed in space (an unsymmetric
+!> tangent: the dense path's full problem) or modes along a motion.
 module reduction_krylov
   use core_kinds, only: wp
   use core_error, only: error_t, ERR_NUMERIC
   use reduction_lanczos, only: lanczos_t, LZ_OP, LZ_OP_BX, LZ_B
+  use reduction_eigen, only: sort_modes
   use core_gmres, only: gmres_step, gmres_correct
   use dynamics_system, only: dynamics_t
   use dynamics_static, only: has_loads
@@ -153,6 +154,7 @@ contains
       lambda(j) = dot_product(v(:, j), kv)
       if (v(maxloc(abs(v(:, j)), 1), j) < 0) v(:, j) = -v(:, j)
     end do
+    call sort_modes(lambda, v)
     if (op%loaded .and. err%ok()) call dyn%generalised_force(t, q_dy, 0.0_wp * q_dy, g, err)
     dyn%locked = was_locked
     if (.not. err%ok()) return

@@ -5,12 +5,13 @@
 !> The eigenvectors come back M0-normalised; they are the basis of the reduced models.
 module reduction_modal
   use core_kinds, only: wp
-  use core_error, only: error_t, ERR_INPUT
+  use core_error, only: error_t, ERR_INPUT, ERR_NUMERIC
   use core_strings, only: int_str
   use reduction_eigen, only: lowest_modes
   use reduction_krylov, only: krylov_modes, krylov_modes_applies, mbar_times
   use dynamics_system, only: dynamics_t
-  use dynamics_static, only: tangent_stiffness, motion_tangent, has_loads
+  use dynamics_static, only: tangent_stiffness, motion_tangent, has_loads, STABILITY_MARGIN
+  use dynamics_frequencies, only: general_modes, is_symmetric, stability_scale
   implicit none
   private
   public :: modal_result_t, modal_analysis, modal_mass_times
@@ -114,11 +115,15 @@ contains
       call tangent_stiffness(dyn, t, q_dy, res%k0, err)
     end if
     if (.not. err%ok()) return
-    ! Modes need a symmetric stiffness: of the load stiffness of a moment fixed in space (not
-    ! conservative in 3D) only the symmetric part is kept.
-    res%k0 = 0.5_wp * (res%k0 + transpose(res%k0))
     res%m0 = dyn%mbar
-    call lowest_modes(res%k0, res%m0, nm, name, lambda, v, err, res%solver)
+    if (is_symmetric(res%k0)) then
+      call lowest_modes(res%k0, res%m0, nm, name, lambda, v, err, res%solver)
+    else
+      call unsymmetric_modes(res, nm, lambda, v, err)
+      if (present(for_basis)) then
+        if (for_basis .and. err%ok()) call m_orthonormalise(res%m0, v)
+      end if
+    end if
     if (.not. err%ok()) then
       call err%prefix('modal analysis: ')
       return
@@ -129,6 +134,47 @@ contains
     allocate(res%node_shapes(dyn%model%n_x, nm, 1))
     res%node_shapes(:, :, 1) = matmul(dyn%kin%df(:, dyn%model%n_rh + 1:), res%shapes)
   end subroutine modal_analysis
+
+  !> Modes of an unsymmetric tangent (moments fixed in space, not conservative in 3D): those
+  !> of the full problem, on which the stability test decides (dynamics_frequencies), by
+  !> LAPACK whatever the solver asked. res%k0 then keeps the symmetric part, which a reduced
+  !> model's static correction factors by Cholesky.
+  subroutine unsymmetric_modes(res, nm, lambda, v, err)
+    type(modal_result_t), intent(inout) :: res
+    integer, intent(in) :: nm
+    real(wp), allocatable, intent(out) :: lambda(:), v(:, :)
+    type(error_t), intent(inout) :: err
+    integer :: info
+    call general_modes(res%k0, res%m0, nm, STABILITY_MARGIN * stability_scale(res%k0, &
+      res%m0), lambda, v, info)
+    if (info /= 0) then
+      call err%set(ERR_NUMERIC, 'LAPACK dggev failed on the unsymmetric tangent of the ' // &
+        'moments fixed in space (info = ' // int_str(info) // ')')
+      return
+    end if
+    res%solver = 'lapack'
+    res%k0 = 0.5_wp * (res%k0 + transpose(res%k0))
+  end subroutine unsymmetric_modes
+
+  !> Gram-Schmidt in the Mbar inner product, lowest mode first: a reduced model's basis must
+  !> be Mbar-orthonormal (its velocities are V^T Mbar v), which the right eigenvectors of an
+  !> unsymmetric tangent are not; the span, and so the reduced model's modes, stay the same.
+  subroutine m_orthonormalise(m, v)
+    real(wp), intent(in) :: m(:, :)
+    real(wp), intent(inout) :: v(:, :)
+    real(wp) :: mv(size(v, 1))
+    integer :: i, j, pass
+    do j = 1, size(v, 2)
+      ! Twice: the second pass removes what the first one's rounding left.
+      do pass = 1, 2
+        do i = 1, j - 1
+          v(:, j) = v(:, j) - dot_product(v(:, i), matmul(m, v(:, j))) * v(:, i)
+        end do
+      end do
+      mv = matmul(m, v(:, j))
+      v(:, j) = v(:, j) / sqrt(dot_product(v(:, j), mv))
+    end do
+  end subroutine m_orthonormalise
 
   !> Mbar w at the configuration of the modal analysis res, which must be the last one the
   !> kinematics of dyn solved (the Krylov path keeps no Mbar).

@@ -370,3 +370,10 @@ def test_rigid_body_mode_has_no_dc_gain(tmp_path):
     j_arm = RHO * AREA * LENGTH**3 / 3
     g = lin.frequency_response(w, input="j1.torque", output="j1.angle")
     np.testing.assert_allclose(g, -1 / (j_arm * w**2), rtol=1e-9, atol=0)
+    # At w = 0, on the poles, G is infinite: a ValueError naming the file and the frequency,
+    # not numpy's bare LinAlgError('Singular matrix'), and the same from the module function.
+    with pytest.raises(ValueError, match=r"infinite at w = 0 rad/s") as info:
+        lin.frequency_response([3.0, 0.0], input="j1.torque", output="j1.angle")
+    assert str(lin.path) in str(info.value)
+    with pytest.raises(ValueError, match="infinite at w = 0"):
+        fxc.frequency_response(*lin.matrices(), [0.0])
